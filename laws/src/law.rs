@@ -1,0 +1,80 @@
+//! The `ConstitutiveLaw` seam.
+//!
+//! Index convention: a 3×3 tensor `T_iJ` is flattened row-major, component `(i, J)` at
+//! position `3 i + J` (see [`crate::tensor::idx`]); the tangent `A_iJkL = ∂P_iJ/∂F_kL` is the
+//! 9×9 matrix with entry `(3i+J, 3k+L)`.
+
+use nalgebra::Matrix3;
+
+use crate::{LawError, Tangent};
+
+/// The kinematics handed to a law at one integration point.
+#[derive(Debug, Clone, Copy)]
+pub struct Kinematics {
+    /// Total deformation gradient `F_{n+1}` (with `F33` from plane strain/axisymmetry).
+    pub deformation_gradient: Matrix3<f64>,
+    /// Committed deformation gradient `F_n` at the start of the step (rate-type laws).
+    pub previous_deformation_gradient: Matrix3<f64>,
+    /// Time step `Δt` in s (0 for a static load step).
+    pub time_step: f64,
+}
+
+impl Kinematics {
+    /// Kinematics of a static evaluation at `F` from the undeformed state.
+    pub fn at(deformation_gradient: Matrix3<f64>) -> Self {
+        Self { deformation_gradient, previous_deformation_gradient: Matrix3::identity(), time_step: 0.0 }
+    }
+}
+
+/// Stress and consistent tangent returned by a law.
+#[derive(Debug, Clone, Copy)]
+pub struct StressResponse {
+    /// First Piola–Kirchhoff stress `P = τ F^{-T}` in Pa.
+    pub first_piola: Matrix3<f64>,
+    /// Consistent tangent `A = ∂P/∂F` (9×9, see the module doc for the index convention).
+    pub tangent: Tangent,
+}
+
+/// A constitutive law: stress, consistent tangent and history at finite strain.
+///
+/// Implementations are immutable parameter sets; all evolving data is in the `state`
+/// slices, whose length is [`ConstitutiveLaw::state_len`].
+pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
+    /// Short name of the law as written in case files, e.g. `"neo_hookean"`.
+    fn name(&self) -> &'static str;
+
+    /// Mass density ρ₀ in kg/m³ (reference configuration).
+    fn density(&self) -> f64;
+
+    /// Number of `f64` history slots an integration point must hold for this law.
+    fn state_len(&self) -> usize {
+        0
+    }
+
+    /// Writes the virgin history (no deformation, no plastic strain) into `state`.
+    fn initialise_state(&self, _state: &mut [f64]) {}
+
+    /// Names of the scalar state variables this law reports for output, e.g.
+    /// `accumulated_plastic_deviatoric_strain`. Their values come from
+    /// [`ConstitutiveLaw::state_output`].
+    fn state_variables(&self) -> &'static [&'static str] {
+        &[]
+    }
+
+    /// Writes the values of [`ConstitutiveLaw::state_variables`] for history `state` into `out`.
+    fn state_output(&self, _state: &[f64], _out: &mut [f64]) {}
+
+    /// Evaluates stress and consistent tangent at `kinematics`, starting from the committed
+    /// history `committed` and writing the updated (trial) history into `trial`.
+    /// Neither the law nor this call commits anything.
+    fn update(
+        &self,
+        kinematics: &Kinematics,
+        committed: &[f64],
+        trial: &mut [f64],
+    ) -> Result<StressResponse, LawError>;
+
+    /// Small-strain elastic constants `(λ, μ)` at the reference state, used for time-step
+    /// estimates and penalty scaling.
+    fn elastic_lame(&self) -> (f64, f64);
+}

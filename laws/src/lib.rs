@@ -1,0 +1,27 @@
+//! Constitutive laws at finite strain for Loam.
+//!
+//! Key design decision: **a law sees only kinematics**. It takes the total deformation
+//! gradient `F` (3×3; plane strain and axisymmetry enter only through `F33`), the committed
+//! deformation gradient of the previous step, the time step and its committed history, and
+//! returns the first Piola–Kirchhoff stress `P` with the consistent tangent `A = ∂P/∂F`.
+//! The element kernels of `loam-fem` pull these back to whatever configuration they
+//! integrate on (the reference mesh for total-Lagrangian FEM, the configuration at the
+//! start of the step for MPM), so one law serves every discretisation.
+//!
+//! History lives outside the law, in flat `f64` slices owned by the integration point
+//! (struct-of-arrays storage in the domains). A law writes its *trial* history during a
+//! Newton iteration and never touches the committed one: committing is a copy made by the
+//! owner once the step has converged. Laws hold no mutable caches and are `Send + Sync`.
+
+#![allow(non_snake_case)]
+
+pub mod error;
+pub mod law;
+pub mod material;
+pub mod neo_hookean;
+pub mod tensor;
+
+pub use error::{LawError, ParameterError};
+pub use law::{ConstitutiveLaw, Kinematics, StressResponse};
+pub use material::MaterialSpec;
+pub use tensor::{Tangent, idx};
