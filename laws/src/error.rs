@@ -12,12 +12,20 @@ pub enum LawError {
         det_f: f64,
     },
     /// The local return mapping did not converge.
-    #[error("return mapping did not converge after {iterations} iterations (residual {residual:.3e})")]
+    #[error(
+        "return mapping did not converge after {iterations} iterations (residual {residual:.3e})"
+    )]
     ReturnMappingFailed {
         /// Local iterations spent.
         iterations: usize,
         /// Last local residual.
         residual: f64,
+    },
+    /// An initial stress that the law cannot represent or that violates its yield condition.
+    #[error("initial stress: {problem}")]
+    InitialStress {
+        /// What is wrong.
+        problem: String,
     },
 }
 
@@ -34,6 +42,9 @@ pub struct ParameterError {
 impl ParameterError {
     /// Shorthand used by the parameter checks.
     pub fn new(parameter: &'static str, problem: impl Into<String>) -> Self {
-        Self { parameter, problem: problem.into() }
+        Self {
+            parameter,
+            problem: problem.into(),
+        }
     }
 }

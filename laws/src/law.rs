@@ -22,7 +22,11 @@ pub struct Kinematics {
 impl Kinematics {
     /// Kinematics of a static evaluation at `F` from the undeformed state.
     pub fn at(deformation_gradient: Matrix3<f64>) -> Self {
-        Self { deformation_gradient, previous_deformation_gradient: Matrix3::identity(), time_step: 0.0 }
+        Self {
+            deformation_gradient,
+            previous_deformation_gradient: Matrix3::identity(),
+            time_step: 0.0,
+        }
     }
 }
 
@@ -53,6 +57,25 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
 
     /// Writes the virgin history (no deformation, no plastic strain) into `state`.
     fn initialise_state(&self, _state: &mut [f64]) {}
+
+    /// Writes the history of a point at rest (`F = I`) carrying the Cauchy stress `stress`
+    /// (Pa, tension positive), e.g. a geostatic `K0` state. Laws whose history can hold an
+    /// elastic prestrain (the multiplicative elasto-plastic laws) override this; the
+    /// default accepts only a zero stress.
+    fn initialise_state_at_stress(
+        &self,
+        stress: &Matrix3<f64>,
+        state: &mut [f64],
+    ) -> Result<(), LawError> {
+        self.initialise_state(state);
+        if stress.iter().all(|v| *v == 0.0) {
+            Ok(())
+        } else {
+            Err(LawError::InitialStress {
+                problem: format!("law `{}` cannot start from a non-zero stress", self.name()),
+            })
+        }
+    }
 
     /// Names of the scalar state variables this law reports for output, e.g.
     /// `accumulated_plastic_deviatoric_strain`. Their values come from

@@ -12,16 +12,36 @@
 //! (struct-of-arrays storage in the domains). A law writes its *trial* history during a
 //! Newton iteration and never touches the committed one: committing is a copy made by the
 //! owner once the step has converged. Laws hold no mutable caches and are `Send + Sync`.
+//!
+//! The elasto-plastic laws share one machinery: multiplicative plasticity on Hencky
+//! elasticity ([`multiplicative`], Simo 1992) around a principal-space return mapping,
+//! with the isotropic-function derivative of [`spectral`] for the tangent and forward-mode
+//! differentiation ([`dual`]) of the return algorithm for its algorithmic tangent.
+//!
+//! [`driver`] runs one material point along a laboratory path (triaxial, oedometer,
+//! simple shear, …) from a JSON path file.
 
 #![allow(non_snake_case)]
 
+pub mod driver;
+pub mod drucker_prager;
+pub mod dual;
 pub mod error;
+pub mod hencky;
 pub mod law;
+pub mod linear_elastic;
 pub mod material;
+pub mod modified_cam_clay;
+pub mod mohr_coulomb;
+pub mod mohr_coulomb_softening;
+pub mod multiplicative;
 pub mod neo_hookean;
+pub mod newtonian_fluid;
+pub mod saint_venant_kirchhoff;
+pub mod spectral;
 pub mod tensor;
 
 pub use error::{LawError, ParameterError};
 pub use law::{ConstitutiveLaw, Kinematics, StressResponse};
 pub use material::MaterialSpec;
-pub use tensor::{Tangent, idx};
+pub use tensor::{idx, Tangent};

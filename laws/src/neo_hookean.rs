@@ -12,7 +12,7 @@
 
 use nalgebra::Matrix3;
 
-use crate::{ConstitutiveLaw, Kinematics, LawError, StressResponse, Tangent, idx};
+use crate::{idx, ConstitutiveLaw, Kinematics, LawError, StressResponse, Tangent};
 
 /// Compressible Neo-Hookean solid with Lamé constants `λ`, `μ` (Pa) and density ρ (kg/m³).
 #[derive(Debug, Clone, Copy)]
@@ -29,7 +29,11 @@ impl NeoHookean {
     /// From Young's modulus `E` (Pa) and Poisson's ratio `ν`.
     pub fn new(density: f64, young_modulus: f64, poisson_ratio: f64) -> Self {
         let (lambda, mu) = crate::material::lame(young_modulus, poisson_ratio);
-        Self { density, lambda, mu }
+        Self {
+            density,
+            lambda,
+            mu,
+        }
     }
 }
 
@@ -57,7 +61,9 @@ impl ConstitutiveLaw for NeoHookean {
         if det_f <= 0.0 || !det_f.is_finite() {
             return Err(LawError::InvertedDeformation { det_f });
         }
-        let f_inv: Matrix3<f64> = f.try_inverse().ok_or(LawError::InvertedDeformation { det_f })?;
+        let f_inv: Matrix3<f64> = f
+            .try_inverse()
+            .ok_or(LawError::InvertedDeformation { det_f })?;
         let ln_j = det_f.ln();
         let c = self.lambda * ln_j - self.mu;
         let first_piola = self.mu * f + c * f_inv.transpose();
@@ -76,7 +82,10 @@ impl ConstitutiveLaw for NeoHookean {
                 }
             }
         }
-        Ok(StressResponse { first_piola, tangent })
+        Ok(StressResponse {
+            first_piola,
+            tangent,
+        })
     }
 }
 
@@ -91,7 +100,9 @@ mod tests {
         let f = Matrix3::new(1.1, 0.2, 0.05, -0.1, 0.95, 0.02, 0.03, 0.01, 1.05);
         let r = law.update(&Kinematics::at(f), &[], &mut []).unwrap();
         let fd = finite_difference_tangent(&f, 1e-6, |g| {
-            law.update(&Kinematics::at(*g), &[], &mut []).unwrap().first_piola
+            law.update(&Kinematics::at(*g), &[], &mut [])
+                .unwrap()
+                .first_piola
         });
         let err = (r.tangent - fd).amax() / r.tangent.amax();
         println!("neo-Hookean tangent: relative error vs central FD {err:.2e} (tolerance 1e-6)");
@@ -101,7 +112,9 @@ mod tests {
     #[test]
     fn stress_free_in_reference_state() {
         let law = NeoHookean::new(1000.0, 9.0e7, 0.3);
-        let r = law.update(&Kinematics::at(Matrix3::identity()), &[], &mut []).unwrap();
+        let r = law
+            .update(&Kinematics::at(Matrix3::identity()), &[], &mut [])
+            .unwrap();
         assert!(r.first_piola.amax() < 1e-6);
     }
 }

@@ -1,0 +1,79 @@
+//! Hencky hyperelasticity: Hooke's law between the logarithmic strain and the Kirchhoff
+//! stress — the elastic part of every elasto-plastic law of this crate.
+//!
+//! Energy `ψ = λ/2 (tr ε)² + μ ε:ε`, `ε = ½ ln b`, `b = F Fᵀ`.
+//! Stress `τ = λ tr(ε) I + 2 μ ε` (Kirchhoff), `P = τ F⁻ᵀ`.
+//! Tangent: `τ(b)` is an isotropic tensor function with `∂τ_a/∂ε_b = λ + 2μ δ_ab`, differentiated
+//! by [`crate::multiplicative::kirchhoff_update`] (robust at repeated stretches).
+//!
+//! Reference: Simo (1992), CMAME 99:61–112, doi:10.1016/0045-7825(92)90123-2;
+//! Bruhns, Xiao & Meyers (2001), "Constitutive inequalities for an isotropic elastic strain-energy
+//! function based on Hencky's logarithmic strain tensor", Proc. R. Soc. A 457:2207–2226,
+//! doi:10.1098/rspa.2001.0818.
+
+use nalgebra::Matrix3;
+
+use crate::multiplicative::{
+    checked_inverse, hencky_matrix, hencky_stress, kirchhoff_update, PrincipalResponse,
+};
+use crate::tensor::piola_from_kirchhoff;
+use crate::{ConstitutiveLaw, Kinematics, LawError, StressResponse};
+
+/// Hencky (logarithmic-strain) hyperelastic solid with Lamé constants `λ`, `μ` (Pa).
+#[derive(Debug, Clone, Copy)]
+pub struct Hencky {
+    /// Density ρ₀ in kg/m³.
+    pub density: f64,
+    /// First Lamé constant λ in Pa.
+    pub lambda: f64,
+    /// Shear modulus μ in Pa.
+    pub mu: f64,
+}
+
+impl Hencky {
+    /// From Young's modulus `E` (Pa) and Poisson's ratio `ν`.
+    pub fn new(density: f64, young_modulus: f64, poisson_ratio: f64) -> Self {
+        let (lambda, mu) = crate::material::lame(young_modulus, poisson_ratio);
+        Self {
+            density,
+            lambda,
+            mu,
+        }
+    }
+}
+
+impl ConstitutiveLaw for Hencky {
+    fn name(&self) -> &'static str {
+        "hencky"
+    }
+
+    fn density(&self) -> f64 {
+        self.density
+    }
+
+    fn elastic_lame(&self) -> (f64, f64) {
+        (self.lambda, self.mu)
+    }
+
+    fn update(
+        &self,
+        kinematics: &Kinematics,
+        _committed: &[f64],
+        _trial: &mut [f64],
+    ) -> Result<StressResponse, LawError> {
+        let f = &kinematics.deformation_gradient;
+        let f_inv = checked_inverse(f)?;
+        let ku = kirchhoff_update(f, &Matrix3::identity(), |eps| {
+            Ok(PrincipalResponse {
+                tau: hencky_stress(self.lambda, self.mu, eps),
+                eps_e: eps,
+                dtau_deps: hencky_matrix(self.lambda, self.mu),
+            })
+        })?;
+        let (first_piola, tangent) = piola_from_kirchhoff(&f_inv, &ku.tau, &ku.dtau_df);
+        Ok(StressResponse {
+            first_piola,
+            tangent,
+        })
+    }
+}

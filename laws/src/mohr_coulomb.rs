@@ -1,0 +1,453 @@
+//! Mohr–Coulomb elasto-plasticity at finite strain, non-associated, with the return mapping
+//! of Clausen, Damkilde & Andersen (2007) in principal stress space.
+//!
+//! Frame: multiplicative plasticity on Hencky elasticity ([`crate::multiplicative`],
+//! Simo 1992). In principal Kirchhoff stresses sorted `τ₁ ≥ τ₂ ≥ τ₃` (tension positive):
+//!
+//! - yield function `f = k τ₁ − τ₃ − σ_c`, `k = (1 + sin φ)/(1 − sin φ)`,
+//!   `σ_c = 2 c cos φ/(1 − sin φ)` (the uniaxial compressive strength);
+//! - plastic potential `g = m τ₁ − τ₃`, `m = (1 + sin ψ)/(1 − sin ψ)` (ψ ≤ φ);
+//! - elasticity `τ = D ε_e`, `D = λ 1⊗1 + 2μ I` (3×3, principal).
+//!
+//! **Algorithm** (Clausen, Damkilde & Andersen 2007, "An efficient return algorithm for
+//! non-associated plasticity with linear yield criteria in principal stress space",
+//! Computers & Structures 85:1795–1807, doi:10.1016/j.compstruc.2007.04.002). With the
+//! elastic trial `τ_B` and the flow direction `D b`, `b = ∂g/∂τ = (m, 0, −1)`:
+//!
+//! 1. return to the plane: `τ_C = τ_B − f(τ_B) D b / (aᵀ D b)`, `a = (k, 0, −1)`; accepted if
+//!    it keeps the order `τ₁ ≥ τ₂ ≥ τ₃`;
+//! 2. otherwise return to the edge `τ₁ = τ₂` (triaxial compression, direction
+//!    `ℓ₁ = (1, 1, k)` through `(0, 0, −σ_c)`) or `τ₂ = τ₃` (triaxial extension, direction
+//!    `ℓ₂ = (1, k, k)` through `(σ_c/k, 0, 0)`): `τ_C = τ₀ + t ℓ`,
+//!    `t = nᵀ(τ_B − τ₀)/(nᵀ ℓ)`, `n = D b × D b'`, with `b'` the flow direction of the
+//!    second active plane; accepted while the point lies on the cone side of the apex;
+//! 3. otherwise return to the apex `τ_C = σ_c/(k − 1) (1, 1, 1)` (absent when φ = 0).
+//!
+//! The algorithmic tangent `∂τ/∂ε_tr` is the exact derivative of this algorithm, obtained
+//! by forward-mode differentiation ([`crate::dual`]); with strain softening
+//! ([`crate::mohr_coulomb_softening`]) the strength parameters depend on the accumulated
+//! plastic deviatoric strain κ, the scalar equation `κ = κ_n + Δκ(κ)` is solved by Newton
+//! and the tangent includes `∂τ/∂κ · dκ/dε_tr` (implicit function theorem).
+
+use nalgebra::Matrix3;
+
+use crate::dual::{Dual, Real};
+use crate::multiplicative::{
+    self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel,
+    PrincipalResponse, CP_INV_LEN, PLASTIC_OUTPUT,
+};
+use crate::{ConstitutiveLaw, Kinematics, LawError, StressResponse};
+
+/// Mohr–Coulomb strength at a given accumulated plastic deviatoric strain.
+#[derive(Debug, Clone, Copy)]
+pub struct Strength<T> {
+    /// Friction angle φ in rad.
+    pub friction_angle: T,
+    /// Cohesion c in Pa.
+    pub cohesion: T,
+    /// Dilatancy angle ψ in rad.
+    pub dilatancy_angle: T,
+}
+
+/// How the Mohr–Coulomb strength evolves with the accumulated plastic deviatoric strain κ.
+pub trait StrengthEvolution: Send + Sync + std::fmt::Debug + Clone {
+    /// Name of the law in case files.
+    const NAME: &'static str;
+    /// Strength at κ (generic so that `∂/∂κ` comes out of [`crate::dual`]).
+    fn at<T: Real>(&self, kappa: T) -> Strength<T>;
+    /// Whether the strength depends on κ at all.
+    fn evolves(&self) -> bool;
+}
+
+/// Constant strength: perfect Mohr–Coulomb plasticity.
+#[derive(Debug, Clone, Copy)]
+pub struct ConstantStrength(pub Strength<f64>);
+
+impl StrengthEvolution for ConstantStrength {
+    const NAME: &'static str = "mohr_coulomb";
+    fn at<T: Real>(&self, _kappa: T) -> Strength<T> {
+        Strength {
+            friction_angle: T::cst(self.0.friction_angle),
+            cohesion: T::cst(self.0.cohesion),
+            dilatancy_angle: T::cst(self.0.dilatancy_angle),
+        }
+    }
+    fn evolves(&self) -> bool {
+        false
+    }
+}
+
+/// Mohr–Coulomb law with Hencky elasticity and a strength evolution `S`.
+#[derive(Debug, Clone)]
+pub struct MohrCoulombLaw<S> {
+    /// Density ρ₀ in kg/m³.
+    pub density: f64,
+    /// First Lamé constant λ in Pa.
+    pub lambda: f64,
+    /// Shear modulus μ in Pa.
+    pub mu: f64,
+    /// Strength and its evolution.
+    pub strength: S,
+}
+
+/// Perfectly plastic Mohr–Coulomb.
+pub type MohrCoulomb = MohrCoulombLaw<ConstantStrength>;
+
+impl MohrCoulomb {
+    /// From `E` (Pa), `ν`, φ (rad), c (Pa), ψ (rad).
+    pub fn new(
+        density: f64,
+        young_modulus: f64,
+        poisson_ratio: f64,
+        friction_angle: f64,
+        cohesion: f64,
+        dilatancy_angle: f64,
+    ) -> Self {
+        let (lambda, mu) = crate::material::lame(young_modulus, poisson_ratio);
+        Self {
+            density,
+            lambda,
+            mu,
+            strength: ConstantStrength(Strength {
+                friction_angle,
+                cohesion,
+                dilatancy_angle,
+            }),
+        }
+    }
+}
+
+/// `(k, σ_c, m)` of a strength: `k = (1+sin φ)/(1−sin φ)`, `σ_c = 2c cos φ/(1−sin φ)`,
+/// `m = (1+sin ψ)/(1−sin ψ)`.
+pub fn mohr_coulomb_coefficients<T: Real>(s: &Strength<T>) -> (T, T, T) {
+    let sphi = s.friction_angle.sin();
+    let k = (sphi + 1.0) / (-sphi + 1.0);
+    let sc = s.cohesion * s.friction_angle.cos() * 2.0 / (-sphi + 1.0);
+    let spsi = s.dilatancy_angle.sin();
+    let m = (spsi + 1.0) / (-spsi + 1.0);
+    (k, sc, m)
+}
+
+fn cross<T: Real>(a: [T; 3], b: [T; 3]) -> [T; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn dot<T: Real>(a: [T; 3], b: [T; 3]) -> T {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Return region of the Clausen et al. (2007) algorithm.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Region {
+    /// Elastic step.
+    Elastic,
+    /// Return to the yield plane.
+    Plane,
+    /// Return to the triaxial-compression edge `τ₁ = τ₂`.
+    CompressionEdge,
+    /// Return to the triaxial-extension edge `τ₂ = τ₃`.
+    ExtensionEdge,
+    /// Return to the apex.
+    Apex,
+}
+
+/// The Clausen–Damkilde–Andersen return for sorted trial stresses `sb` (`sb₀ ≥ sb₁ ≥ sb₂`)
+/// and a plastic trial (`f(sb) > 0`), with Hencky moduli `λ`, `μ`.
+pub fn clausen_return<T: Real>(
+    sb: [T; 3],
+    lambda: f64,
+    mu: f64,
+    k: T,
+    sc: T,
+    m: T,
+) -> Result<([T; 3], Region), LawError> {
+    let z = T::cst(0.0);
+    let one = T::cst(1.0);
+    let de = |v: [T; 3]| hencky_stress(lambda, mu, v);
+    let scale = sb
+        .iter()
+        .fold(sc.re().abs(), |a, s| a.max(s.re().abs()))
+        .max(1.0);
+    let tol = 1e-12 * scale;
+    let f = k * sb[0] - sb[2] - sc;
+    let db = de([m, z, -one]);
+    let adb = k * db[0] - db[2];
+    let ratio = f / adb;
+    let sp = [
+        sb[0] - db[0] * ratio,
+        sb[1] - db[1] * ratio,
+        sb[2] - db[2] * ratio,
+    ];
+    if sp[0].re() >= sp[1].re() - tol && sp[1].re() >= sp[2].re() - tol {
+        return Ok((sp, Region::Plane));
+    }
+    let edge = |p: [T; 3], l: [T; 3], b2: [T; 3]| {
+        let n = cross(db, de(b2));
+        let t = dot(n, [sb[0] - p[0], sb[1] - p[1], sb[2] - p[2]]) / dot(n, l);
+        [p[0] + l[0] * t, p[1] + l[1] * t, p[2] + l[2] * t]
+    };
+    let compression = || edge([z, z, -sc], [one, one, k], [z, m, -one]);
+    let extension = || edge([sc / k, z, z], [one, k, k], [m, -one, z]);
+    if sp[0].re() < sp[1].re() {
+        let s = compression();
+        if s[1].re() >= s[2].re() - tol {
+            return Ok((s, Region::CompressionEdge));
+        }
+    }
+    if sp[1].re() < sp[2].re() {
+        let s = extension();
+        if s[0].re() >= s[1].re() - tol {
+            return Ok((s, Region::ExtensionEdge));
+        }
+    }
+    if k.re() - 1.0 > 1e-12 {
+        let a = sc / (k - 1.0);
+        return Ok(([a, a, a], Region::Apex));
+    }
+    Err(LawError::ReturnMappingFailed {
+        iterations: 0,
+        residual: f.re(),
+    })
+}
+
+/// Result of the plastic return at a fixed κ, differentiated with respect to
+/// `(ε_tr,1, ε_tr,2, ε_tr,3, κ)`.
+struct PlasticEvaluation {
+    tau: [Dual<4>; 3],
+    delta_kappa: Dual<4>,
+    region: Region,
+}
+
+impl<S: StrengthEvolution> MohrCoulombLaw<S> {
+    /// Yield function `f = k τ₁ − τ₃ − σ_c` (Pa) at principal Kirchhoff stresses `tau`
+    /// (any order) and accumulated plastic deviatoric strain `kappa`.
+    pub fn yield_function(&self, tau: [f64; 3], kappa: f64) -> f64 {
+        let (k, sc, _) = mohr_coulomb_coefficients(&self.strength.at(kappa));
+        let max = tau.iter().cloned().fold(f64::MIN, f64::max);
+        let min = tau.iter().cloned().fold(f64::MAX, f64::min);
+        k * max - min - sc
+    }
+
+    /// Return region taken by the trial principal elastic log strains `eps_tr` from the
+    /// committed internal variables (`[κ, ε_p^v, flag]`).
+    pub fn region(&self, eps_tr: [f64; 3], committed: &[f64]) -> Region {
+        let tau_b = hencky_stress(self.lambda, self.mu, eps_tr);
+        if self.yield_function(tau_b, committed[0]) <= self.yield_tolerance(tau_b) {
+            return Region::Elastic;
+        }
+        self.plastic_evaluation(eps_tr, committed[0])
+            .map(|e| e.region)
+            .unwrap_or(Region::Elastic)
+    }
+
+    fn yield_tolerance(&self, tau: [f64; 3]) -> f64 {
+        1e-10 * tau.iter().fold(1.0_f64, |a, t| a.max(t.abs()))
+    }
+
+    fn plastic_evaluation(
+        &self,
+        eps_tr: [f64; 3],
+        kappa: f64,
+    ) -> Result<PlasticEvaluation, LawError> {
+        let eps: [Dual<4>; 3] = [
+            Dual::seed(eps_tr[0], 0),
+            Dual::seed(eps_tr[1], 1),
+            Dual::seed(eps_tr[2], 2),
+        ];
+        let (k, sc, m) = mohr_coulomb_coefficients(&self.strength.at(Dual::seed(kappa, 3)));
+        let tau_b = hencky_stress(self.lambda, self.mu, eps);
+        let mut perm = [0usize, 1, 2];
+        perm.sort_by(|&a, &b| {
+            tau_b[b]
+                .v
+                .partial_cmp(&tau_b[a].v)
+                .unwrap_or(std::cmp::Ordering::Equal)
+        });
+        let sorted = perm.map(|a| tau_b[a]);
+        let (ts, region) = clausen_return(sorted, self.lambda, self.mu, k, sc, m)?;
+        let mut tau = tau_b;
+        for (i, &a) in perm.iter().enumerate() {
+            tau[a] = ts[i];
+        }
+        let e = hencky_strain(self.lambda, self.mu, tau);
+        let d = [eps[0] - e[0], eps[1] - e[1], eps[2] - e[2]];
+        let vol = (d[0] + d[1] + d[2]) / 3.0;
+        let n2 = d
+            .iter()
+            .fold(Dual::cst(0.0), |acc, di| acc + (*di - vol) * (*di - vol));
+        let delta_kappa = if n2.v > 1e-300 {
+            (n2 * (2.0 / 3.0)).sqrt()
+        } else {
+            Dual::cst(0.0)
+        };
+        Ok(PlasticEvaluation {
+            tau,
+            delta_kappa,
+            region,
+        })
+    }
+}
+
+/// Maximum local Newton iterations on κ (softening).
+const MAX_ITERATIONS: usize = 50;
+
+impl<S: StrengthEvolution> PrincipalModel for MohrCoulombLaw<S> {
+    fn internal_len(&self) -> usize {
+        3
+    }
+
+    fn initialise_internal(&self, internal: &mut [f64]) {
+        internal[..3].fill(0.0);
+    }
+
+    fn principal_update(
+        &self,
+        eps_tr: [f64; 3],
+        committed: &[f64],
+        trial: &mut [f64],
+    ) -> Result<PrincipalResponse, LawError> {
+        let kappa_n = committed[0];
+        let tau_b = hencky_stress(self.lambda, self.mu, eps_tr);
+        if self.yield_function(tau_b, kappa_n) <= self.yield_tolerance(tau_b) {
+            accumulate_plastic_strain(committed, trial, eps_tr, eps_tr, false);
+            return Ok(PrincipalResponse {
+                tau: tau_b,
+                eps_e: eps_tr,
+                dtau_deps: hencky_matrix(self.lambda, self.mu),
+            });
+        }
+        let mut kappa = kappa_n;
+        let mut residual = f64::INFINITY;
+        for iteration in 0..=MAX_ITERATIONS {
+            let ev = self.plastic_evaluation(eps_tr, kappa)?;
+            // r(κ) = κ − κ_n − Δκ(κ, ε_tr)
+            let r = Dual::<4>::seed(kappa, 3) - ev.delta_kappa - kappa_n;
+            let converged = !self.strength.evolves() || r.v.abs() <= 1e-12 * (1.0 + kappa.abs());
+            if converged {
+                let kappa_new = if self.strength.evolves() {
+                    kappa
+                } else {
+                    kappa_n + ev.delta_kappa.v
+                };
+                let dkappa = [-r.d[0] / r.d[3], -r.d[1] / r.d[3], -r.d[2] / r.d[3]];
+                let dtau_deps =
+                    Matrix3::from_fn(|a, b| ev.tau[a].d[b] + ev.tau[a].d[3] * dkappa[b]);
+                let tau = ev.tau.map(|t| t.v);
+                let eps_e = hencky_strain(self.lambda, self.mu, tau);
+                accumulate_plastic_strain(committed, trial, eps_tr, eps_e, true);
+                trial[0] = kappa_new;
+                return Ok(PrincipalResponse {
+                    tau,
+                    eps_e,
+                    dtau_deps,
+                });
+            }
+            residual = r.v;
+            if iteration == MAX_ITERATIONS {
+                break;
+            }
+            kappa = (kappa - r.v / r.d[3]).max(kappa_n);
+        }
+        Err(LawError::ReturnMappingFailed {
+            iterations: MAX_ITERATIONS,
+            residual,
+        })
+    }
+
+    fn elastic_strain(&self, tau: [f64; 3]) -> Result<[f64; 3], LawError> {
+        Ok(hencky_strain(self.lambda, self.mu, tau))
+    }
+}
+
+impl<S: StrengthEvolution> ConstitutiveLaw for MohrCoulombLaw<S> {
+    fn name(&self) -> &'static str {
+        S::NAME
+    }
+
+    fn density(&self) -> f64 {
+        self.density
+    }
+
+    fn state_len(&self) -> usize {
+        CP_INV_LEN + 3
+    }
+
+    fn initialise_state(&self, state: &mut [f64]) {
+        multiplicative::initialise(self, state);
+    }
+
+    fn initialise_state_at_stress(
+        &self,
+        stress: &Matrix3<f64>,
+        state: &mut [f64],
+    ) -> Result<(), LawError> {
+        multiplicative::initialise_at_stress(self, stress, state)
+    }
+
+    fn state_variables(&self) -> &'static [&'static str] {
+        &PLASTIC_OUTPUT
+    }
+
+    fn state_output(&self, state: &[f64], out: &mut [f64]) {
+        out[..3].copy_from_slice(&state[CP_INV_LEN..CP_INV_LEN + 3]);
+    }
+
+    fn update(
+        &self,
+        kinematics: &Kinematics,
+        committed: &[f64],
+        trial: &mut [f64],
+    ) -> Result<StressResponse, LawError> {
+        multiplicative::update(self, kinematics, committed, trial)
+    }
+
+    fn elastic_lame(&self) -> (f64, f64) {
+        (self.lambda, self.mu)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tensor::tangent_relative_error;
+
+    fn law() -> MohrCoulomb {
+        MohrCoulomb::new(
+            2000.0,
+            5.0e7,
+            0.3,
+            25f64.to_radians(),
+            5.0e3,
+            5f64.to_radians(),
+        )
+    }
+
+    /// Trial principal Kirchhoff stresses (kPa) chosen to land in each return region
+    /// (c cot φ = 10.7 kPa is the apex), with the region expected.
+    #[test]
+    fn tangent_in_every_region() {
+        let law = law();
+        let cases = [
+            ([-50.0, -200.0, -400.0], Region::Plane),
+            ([-50.0, -300.0, -300.0], Region::ExtensionEdge),
+            ([-100.0, -100.0, -400.0], Region::CompressionEdge),
+            ([30.0, 40.0, 35.0], Region::Apex),
+            ([-100.0, -120.0, -150.0], Region::Elastic),
+        ];
+        let rot = nalgebra::Rotation3::from_euler_angles(0.2, 0.5, -0.3).into_inner();
+        for (tau_kpa, expected) in cases {
+            let eps = hencky_strain(law.lambda, law.mu, tau_kpa.map(|t| t * 1e3));
+            let mut state = vec![0.0; law.state_len()];
+            law.initialise_state(&mut state);
+            assert_eq!(law.region(eps, &state[CP_INV_LEN..]), expected);
+            let f = rot * Matrix3::from_diagonal(&eps.map(f64::exp).into()) * rot.transpose();
+            let err = tangent_relative_error(&law, &Kinematics::at(f), &state).unwrap();
+            println!("mohr_coulomb {expected:?}: tangent relative error vs central FD {err:.2e} (tolerance 1e-6)");
+            assert!(err < 1e-6);
+        }
+    }
+}
