@@ -1,1 +1,31 @@
-//! fem (placeholder)
+//! Everything a discretisation needs, and the Lagrangian FEM domain.
+//!
+//! Key design decision: **one node set and one DOF map for all domains**, and element
+//! kernels that do not know who owns their integration points. An FEM mesh passes Gauss
+//! points to [`kernel::solid_element`], an MPM grid passes material points; both fill
+//! element blocks that one lock-free gather ([`assembly`]) adds into one sparse system
+//! solved by one Newton loop ([`model::Model::solve_step`]). Coupling MPM and FEM is then
+//! assembly over shared nodes, not a special solver.
+
+#![allow(non_snake_case)]
+
+pub mod amplitude;
+pub mod assembly;
+pub mod dofs;
+pub mod domain;
+pub mod element;
+pub mod formulation;
+pub mod gmsh;
+pub mod kernel;
+pub mod linear_solver;
+pub mod loads;
+pub mod mesh;
+pub mod model;
+pub mod scheme;
+pub mod solid_domain;
+
+/// Von Mises equivalent stress `√(3/2 s:s)`, `s` the deviator of `σ`.
+pub fn von_mises(sigma: &nalgebra::Matrix3<f64>) -> f64 {
+    let s = sigma - nalgebra::Matrix3::identity() * (sigma.trace() / 3.0);
+    (1.5 * s.dot(&s)).sqrt()
+}

@@ -1,0 +1,116 @@
+//! The `Domain` seam: anything that contributes element blocks to the global system.
+//!
+//! An FEM mesh and an MPM background grid are both domains. A domain refers to nodes by
+//! global id, declares its element blocks once per pattern, fills its part of the element
+//! buffers at every Newton iteration, and commits its history when a step has converged.
+
+use crate::assembly::BlockLayout;
+use crate::element::ElementType;
+use crate::formulation::Formulation;
+
+/// Nodal unknowns of the whole model, full DOF vectors (node-major, `dim` per node).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct NodalState {
+    /// Displacement from the reference configuration.
+    pub u: Vec<f64>,
+    /// Velocity.
+    pub v: Vec<f64>,
+    /// Acceleration.
+    pub a: Vec<f64>,
+}
+
+impl NodalState {
+    /// All zero for `n` DOFs.
+    pub fn zeros(n: usize) -> Self {
+        Self { u: vec![0.0; n], v: vec![0.0; n], a: vec![0.0; n] }
+    }
+}
+
+/// What a domain needs to assemble at one Newton iteration.
+pub struct AssemblyInput<'a> {
+    /// Current iterate at `t_{n+1}`.
+    pub state: &'a NodalState,
+    /// Committed state at `t_n`.
+    pub committed: &'a NodalState,
+    /// Acceleration at which inertia is evaluated (`ã`, full DOF vector); `None` if static.
+    pub inertial_acceleration: Option<&'a [f64]>,
+    /// Mass coefficient of the tangent (`c_M`, 0 if static).
+    pub mass_coefficient: f64,
+    /// Gravity vector at `t_{n+1}` (m/s²), already scaled by its amplitude.
+    pub gravity: [f64; 3],
+    /// Time step Δt.
+    pub time_step: f64,
+    /// Whether to compute element matrices (else only vectors).
+    pub with_tangent: bool,
+}
+
+/// Failure while a domain assembles.
+#[derive(Debug, Clone, thiserror::Error, PartialEq)]
+#[error("domain '{domain}', element {element}: {message}")]
+pub struct DomainError {
+    /// Domain name.
+    pub domain: String,
+    /// Element (or cell) index within the domain.
+    pub element: usize,
+    /// What went wrong.
+    pub message: String,
+}
+
+/// A named output field (per node or per cell) for VTK files.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Field {
+    /// Field name, e.g. `displacement`, `cauchy_stress`.
+    pub name: String,
+    /// Components per entity (1 scalar, 3 vector, 9 tensor).
+    pub components: usize,
+    /// Values back to back.
+    pub values: Vec<f64>,
+}
+
+/// A domain's geometry and fields for output.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DomainOutput {
+    /// Point coordinates (reference configuration for meshes; current for material points).
+    pub points: Vec<[f64; 3]>,
+    /// Cell type and flat connectivity into `points`; `None` for a point cloud.
+    pub cells: Option<(ElementType, Vec<usize>)>,
+    /// Fields per point.
+    pub point_fields: Vec<Field>,
+    /// Fields per cell.
+    pub cell_fields: Vec<Field>,
+}
+
+/// A contributor of element blocks to the global system.
+pub trait Domain: Send + Sync {
+    /// The domain's name from the case file.
+    fn name(&self) -> &str;
+
+    /// Kinematic formulation (all domains of a model share one).
+    fn formulation(&self) -> Formulation;
+
+    /// Appends this domain's element blocks (global DOF ids) to `layout`, in the order
+    /// in which [`Domain::assemble`] fills its buffers.
+    fn blocks(&self, layout: &mut BlockLayout);
+
+    /// Fills the element matrices (row-major) and residual vectors
+    /// `r_e = f_int − f_body + M ã` of this domain's blocks.
+    fn assemble(&mut self, input: &AssemblyInput<'_>, matrices: &mut [f64], vectors: &mut [f64]) -> Result<(), DomainError>;
+
+    /// The step has converged: commit histories (input as for the last assembly).
+    fn commit(&mut self, input: &AssemblyInput<'_>);
+
+    /// Kinetic energy `½ vᵀ M v` for the nodal velocities `v` (full DOF vector).
+    fn kinetic_energy(&self, v: &[f64]) -> f64;
+
+    /// Stored work of the internal forces (strain energy for elastic laws), committed.
+    fn strain_energy(&self) -> f64;
+
+    /// Boundary facets (global node ids, outward orientation) for surface loads.
+    fn boundary_facets(&self) -> Vec<Vec<usize>>;
+
+    /// Out-of-plane thickness (plane problems; 1 otherwise).
+    fn thickness(&self) -> f64;
+
+    /// Geometry and fields for output at the committed state.
+    fn output(&self, committed: &NodalState) -> DomainOutput;
+}

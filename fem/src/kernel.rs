@@ -1,0 +1,389 @@
+//! The large-deformation solid element kernel, shared by every discretisation.
+//!
+//! The kernel does not know who owns its integration points: FEM passes Gauss points,
+//! MPM passes material points. Each point carries its shape functions and gradients with
+//! respect to the *step reference configuration* `X̃` (the mesh's reference configuration
+//! for total-Lagrangian FEM; the configuration at the start of the step for MPM, whose grid
+//! is reset), its weight (volume in that configuration), and the deformation gradient `F0`
+//! of that configuration relative to the material's stress-free state (`I` for FEM, `F_n`
+//! for MPM). With nodal displacements `u_a` measured from `X̃`,
+//!
+//! `ΔF = I + Σ_a u_a ⊗ ∇_X̃ N_a`,  `F = ΔF F0`,  `(P, A) = law(F)`,
+//!
+//! and the law's stress is pulled back to `X̃` (Bonet & Wood 2008, §4.8):
+//!
+//! `P̃_iJ = J0⁻¹ P_iK F0_JK`,  `Ã_iJkM = J0⁻¹ A_iKkL F0_JK F0_ML`,  `J0 = det F0`.
+//!
+//! Internal force and consistent tangent (material + geometric stiffness, both contained in
+//! `Ã`):
+//!
+//! `f_ai = Σ_p w_p P̃_iJ ∂N_a/∂X̃_J`,  `K_ai,bk = Σ_p w_p ∂N_a/∂X̃_J Ã_iJkL ∂N_b/∂X̃_L`,
+//!
+//! with the hoop term `F33 = 1 + u_r/R` added for axisymmetry and `F33` condensed out by
+//! `P̃33 = 0` for plane stress.
+
+use loam_laws::{ConstitutiveLaw, Kinematics, LawError, Tangent, idx};
+use nalgebra::{Matrix3, SMatrix};
+
+use crate::element::{ElementType, MAX_NODES};
+use crate::formulation::Formulation;
+
+/// Largest number of element DOFs (hex8 × 3).
+pub const MAX_DOFS: usize = 24;
+
+/// Geometry of one integration point in the step reference configuration.
+#[derive(Debug, Clone, Copy)]
+pub struct PointGeometry {
+    /// Shape functions `N_a` at the point.
+    pub shape: [f64; MAX_NODES],
+    /// Gradients `∂N_a/∂X̃` at the point.
+    pub gradient: [[f64; 3]; MAX_NODES],
+    /// Integration weight: the point's volume in the step reference configuration
+    /// (with thickness or 2πR included).
+    pub weight: f64,
+    /// Radius `R` of the point (axisymmetric only; 0 otherwise).
+    pub radius: f64,
+}
+
+/// Failure inside an element kernel.
+#[derive(Debug, Clone, thiserror::Error, PartialEq)]
+pub enum KernelError {
+    /// The law failed at an integration point (e.g. `det F ≤ 0`).
+    #[error("integration point {point}: {source}")]
+    Law {
+        /// Point index within the element.
+        point: usize,
+        /// What the law reported.
+        source: LawError,
+    },
+    /// The isoparametric map is singular or inverted (`det J ≤ 0`).
+    #[error("inverted element geometry (det J = {det_j:.3e})")]
+    InvertedElement {
+        /// Jacobian determinant of the reference map.
+        det_j: f64,
+    },
+}
+
+/// Computes [`PointGeometry`] at local coordinates `xi` of an element whose nodes sit at
+/// `coords` in the step reference configuration. `measure` multiplies the reference-element
+/// weight (Gauss weight); the thickness or `2πR` factor of the formulation is applied here.
+pub fn point_geometry(
+    element: ElementType,
+    formulation: Formulation,
+    thickness: f64,
+    coords: &[[f64; 3]],
+    xi: &[f64; 3],
+    gauss_weight: f64,
+) -> Result<PointGeometry, KernelError> {
+    let nn = element.num_nodes();
+    let dim = element.dim();
+    let mut g = PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
+    let mut dn = [[0.0; 3]; MAX_NODES];
+    element.shape_functions(xi, &mut g.shape);
+    element.shape_gradients(xi, &mut dn);
+    let mut jac = Matrix3::<f64>::identity();
+    for d in 0..dim {
+        jac[(d, d)] = 0.0;
+    }
+    for a in 0..nn {
+        for d in 0..dim {
+            for e in 0..dim {
+                jac[(d, e)] += coords[a][d] * dn[a][e];
+            }
+        }
+    }
+    let det_j = jac.determinant();
+    if det_j <= 0.0 || !det_j.is_finite() {
+        return Err(KernelError::InvertedElement { det_j });
+    }
+    let jinv_t = jac.try_inverse().ok_or(KernelError::InvertedElement { det_j })?.transpose();
+    for a in 0..nn {
+        let v = jinv_t * nalgebra::Vector3::new(dn[a][0], dn[a][1], dn[a][2]);
+        for d in 0..dim {
+            g.gradient[a][d] = v[d];
+        }
+        g.radius += g.shape[a] * coords[a][0];
+    }
+    if formulation != Formulation::Axisymmetric {
+        g.radius = 0.0;
+    }
+    g.weight = gauss_weight * det_j * formulation.measure_factor(thickness, g.radius);
+    Ok(g)
+}
+
+/// Inputs shared by all points of one kernel call.
+#[derive(Clone, Copy)]
+pub struct KernelContext<'a> {
+    /// Element shape.
+    pub element: ElementType,
+    /// Kinematic formulation.
+    pub formulation: Formulation,
+    /// The law of this element's material.
+    pub law: &'a dyn ConstitutiveLaw,
+    /// Time step Δt (0 for static steps), handed to rate-type laws.
+    pub time_step: f64,
+}
+
+/// Per-point state handed to [`evaluate_point`].
+pub struct PointState<'a> {
+    /// Deformation gradient of the step reference configuration (`I` for FEM, `F_n` for MPM).
+    pub f0: &'a Matrix3<f64>,
+    /// Committed deformation gradient at the start of the step.
+    pub f_prev: &'a Matrix3<f64>,
+    /// Committed history.
+    pub committed: &'a [f64],
+    /// Trial history (written).
+    pub trial: &'a mut [f64],
+}
+
+/// Result of the law at one point, pulled back to the step reference configuration.
+pub struct PointResponse {
+    /// Total deformation gradient `F = ΔF F0`.
+    pub deformation_gradient: Matrix3<f64>,
+    /// Pulled-back first Piola–Kirchhoff stress `P̃`.
+    pub stress: Matrix3<f64>,
+    /// Pulled-back tangent `Ã`, restricted to the active components and condensed for
+    /// plane stress: entry `(c, d)` refers to `ACTIVE[c]`, `ACTIVE[d]`.
+    pub tangent: SMatrix<f64, 9, 9>,
+    /// Number of active components (4 plane, 5 axisymmetric, 9 in 3D).
+    pub active: usize,
+    /// Cauchy stress `σ = P Fᵀ / J`.
+    pub cauchy: Matrix3<f64>,
+}
+
+/// Flattened components of `F` that vary with the nodal unknowns, per formulation.
+const ACTIVE_2D: [usize; 5] = [idx(0, 0), idx(0, 1), idx(1, 0), idx(1, 1), idx(2, 2)];
+const ACTIVE_3D: [usize; 9] = [0, 1, 2, 3, 4, 5, 6, 7, 8];
+
+fn active_components(formulation: Formulation) -> &'static [usize] {
+    match formulation {
+        Formulation::PlaneStrain | Formulation::PlaneStress => &ACTIVE_2D[..4],
+        Formulation::Axisymmetric => &ACTIVE_2D,
+        Formulation::ThreeD => &ACTIVE_3D,
+    }
+}
+
+/// `P̃ = J0⁻¹ P F0ᵀ` and `Ã_iJkM = J0⁻¹ A_iKkL F0_JK F0_ML` (see the module doc).
+fn pull_back(f0: &Matrix3<f64>, p: &Matrix3<f64>, a: &Tangent) -> (Matrix3<f64>, Tangent) {
+    if *f0 == Matrix3::identity() {
+        return (*p, *a);
+    }
+    let inv_j0 = 1.0 / f0.determinant();
+    let p_t = p * f0.transpose() * inv_j0;
+    // right-multiply the second index pair: A F0 over (L→M) then over (K→J)
+    let mut tmp = Tangent::zeros();
+    for r in 0..9 {
+        for k in 0..3 {
+            for m in 0..3 {
+                let mut v = 0.0;
+                for l in 0..3 {
+                    v += a[(r, idx(k, l))] * f0[(m, l)];
+                }
+                tmp[(r, idx(k, m))] = v;
+            }
+        }
+    }
+    let mut out = Tangent::zeros();
+    for i in 0..3 {
+        for j in 0..3 {
+            for c in 0..9 {
+                let mut v = 0.0;
+                for kk in 0..3 {
+                    v += tmp[(idx(i, kk), c)] * f0[(j, kk)];
+                }
+                out[(idx(i, j), c)] = v * inv_j0;
+            }
+        }
+    }
+    (p_t, out)
+}
+
+/// Evaluates the law at one point for nodal displacements `disp` (from the step reference
+/// configuration) and returns the pulled-back stress and active tangent.
+pub fn evaluate_point(
+    ctx: &KernelContext<'_>,
+    geometry: &PointGeometry,
+    disp: &[[f64; 3]],
+    state: PointState<'_>,
+) -> Result<PointResponse, LawError> {
+    let nn = ctx.element.num_nodes();
+    let dim = ctx.element.dim();
+    let mut delta_f = Matrix3::<f64>::identity();
+    for a in 0..nn {
+        for i in 0..dim {
+            for j in 0..dim {
+                delta_f[(i, j)] += disp[a][i] * geometry.gradient[a][j];
+            }
+        }
+    }
+    if ctx.formulation == Formulation::Axisymmetric {
+        let ur: f64 = (0..nn).map(|a| geometry.shape[a] * disp[a][0]).sum();
+        delta_f[(2, 2)] = 1.0 + ur / geometry.radius;
+    }
+    let mut kin = Kinematics {
+        deformation_gradient: delta_f * state.f0,
+        previous_deformation_gradient: *state.f_prev,
+        time_step: ctx.time_step,
+    };
+    let active = active_components(ctx.formulation);
+    if ctx.formulation == Formulation::PlaneStress {
+        // local Newton on ΔF33 such that P̃33 = 0
+        delta_f[(2, 2)] = state.f_prev[(2, 2)] / state.f0[(2, 2)];
+        let c33 = idx(2, 2);
+        for it in 0..30 {
+            kin.deformation_gradient = delta_f * state.f0;
+            let r = ctx.law.update(&kin, state.committed, state.trial)?;
+            let (p, a) = pull_back(state.f0, &r.first_piola, &r.tangent);
+            let scale = p.amax().max(1e-300);
+            if p[(2, 2)].abs() <= 1e-12 * scale || it == 29 {
+                let mut t = SMatrix::<f64, 9, 9>::zeros();
+                for (c, &ic) in active.iter().enumerate() {
+                    for (d, &id) in active.iter().enumerate() {
+                        t[(c, d)] = a[(ic, id)] - a[(ic, c33)] * a[(c33, id)] / a[(c33, c33)];
+                    }
+                }
+                if p[(2, 2)].abs() > 1e-8 * scale {
+                    return Err(LawError::ReturnMappingFailed { iterations: it, residual: p[(2, 2)] });
+                }
+                let cauchy = cauchy_stress(&r.first_piola, &kin.deformation_gradient);
+                return Ok(PointResponse { deformation_gradient: kin.deformation_gradient, stress: p, tangent: t, active: 4, cauchy });
+            }
+            delta_f[(2, 2)] -= p[(2, 2)] / a[(c33, c33)];
+            if delta_f[(2, 2)] <= 0.0 {
+                return Err(LawError::InvertedDeformation { det_f: delta_f[(2, 2)] });
+            }
+        }
+        unreachable!("plane-stress loop returns by its last iteration");
+    }
+    let r = ctx.law.update(&kin, state.committed, state.trial)?;
+    let (p, a) = pull_back(state.f0, &r.first_piola, &r.tangent);
+    let mut t = SMatrix::<f64, 9, 9>::zeros();
+    for (c, &ic) in active.iter().enumerate() {
+        for (d, &id) in active.iter().enumerate() {
+            t[(c, d)] = a[(ic, id)];
+        }
+    }
+    let cauchy = cauchy_stress(&r.first_piola, &kin.deformation_gradient);
+    Ok(PointResponse { deformation_gradient: kin.deformation_gradient, stress: p, tangent: t, active: active.len(), cauchy })
+}
+
+/// Cauchy stress `σ = P Fᵀ / det F`.
+pub fn cauchy_stress(first_piola: &Matrix3<f64>, f: &Matrix3<f64>) -> Matrix3<f64> {
+    first_piola * f.transpose() / f.determinant()
+}
+
+/// What the kernel reports per integration point for output and energy bookkeeping.
+#[derive(Debug, Clone, Copy)]
+pub struct PointOutput {
+    /// Total deformation gradient `F`.
+    pub deformation_gradient: Matrix3<f64>,
+    /// Cauchy stress `σ`.
+    pub cauchy: Matrix3<f64>,
+    /// Pulled-back first Piola–Kirchhoff stress `P̃` (work conjugate to `ΔF`).
+    pub stress: Matrix3<f64>,
+}
+
+impl Default for PointOutput {
+    fn default() -> Self {
+        Self { deformation_gradient: Matrix3::identity(), cauchy: Matrix3::zeros(), stress: Matrix3::zeros() }
+    }
+}
+
+/// Rows of the discrete gradient operator at one point: `b[(a, i)][c]` is
+/// `∂F̃_{ACTIVE[c]}/∂u_ai`. Returns the number of active components.
+fn gradient_operator(
+    formulation: Formulation,
+    element: ElementType,
+    geometry: &PointGeometry,
+    b: &mut [[f64; 9]; MAX_DOFS],
+) -> usize {
+    let nn = element.num_nodes();
+    let dim = element.dim();
+    let active = active_components(formulation);
+    for a in 0..nn {
+        for i in 0..dim {
+            let row = &mut b[a * dim + i];
+            for (c, &comp) in active.iter().enumerate() {
+                let (ci, cj) = (comp / 3, comp % 3);
+                row[c] = if comp == idx(2, 2) && dim == 2 {
+                    if i == 0 { geometry.shape[a] / geometry.radius } else { 0.0 }
+                } else if ci == i {
+                    geometry.gradient[a][cj]
+                } else {
+                    0.0
+                };
+            }
+        }
+    }
+    active.len()
+}
+
+/// Internal force vector `f_int` (length `nn·dim`) and, if asked, the consistent tangent
+/// `stiffness` (row-major, `(nn·dim)²`) of one element over its integration points.
+///
+/// `f0`, `f_prev`, `geometry`, `point_out` hold one entry per point; `committed` and `trial` hold the
+/// points' histories back to back with stride `law.state_len()`. Outputs are overwritten.
+pub fn solid_element(
+    ctx: &KernelContext<'_>,
+    disp: &[[f64; 3]],
+    geometry: &[PointGeometry],
+    f0: &[Matrix3<f64>],
+    f_prev: &[Matrix3<f64>],
+    committed: &[f64],
+    trial: &mut [f64],
+    point_out: &mut [PointOutput],
+    f_int: &mut [f64],
+    mut stiffness: Option<&mut [f64]>,
+) -> Result<(), KernelError> {
+    let ndof = ctx.element.num_nodes() * ctx.element.dim();
+    let stride = ctx.law.state_len();
+    f_int[..ndof].fill(0.0);
+    if let Some(k) = stiffness.as_deref_mut() {
+        k[..ndof * ndof].fill(0.0);
+    }
+    let mut b = [[0.0; 9]; MAX_DOFS];
+    let mut bt_a = [[0.0; 9]; MAX_DOFS];
+    for (p, g) in geometry.iter().enumerate() {
+        let state = PointState {
+            f0: &f0[p],
+            f_prev: &f_prev[p],
+            committed: &committed[p * stride..(p + 1) * stride],
+            trial: &mut trial[p * stride..(p + 1) * stride],
+        };
+        let r = evaluate_point(ctx, g, disp, state).map_err(|source| KernelError::Law { point: p, source })?;
+        point_out[p] = PointOutput { deformation_gradient: r.deformation_gradient, cauchy: r.cauchy, stress: r.stress };
+        let nc = gradient_operator(ctx.formulation, ctx.element, g, &mut b);
+        let active = active_components(ctx.formulation);
+        let w = g.weight;
+        for r_ in 0..ndof {
+            let mut v = 0.0;
+            for c in 0..nc {
+                v += r.stress[(active[c] / 3, active[c] % 3)] * b[r_][c];
+            }
+            f_int[r_] += w * v;
+        }
+        if let Some(k) = stiffness.as_deref_mut() {
+            let nca = r.active;
+            for r_ in 0..ndof {
+                for d in 0..nca {
+                    let mut v = 0.0;
+                    for c in 0..nca {
+                        v += b[r_][c] * r.tangent[(c, d)];
+                    }
+                    bt_a[r_][d] = w * v;
+                }
+            }
+            for r_ in 0..ndof {
+                let row = &mut k[r_ * ndof..(r_ + 1) * ndof];
+                for s in 0..ndof {
+                    let mut v = 0.0;
+                    for d in 0..nca {
+                        v += bt_a[r_][d] * b[s][d];
+                    }
+                    row[s] += v;
+                }
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,434 @@
+//! A model: nodes, domains, constraints and loads on one DOF map, and the implicit step.
+//!
+//! One step from `t_n` to `t_{n+1} = t_n + Δt` (Newton–Raphson, as in Kratos' residual-based
+//! Newton strategy): displacement predictor `u = u_n` with prescribed values at `t_{n+1}`;
+//! then repeat — every domain fills its element blocks, the gather forms
+//! `R = f_int − f_body + M ã − f_ext` and the tangent `K_t + c_M M`, the sparse system
+//! `K δu = −R` is solved, `u ← u + δu` and the scheme updates `v`, `a` — until the
+//! convergence criterion holds. Only then do domains commit their histories.
+
+use std::time::Instant;
+
+use serde::Deserialize;
+
+use crate::amplitude::Amplitude;
+use crate::assembly::{AssemblyPattern, BlockLayout};
+use crate::domain::{AssemblyInput, Domain, DomainError, NodalState};
+use crate::dofs::{CONSTRAINED, DofMap};
+use crate::linear_solver::{LinearSolver, LinearSolverError, LinearSolverKind};
+use crate::scheme::TimeScheme;
+
+/// Which norms decide convergence.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ConvergenceCriterion {
+    /// Residual only.
+    Residual,
+    /// Displacement increment only.
+    Displacement,
+    /// Both (the default).
+    #[default]
+    And,
+    /// Either.
+    Or,
+}
+
+/// Newton–Raphson settings, as in the case file's `solver` object.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct NewtonSettings {
+    /// Largest number of iterations per step (default 20).
+    pub max_iterations: usize,
+    /// `‖R_k‖ / ‖R_0‖` below which the residual has converged (default 1e-6).
+    pub residual_relative_tolerance: f64,
+    /// `‖R_k‖` (N) below which the residual has converged (default 1e-9).
+    pub residual_absolute_tolerance: f64,
+    /// `‖δu‖ / ‖Δu‖` (increment of this iteration vs of the step) (default 1e-6).
+    pub displacement_relative_tolerance: f64,
+    /// `‖δu‖` (m) below which the displacement has converged (default 1e-12).
+    pub displacement_absolute_tolerance: f64,
+    /// Combination of the two criteria (default `and`).
+    pub convergence_criterion: ConvergenceCriterion,
+    /// Direct solver (default `auto`: Cholesky if symmetric, else LU).
+    pub linear_solver: LinearSolverKind,
+}
+
+impl Default for NewtonSettings {
+    fn default() -> Self {
+        Self {
+            max_iterations: 20,
+            residual_relative_tolerance: 1e-6,
+            residual_absolute_tolerance: 1e-9,
+            displacement_relative_tolerance: 1e-6,
+            displacement_absolute_tolerance: 1e-12,
+            convergence_criterion: ConvergenceCriterion::And,
+            linear_solver: LinearSolverKind::Auto,
+        }
+    }
+}
+
+/// Prescribed displacements `u = value · amplitude(t)` on a set of DOFs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Constraint {
+    /// Global DOF ids.
+    pub dofs: Vec<usize>,
+    /// Prescribed value per DOF (m).
+    pub values: Vec<f64>,
+    /// Time function.
+    pub amplitude: Amplitude,
+}
+
+/// External nodal forces `f = forces · amplitude(t)`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Load {
+    /// (global DOF, force in N) pairs.
+    pub forces: Vec<(usize, f64)>,
+    /// Time function.
+    pub amplitude: Amplitude,
+}
+
+/// Why a step failed.
+#[derive(Debug, Clone, thiserror::Error, PartialEq)]
+pub enum StepError {
+    /// Newton did not converge in the allowed iterations.
+    #[error("Newton did not converge in {iterations} iterations (residual {residual:.3e})")]
+    NoConvergence {
+        /// Iterations spent.
+        iterations: usize,
+        /// Last residual norm.
+        residual: f64,
+    },
+    /// An element failed (e.g. inverted).
+    #[error(transparent)]
+    Domain(#[from] DomainError),
+    /// The linear solve failed.
+    #[error(transparent)]
+    LinearSolver(#[from] LinearSolverError),
+}
+
+/// Wall-clock seconds per phase.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PhaseTimings {
+    /// Building sparsity patterns (and domains' per-step preparation).
+    pub pattern: f64,
+    /// Element kernels and gather of matrix and residual.
+    pub assembly: f64,
+    /// Symbolic and numeric factorisation.
+    pub factorisation: f64,
+    /// Triangular solves.
+    pub solve: f64,
+}
+
+impl std::ops::AddAssign for PhaseTimings {
+    fn add_assign(&mut self, o: Self) {
+        self.pattern += o.pattern;
+        self.assembly += o.assembly;
+        self.factorisation += o.factorisation;
+        self.solve += o.solve;
+    }
+}
+
+/// What one converged step did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StepReport {
+    /// Newton iterations (linear solves).
+    pub iterations: usize,
+    /// Free-DOF residual norm at each iteration, the last one converged.
+    pub residuals: Vec<f64>,
+    /// Phase timings of this step.
+    pub timings: PhaseTimings,
+}
+
+struct Workspace {
+    dofs: DofMap,
+    pattern: AssemblyPattern,
+    domain_matrix: Vec<usize>,
+    domain_vector: Vec<usize>,
+    matrices: Vec<f64>,
+    vectors: Vec<f64>,
+    values: Vec<f64>,
+    residual: Vec<f64>,
+    rhs: Vec<f64>,
+    solver: LinearSolver,
+}
+
+/// Nodes, domains, constraints, loads and the solution state.
+pub struct Model {
+    /// Components per node (2 or 3).
+    pub dim: usize,
+    /// Reference coordinates of the global nodes.
+    pub coords: Vec<[f64; 3]>,
+    /// Domains on the shared node set.
+    pub domains: Vec<Box<dyn Domain>>,
+    /// Prescribed displacements.
+    pub constraints: Vec<Constraint>,
+    /// External nodal forces.
+    pub loads: Vec<Load>,
+    /// Gravity (m/s²) and its time function.
+    pub gravity: ([f64; 3], Amplitude),
+    /// Time scheme.
+    pub scheme: TimeScheme,
+    /// Newton settings.
+    pub settings: NewtonSettings,
+    /// Current iterate (equal to `committed` between steps).
+    pub state: NodalState,
+    /// Last converged state.
+    pub committed: NodalState,
+    /// Time of the committed state.
+    pub time: f64,
+    /// Reactions (full DOF vector; nonzero at constrained DOFs) of the committed state.
+    pub reactions: Vec<f64>,
+    workspace: Option<Workspace>,
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+impl Model {
+    /// A model over `coords` with `dim` DOFs per node and no domains yet.
+    pub fn new(dim: usize, coords: Vec<[f64; 3]>, scheme: TimeScheme, settings: NewtonSettings) -> Self {
+        let n = coords.len() * dim;
+        Self {
+            dim,
+            coords,
+            domains: Vec::new(),
+            constraints: Vec::new(),
+            loads: Vec::new(),
+            gravity: ([0.0; 3], Amplitude::default()),
+            scheme,
+            settings,
+            state: NodalState::zeros(n),
+            committed: NodalState::zeros(n),
+            time: 0.0,
+            reactions: vec![0.0; n],
+            workspace: None,
+        }
+    }
+
+    /// Number of DOFs (constrained included).
+    pub fn num_dofs(&self) -> usize {
+        self.coords.len() * self.dim
+    }
+
+    /// Number of equations (after [`Model::prepare`]).
+    pub fn num_equations(&self) -> usize {
+        self.workspace.as_ref().map_or(0, |w| w.dofs.num_equations())
+    }
+
+    /// Number of nonzeros of the global matrix (after [`Model::prepare`]).
+    pub fn nnz(&self) -> usize {
+        self.workspace.as_ref().map_or(0, |w| w.pattern.nnz())
+    }
+
+    /// Forgets the sparsity pattern (after a change of domains or constraints).
+    pub fn invalidate_pattern(&mut self) {
+        self.workspace = None;
+    }
+
+    /// Builds the DOF map, the element-buffer layout and the sparsity pattern, if needed.
+    pub fn prepare(&mut self) {
+        if self.workspace.is_some() {
+            return;
+        }
+        let mut constrained = vec![false; self.num_dofs()];
+        for c in &self.constraints {
+            for &d in &c.dofs {
+                constrained[d] = true;
+            }
+        }
+        let mut layout = BlockLayout::default();
+        let mut domain_matrix = vec![0];
+        let mut domain_vector = vec![0];
+        for d in &self.domains {
+            d.blocks(&mut layout);
+            domain_matrix.push(layout.matrix_len());
+            domain_vector.push(layout.vector_len());
+        }
+        // nodes no block touches carry no equation
+        let mut touched = vec![false; self.num_dofs()];
+        for &g in &layout.dofs {
+            touched[g] = true;
+        }
+        for (c, t) in constrained.iter_mut().zip(&touched) {
+            *c |= !t;
+        }
+        let dofs = DofMap::new(self.dim, &constrained);
+        let pattern = AssemblyPattern::new(&dofs, &layout);
+        let n_eq = dofs.num_equations();
+        self.workspace = Some(Workspace {
+            matrices: vec![0.0; layout.matrix_len()],
+            vectors: vec![0.0; layout.vector_len()],
+            values: vec![0.0; pattern.nnz()],
+            residual: vec![0.0; self.num_dofs()],
+            rhs: vec![0.0; n_eq],
+            solver: LinearSolver::new(self.settings.linear_solver),
+            dofs,
+            pattern,
+            domain_matrix,
+            domain_vector,
+        });
+    }
+
+    /// Advances from the committed state by `dt`. On success the new state is committed
+    /// and `time` advanced; on failure nothing committed changes (call again with a
+    /// smaller step).
+    pub fn solve_step(&mut self, dt: f64) -> Result<StepReport, StepError> {
+        let mut report = StepReport::default();
+        let t0 = Instant::now();
+        self.prepare();
+        report.timings.pattern += t0.elapsed().as_secs_f64();
+        let t_new = self.time + dt;
+        let scheme = self.scheme;
+        let settings = self.settings;
+        let n = self.num_dofs();
+        self.state.clone_from(&self.committed);
+        for c in &self.constraints {
+            let f = c.amplitude.at(t_new);
+            for (&d, &v) in c.dofs.iter().zip(&c.values) {
+                self.state.u[d] = v * f;
+            }
+        }
+        self.update_kinematics(dt);
+        let mut f_ext = vec![0.0; n];
+        for l in &self.loads {
+            let f = l.amplitude.at(t_new);
+            for &(d, v) in &l.forces {
+                f_ext[d] += v * f;
+            }
+        }
+        let gf = self.gravity.1.at(t_new);
+        let gravity = self.gravity.0.map(|g| g * gf);
+        let mut inertial = vec![0.0; n];
+        let mut r0 = 0.0;
+        let mut du_step = vec![0.0; n];
+        let mut last_du = f64::INFINITY;
+        let mut ws = self.workspace.take().expect("prepared");
+        let result = (|| {
+            for it in 0..=settings.max_iterations {
+                let t = Instant::now();
+                if scheme.coefficients().is_some() {
+                    for ((m, &a), &an) in inertial.iter_mut().zip(&self.state.a).zip(&self.committed.a) {
+                        *m = scheme.inertial_acceleration(a, an);
+                    }
+                }
+                let input = AssemblyInput {
+                    state: &self.state,
+                    committed: &self.committed,
+                    inertial_acceleration: scheme.coefficients().map(|_| inertial.as_slice()),
+                    mass_coefficient: scheme.mass_coefficient(dt),
+                    gravity,
+                    time_step: dt,
+                    with_tangent: true,
+                };
+                let mut mats = ws.matrices.as_mut_slice();
+                let mut vecs = ws.vectors.as_mut_slice();
+                for (k, d) in self.domains.iter_mut().enumerate() {
+                    let (m, rest_m) = mats.split_at_mut(ws.domain_matrix[k + 1] - ws.domain_matrix[k]);
+                    let (v, rest_v) = vecs.split_at_mut(ws.domain_vector[k + 1] - ws.domain_vector[k]);
+                    d.assemble(&input, m, v)?;
+                    mats = rest_m;
+                    vecs = rest_v;
+                }
+                ws.pattern.gather_vector(&ws.vectors, &mut ws.residual);
+                for (r, f) in ws.residual.iter_mut().zip(&f_ext) {
+                    *r -= f;
+                }
+                for (g, &e) in ws.dofs.equations().iter().enumerate() {
+                    if e != CONSTRAINED {
+                        ws.rhs[e] = -ws.residual[g];
+                    }
+                }
+                let r_norm = norm(&ws.rhs);
+                report.residuals.push(r_norm);
+                report.timings.assembly += t.elapsed().as_secs_f64();
+                if it == 0 {
+                    r0 = r_norm;
+                }
+                let res_ok = r_norm <= settings.residual_absolute_tolerance
+                    || r_norm <= settings.residual_relative_tolerance * r0;
+                let du_norm = norm(&du_step);
+                let disp_ok = it > 0
+                    && (last_du <= settings.displacement_absolute_tolerance
+                        || last_du <= settings.displacement_relative_tolerance * du_norm);
+                let converged = (it == 0 && r_norm <= settings.residual_absolute_tolerance)
+                    || (it > 0
+                        && match settings.convergence_criterion {
+                            ConvergenceCriterion::Residual => res_ok,
+                            ConvergenceCriterion::Displacement => disp_ok,
+                            ConvergenceCriterion::And => res_ok && disp_ok,
+                            ConvergenceCriterion::Or => res_ok || disp_ok,
+                        });
+                if converged || !r_norm.is_finite() {
+                    if !r_norm.is_finite() {
+                        return Err(StepError::NoConvergence { iterations: it, residual: r_norm });
+                    }
+                    report.iterations = it;
+                    for (g, &e) in ws.dofs.equations().iter().enumerate() {
+                        self.reactions[g] = if e == CONSTRAINED { ws.residual[g] } else { 0.0 };
+                    }
+                    for d in self.domains.iter_mut() {
+                        d.commit(&input);
+                    }
+                    return Ok(());
+                }
+                if it == settings.max_iterations {
+                    break;
+                }
+                let t = Instant::now();
+                ws.pattern.gather_matrix(&ws.matrices, &mut ws.values);
+                report.timings.assembly += t.elapsed().as_secs_f64();
+                let before = ws.solver.timings;
+                ws.solver.solve(&ws.pattern, &ws.values, &mut ws.rhs)?;
+                report.timings.factorisation +=
+                    ws.solver.timings.factorisation - before.factorisation + ws.solver.timings.symbolic - before.symbolic;
+                report.timings.solve += ws.solver.timings.solve - before.solve;
+                for (g, &e) in ws.dofs.equations().iter().enumerate() {
+                    if e != CONSTRAINED {
+                        self.state.u[g] += ws.rhs[e];
+                        du_step[g] += ws.rhs[e];
+                    }
+                }
+                last_du = norm(&ws.rhs);
+                self.update_kinematics(dt);
+            }
+            Err(StepError::NoConvergence {
+                iterations: settings.max_iterations,
+                residual: report.residuals.last().copied().unwrap_or(f64::NAN),
+            })
+        })();
+        self.workspace = Some(ws);
+        match result {
+            Ok(()) => {
+                self.committed.clone_from(&self.state);
+                self.time = t_new;
+                Ok(report)
+            }
+            Err(e) => {
+                self.state.clone_from(&self.committed);
+                Err(e)
+            }
+        }
+    }
+
+    fn update_kinematics(&mut self, dt: f64) {
+        let scheme = self.scheme;
+        let s = &mut self.state;
+        let c = &self.committed;
+        for g in 0..s.u.len() {
+            let (v, a) = scheme.kinematics(dt, s.u[g], c.u[g], c.v[g], c.a[g]);
+            s.v[g] = v;
+            s.a[g] = a;
+        }
+    }
+
+    /// Total kinetic energy of the committed state.
+    pub fn kinetic_energy(&self) -> f64 {
+        self.domains.iter().map(|d| d.kinetic_energy(&self.committed.v)).sum()
+    }
+
+    /// Total stored work of internal forces of the committed state.
+    pub fn strain_energy(&self) -> f64 {
+        self.domains.iter().map(|d| d.strain_energy()).sum()
+    }
+}

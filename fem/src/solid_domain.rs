@@ -1,0 +1,321 @@
+//! The Lagrangian FEM domain: a total-Lagrangian solid on a mesh whose nodes are global.
+//!
+//! Gauss points are the kernel's integration points (`F0 = I`, weights `det J · w_q` on the
+//! reference mesh), so the geometry of every point is computed once. The mass matrix
+//! `M_ab = ∫ ρ0 N_a N_b dV0` is constant in a total-Lagrangian description and is also
+//! computed once (consistent with a higher-order rule, or lumped by row sums).
+
+use std::sync::Arc;
+
+use loam_laws::ConstitutiveLaw;
+use nalgebra::Matrix3;
+use rayon::prelude::*;
+
+use crate::assembly::BlockLayout;
+use crate::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NodalState};
+use crate::element::{ElementType, MAX_NODES};
+use crate::formulation::Formulation;
+use crate::kernel::{KernelContext, PointGeometry, PointOutput, point_geometry, solid_element};
+use crate::mesh::Mesh;
+
+/// A solid FEM domain of one element type and one material.
+pub struct FemDomain {
+    name: String,
+    formulation: Formulation,
+    thickness: f64,
+    element: ElementType,
+    mesh: Mesh,
+    node_ids: Vec<usize>,
+    law: Arc<dyn ConstitutiveLaw>,
+    points_per_element: usize,
+    geometry: Vec<PointGeometry>,
+    identity: Vec<Matrix3<f64>>,
+    f_prev: Vec<Matrix3<f64>>,
+    state_stride: usize,
+    committed_state: Vec<f64>,
+    trial_state: Vec<f64>,
+    committed_out: Vec<PointOutput>,
+    trial_out: Vec<PointOutput>,
+    mass: Vec<f64>,
+    work: Vec<f64>,
+}
+
+impl FemDomain {
+    /// Builds the domain on `mesh`, whose local node `a` is global node `node_ids[a]`.
+    /// Fails with the index of the first inverted element.
+    pub fn new(
+        name: &str,
+        mesh: Mesh,
+        node_ids: Vec<usize>,
+        formulation: Formulation,
+        thickness: f64,
+        law: Arc<dyn ConstitutiveLaw>,
+        lumped_mass: bool,
+    ) -> Result<Self, DomainError> {
+        let element = mesh.element;
+        let nn = element.num_nodes();
+        let rule = element.gauss_points();
+        let mass_rule = element.gauss_points_high();
+        let ngp = rule.len();
+        let ne = mesh.num_cells();
+        let mut geometry = Vec::with_capacity(ne * ngp);
+        let mut mass = vec![0.0; ne * nn * nn];
+        let rho = law.density();
+        for e in 0..ne {
+            let coords: Vec<[f64; 3]> = mesh.cell(e).iter().map(|&a| mesh.coords[a]).collect();
+            let fail = |err: crate::kernel::KernelError| DomainError {
+                domain: name.to_string(),
+                element: e,
+                message: format!("{err} (check the node ordering: counter-clockwise in 2D)"),
+            };
+            for gp in &rule {
+                geometry.push(point_geometry(element, formulation, thickness, &coords, &gp.xi, gp.weight).map_err(fail)?);
+            }
+            let me = &mut mass[e * nn * nn..(e + 1) * nn * nn];
+            for gp in &mass_rule {
+                let g = point_geometry(element, formulation, thickness, &coords, &gp.xi, gp.weight).map_err(fail)?;
+                for a in 0..nn {
+                    for b in 0..nn {
+                        me[a * nn + b] += rho * g.weight * g.shape[a] * g.shape[b];
+                    }
+                }
+            }
+            if lumped_mass {
+                for a in 0..nn {
+                    let row: f64 = me[a * nn..(a + 1) * nn].iter().sum();
+                    me[a * nn..(a + 1) * nn].fill(0.0);
+                    me[a * nn + a] = row;
+                }
+            }
+        }
+        let state_len = law.state_len();
+        let state_stride = ngp * state_len.max(1);
+        let mut committed_state = vec![0.0; ne * state_stride];
+        for p in 0..ne * ngp {
+            let (e, q) = (p / ngp, p % ngp);
+            let start = e * state_stride + q * state_len;
+            law.initialise_state(&mut committed_state[start..start + state_len]);
+        }
+        Ok(Self {
+            name: name.to_string(),
+            formulation,
+            thickness,
+            element,
+            mesh,
+            node_ids,
+            law,
+            points_per_element: ngp,
+            geometry,
+            identity: vec![Matrix3::identity(); ngp],
+            f_prev: vec![Matrix3::identity(); ne * ngp],
+            state_stride,
+            trial_state: committed_state.clone(),
+            committed_state,
+            committed_out: vec![PointOutput::default(); ne * ngp],
+            trial_out: vec![PointOutput::default(); ne * ngp],
+            mass,
+            work: vec![0.0; ne * ngp],
+        })
+    }
+
+    /// Global node ids of the domain's nodes.
+    pub fn node_ids(&self) -> &[usize] {
+        &self.node_ids
+    }
+
+    /// The mesh (local node numbering).
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    fn dim(&self) -> usize {
+        self.element.dim()
+    }
+}
+
+impl Domain for FemDomain {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn formulation(&self) -> Formulation {
+        self.formulation
+    }
+
+    fn thickness(&self) -> f64 {
+        self.thickness
+    }
+
+    fn blocks(&self, layout: &mut BlockLayout) {
+        let dim = self.dim();
+        for e in 0..self.mesh.num_cells() {
+            layout.push(self.mesh.cell(e).iter().flat_map(|&a| (0..dim).map(move |i| self.node_ids[a] * dim + i)));
+        }
+    }
+
+    fn assemble(&mut self, input: &AssemblyInput<'_>, matrices: &mut [f64], vectors: &mut [f64]) -> Result<(), DomainError> {
+        let nn = self.element.num_nodes();
+        let dim = self.dim();
+        let nd = nn * dim;
+        let ngp = self.points_per_element;
+        let ctx = KernelContext {
+            element: self.element,
+            formulation: self.formulation,
+            law: self.law.as_ref(),
+            time_step: input.time_step,
+        };
+        let (mesh, node_ids, geometry, f_prev, identity, mass, committed) =
+            (&self.mesh, &self.node_ids, &self.geometry, &self.f_prev, &self.identity, &self.mass, &self.committed_state);
+        let name = &self.name;
+        matrices
+            .par_chunks_mut(nd * nd)
+            .zip(vectors.par_chunks_mut(nd))
+            .zip(self.trial_state.par_chunks_mut(self.state_stride))
+            .zip(self.trial_out.par_chunks_mut(ngp))
+            .enumerate()
+            .try_for_each(|(e, (((km, fv), trial), out))| {
+                let cell = mesh.cell(e);
+                let mut disp = [[0.0; 3]; MAX_NODES];
+                for (a, &local) in cell.iter().enumerate() {
+                    for i in 0..dim {
+                        disp[a][i] = input.state.u[node_ids[local] * dim + i];
+                    }
+                }
+                let points = e * ngp..(e + 1) * ngp;
+                let stride = self.state_stride;
+                solid_element(
+                    &ctx,
+                    &disp[..nn],
+                    &geometry[points.clone()],
+                    identity,
+                    &f_prev[points],
+                    &committed[e * stride..(e + 1) * stride],
+                    trial,
+                    out,
+                    fv,
+                    input.with_tangent.then_some(&mut *km),
+                )
+                .map_err(|err| DomainError { domain: name.clone(), element: e, message: err.to_string() })?;
+                let me = &mass[e * nn * nn..(e + 1) * nn * nn];
+                for a in 0..nn {
+                    for b in 0..nn {
+                        let m = me[a * nn + b];
+                        if m == 0.0 {
+                            continue;
+                        }
+                        let gb = node_ids[cell[b]] * dim;
+                        for i in 0..dim {
+                            let mut r = -m * input.gravity[i];
+                            if let Some(acc) = input.inertial_acceleration {
+                                r += m * acc[gb + i];
+                            }
+                            fv[a * dim + i] += r;
+                            if input.with_tangent {
+                                km[(a * dim + i) * nd + b * dim + i] += input.mass_coefficient * m;
+                            }
+                        }
+                    }
+                }
+                Ok(())
+            })
+    }
+
+    fn commit(&mut self, _input: &AssemblyInput<'_>) {
+        for (p, (new, old)) in self.trial_out.iter().zip(self.committed_out.iter()).enumerate() {
+            let d_f = new.deformation_gradient - old.deformation_gradient;
+            self.work[p] += 0.5 * (new.stress + old.stress).dot(&d_f) * self.geometry[p].weight;
+            self.f_prev[p] = new.deformation_gradient;
+        }
+        self.committed_out.copy_from_slice(&self.trial_out);
+        self.committed_state.copy_from_slice(&self.trial_state);
+    }
+
+    fn kinetic_energy(&self, v: &[f64]) -> f64 {
+        let nn = self.element.num_nodes();
+        let dim = self.dim();
+        (0..self.mesh.num_cells())
+            .into_par_iter()
+            .map(|e| {
+                let cell = self.mesh.cell(e);
+                let me = &self.mass[e * nn * nn..(e + 1) * nn * nn];
+                let mut k = 0.0;
+                for a in 0..nn {
+                    for b in 0..nn {
+                        let (ga, gb) = (self.node_ids[cell[a]] * dim, self.node_ids[cell[b]] * dim);
+                        for i in 0..dim {
+                            k += 0.5 * me[a * nn + b] * v[ga + i] * v[gb + i];
+                        }
+                    }
+                }
+                k
+            })
+            .sum()
+    }
+
+    fn strain_energy(&self) -> f64 {
+        self.work.iter().sum()
+    }
+
+    fn boundary_facets(&self) -> Vec<Vec<usize>> {
+        self.mesh.boundary_facets().into_iter().map(|f| f.into_iter().map(|a| self.node_ids[a]).collect()).collect()
+    }
+
+    fn output(&self, committed: &NodalState) -> DomainOutput {
+        let dim = self.dim();
+        let nodal = |src: &[f64]| -> Vec<f64> {
+            self.node_ids
+                .iter()
+                .flat_map(|&g| (0..3).map(move |i| if i < dim { src[g * dim + i] } else { 0.0 }))
+                .collect()
+        };
+        let ngp = self.points_per_element;
+        let ne = self.mesh.num_cells();
+        let names = self.law.state_variables();
+        let state_len = self.law.state_len();
+        let mut stress = Vec::with_capacity(ne * 9);
+        let mut strain = Vec::with_capacity(ne * 9);
+        let mut von_mises = Vec::with_capacity(ne);
+        let mut states = vec![0.0; ne * names.len()];
+        let mut tmp = vec![0.0; names.len()];
+        for e in 0..ne {
+            let mut s = Matrix3::zeros();
+            let mut g = Matrix3::zeros();
+            for q in 0..ngp {
+                let p = &self.committed_out[e * ngp + q];
+                s += p.cauchy / ngp as f64;
+                let f = p.deformation_gradient;
+                g += 0.5 * (f.transpose() * f - Matrix3::identity()) / ngp as f64;
+                let start = e * self.state_stride + q * state_len;
+                self.law.state_output(&self.committed_state[start..start + state_len], &mut tmp);
+                for (k, v) in tmp.iter().enumerate() {
+                    states[e * names.len() + k] += v / ngp as f64;
+                }
+            }
+            stress.extend(s.transpose().iter());
+            strain.extend(g.transpose().iter());
+            von_mises.push(crate::von_mises(&s));
+        }
+        let mut cell_fields = vec![
+            Field { name: "cauchy_stress".into(), components: 9, values: stress },
+            Field { name: "green_lagrange_strain".into(), components: 9, values: strain },
+            Field { name: "von_mises_stress".into(), components: 1, values: von_mises },
+        ];
+        for (k, n) in names.iter().enumerate() {
+            cell_fields.push(Field {
+                name: n.to_string(),
+                components: 1,
+                values: (0..ne).map(|e| states[e * names.len() + k]).collect(),
+            });
+        }
+        DomainOutput {
+            points: self.mesh.coords.clone(),
+            cells: Some((self.element, self.mesh.connectivity.clone())),
+            point_fields: vec![
+                Field { name: "displacement".into(), components: 3, values: nodal(&committed.u) },
+                Field { name: "velocity".into(), components: 3, values: nodal(&committed.v) },
+                Field { name: "acceleration".into(), components: 3, values: nodal(&committed.a) },
+            ],
+            cell_fields,
+        }
+    }
+}
