@@ -77,3 +77,43 @@ impl ConstitutiveLaw for Hencky {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tensor::tangent_relative_error;
+
+    #[test]
+    fn tangent_matches_central_differences() {
+        let law = Hencky::new(1000.0, 1.0e7, 0.3);
+        for f in [
+            Matrix3::identity(),
+            Matrix3::new(1.1, 0.2, 0.05, -0.1, 0.95, 0.02, 0.03, 0.01, 1.05),
+        ] {
+            let err = tangent_relative_error(&law, &Kinematics::at(f), &[]).unwrap();
+            println!("hencky tangent: relative error vs central FD {err:.2e} (tolerance 1e-6)");
+            assert!(err < 1e-6);
+        }
+    }
+}
+
+#[cfg(test)]
+mod closed_form {
+    use super::*;
+
+    /// Uniaxial stretch λ₁ = e^{0.1} with lateral stretches 1: τ₁₁ = (λ + 2μ) 0.1, τ₂₂ = λ 0.1.
+    #[test]
+    fn kirchhoff_stress_is_linear_in_log_strain() {
+        let law = Hencky::new(1000.0, 1.0e7, 0.3);
+        let f = Matrix3::from_diagonal(&nalgebra::Vector3::new(0.1f64.exp(), 1.0, 1.0));
+        let r = law.update(&Kinematics::at(f), &[], &mut []).unwrap();
+        let tau = r.first_piola * f.transpose();
+        let (t11, t22) = ((law.lambda + 2.0 * law.mu) * 0.1, law.lambda * 0.1);
+        println!(
+            "hencky: τ11 {:.6e} vs {t11:.6e}, τ22 {:.6e} vs {t22:.6e} (tolerance 1e-12 relative)",
+            tau[(0, 0)],
+            tau[(1, 1)]
+        );
+        assert!((tau[(0, 0)] - t11).abs() < 1e-12 * t11 && (tau[(1, 1)] - t22).abs() < 1e-12 * t11);
+    }
+}

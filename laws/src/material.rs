@@ -101,7 +101,7 @@ fn check_strength(
             format!("must be > 0 when {cohesion_key} = 0 (the material would have no strength)"),
         ));
     }
-    if !(dilatancy_angle >= 0.0) {
+    if dilatancy_angle.is_nan() || dilatancy_angle < 0.0 {
         return Err(ParameterError::new(
             dilatancy_key,
             format!("must be >= 0 degrees, got {dilatancy_angle}"),

@@ -16,7 +16,7 @@
 //! isotropic stress `p₀ = p′c/OCR`, the mean stress at which the sample was unloaded from
 //! its preconsolidation pressure (as in Kratos' MPM Cam Clay). Other initial (e.g.
 //! geostatic) stresses enter through
-//! [`ConstitutiveLaw::initialise_state_at_stress`](crate::ConstitutiveLaw::initialise_state_at_stress).
+//! [`crate::ConstitutiveLaw::initialise_state_at_stress`].
 //!
 //! **Yield and flow** (associated): `f = q²/M² + p (p − p_c) ≤ 0`;
 //! `Δε_v^p = Δλ (2p − p_c)`, `Δε_s^p = Δλ 2q/M²`.
@@ -254,7 +254,7 @@ impl PrincipalModel for ModifiedCamClay {
 
     fn elastic_strain(&self, tau: [f64; 3]) -> Result<[f64; 3], LawError> {
         let p = -(tau[0] + tau[1] + tau[2]) / 3.0;
-        if !(p > 0.0) {
+        if p.is_nan() || p <= 0.0 {
             return Err(LawError::InitialStress {
                 problem: format!(
                     "modified_cam_clay needs a compressive mean stress, got p = {p:.3e} Pa"

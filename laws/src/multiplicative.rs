@@ -105,7 +105,7 @@ pub fn kirchhoff_update(
     let det_f = F.determinant();
     let spec = Spectral::of(&b_tr).ok_or(LawError::InvertedDeformation { det_f })?;
     let x = spec.values;
-    if x.iter().any(|&v| !(v > 0.0)) {
+    if x.iter().any(|&v| v.is_nan() || v <= 0.0) {
         return Err(LawError::InvertedDeformation { det_f });
     }
     let eps_tr = x.map(|v| 0.5 * v.ln());
@@ -138,7 +138,7 @@ pub fn kirchhoff_update(
 /// Inverse of `F` with the inversion check used by every law.
 pub fn checked_inverse(F: &Matrix3<f64>) -> Result<Matrix3<f64>, LawError> {
     let det_f = F.determinant();
-    if !(det_f > 0.0) || !det_f.is_finite() {
+    if !det_f.is_finite() || det_f <= 0.0 {
         return Err(LawError::InvertedDeformation { det_f });
     }
     F.try_inverse()

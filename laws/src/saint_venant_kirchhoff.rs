@@ -87,3 +87,22 @@ impl ConstitutiveLaw for SaintVenantKirchhoff {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tensor::tangent_relative_error;
+
+    #[test]
+    fn tangent_matches_central_differences() {
+        let law = SaintVenantKirchhoff::new(1000.0, 1.0e7, 0.3);
+        for f in [
+            Matrix3::identity(),
+            Matrix3::new(1.1, 0.2, 0.05, -0.1, 0.95, 0.02, 0.03, 0.01, 1.05),
+        ] {
+            let err = tangent_relative_error(&law, &Kinematics::at(f), &[]).unwrap();
+            println!("saint_venant_kirchhoff tangent: relative error vs central FD {err:.2e} (tolerance 1e-6)");
+            assert!(err < 1e-6);
+        }
+    }
+}
