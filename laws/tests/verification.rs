@@ -730,3 +730,74 @@ fn driver_errors_name_the_json_path() {
         assert!(!e.contains('\n'));
     }
 }
+
+/// The remaining path types: drained triaxial extension (closed-form MC strength in
+/// extension), undrained triaxial, simple shear at constant vertical stress and a user
+/// strain-increment table (against the linear elastic closed form).
+#[test]
+fn extension_simple_shear_and_increment_paths() {
+    let run = |path: serde_json::Value, material: serde_json::Value| {
+        let f = driver::parse_path_file(
+            &json!({"description": "t", "material": material, "path": path}).to_string(),
+        )
+        .unwrap();
+        driver::run_path(f.material.build().unwrap().as_ref(), &f).unwrap()
+    };
+    let mut mc = mc_json();
+    mc["dilatancy_angle"] = json!(0.0);
+    // Extension: failure when σ_axial is the major (least compressive) stress:
+    // q = σ₃ − (σ₃ − σ_c)/k.
+    let t = run(
+        json!({"type": "triaxial", "drainage": "drained", "loading": "extension", "confining_pressure": 1e5, "axial_strain": 0.05, "steps": 100}),
+        mc.clone(),
+    );
+    let (s, c) = 25f64.to_radians().sin_cos();
+    let (k, sc) = ((1.0 + s) / (1.0 - s), 2.0 * 5e3 * c / (1.0 - s));
+    let reference = 1e5 - (1e5 - sc) / k;
+    let peak = t.column("q").unwrap().into_iter().fold(0.0, f64::max);
+    let lateral = *t.column("sigma_xx").unwrap().last().unwrap();
+    println!("MC drained triaxial extension: peak q {:.3} kPa, closed form {:.3} kPa (tolerance 1 %); σ_xx {lateral:.3} Pa (reference −1e5)", peak / 1e3, reference / 1e3);
+    assert!((peak - reference).abs() < 0.01 * reference);
+    assert!((lateral + 1e5).abs() < 1e-4);
+    // Undrained: constant volume, q bounded by the MC strength at the current p.
+    let t = run(
+        json!({"type": "triaxial", "drainage": "undrained", "loading": "compression", "confining_pressure": 1e5, "axial_strain": 0.05, "steps": 100}),
+        mc.clone(),
+    );
+    let ev = t
+        .column("volumetric_strain")
+        .unwrap()
+        .into_iter()
+        .fold(0.0_f64, |m, v| m.max(v.abs()));
+    println!(
+        "MC undrained triaxial: max |volumetric strain| {ev:.2e} (reference 0, tolerance 1e-12)"
+    );
+    assert!(ev < 1e-12);
+    // Simple shear at constant vertical stress.
+    let t = run(
+        json!({"type": "simple_shear", "shear_strain": 0.05, "steps": 50, "vertical_stress": 1e5}),
+        mc,
+    );
+    let syy = t.column("sigma_yy").unwrap();
+    let tau = *t.column("sigma_xy").unwrap().last().unwrap();
+    println!(
+        "MC simple shear at σ_v = 100 kPa: final σ_yy {:.3} Pa (reference −1e5), τ_xy {:.3} kPa",
+        syy.last().unwrap(),
+        tau / 1e3
+    );
+    assert!(syy.iter().all(|s| (s + 1e5).abs() < 1e-4));
+    assert!(tau > 0.0);
+    // Strain-increment table: ten vertical increments of −0.001 on a linear elastic solid.
+    let incs: Vec<[f64; 9]> = (0..10)
+        .map(|_| [0.0, 0.0, 0.0, 0.0, -0.001, 0.0, 0.0, 0.0, 0.0])
+        .collect();
+    let t = run(
+        json!({"type": "strain_increments", "increments": incs}),
+        json!({"law": "linear_elastic", "density": 1000.0, "young_modulus": 1e8, "poisson_ratio": 0.3}),
+    );
+    let m = 1e8 * 0.7 / (1.3 * 0.4);
+    let reference = m * (0.999f64.powi(10) - 1.0);
+    let syy = *t.column("sigma_yy").unwrap().last().unwrap();
+    println!("strain increments: σ_yy {syy:.3} Pa, reference {reference:.3} Pa (tolerance 1e-9)");
+    assert!((syy - reference).abs() < 1e-9 * reference.abs());
+}
