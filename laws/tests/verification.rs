@@ -801,3 +801,31 @@ fn extension_simple_shear_and_increment_paths() {
     println!("strain increments: σ_yy {syy:.3} Pa, reference {reference:.3} Pa (tolerance 1e-9)");
     assert!((syy - reference).abs() < 1e-9 * reference.abs());
 }
+
+/// Nearly coincident principal stretches (gap 1e-7 … 1e-9) in plastic states: the
+/// isotropic-function derivative switches between the divided difference and its limit
+/// there, and must stay accurate on both sides.
+#[test]
+fn tangent_at_nearly_repeated_eigenvalues() {
+    let law = MohrCoulomb::new(2000.0, 5e7, 0.3, 25f64.to_radians(), 5e3, 5f64.to_radians());
+    let base = hencky_strain(law.lambda, law.mu, [-50e3, -300e3, -300e3]);
+    let clay = mcc(1.0);
+    for gap in [1e-5, 1e-7, 1e-9, 0.0] {
+        let eps = [base[0], base[1], base[2] + gap];
+        let s = virgin(&law);
+        check_tangent(
+            &format!("mohr_coulomb extension edge, eigen gap {gap:.0e}"),
+            &law,
+            &Kinematics::at(stretch(eps)),
+            &s,
+        );
+        let s = virgin(&clay);
+        let eps = [-0.005, -0.005 + gap, -0.005 - gap];
+        check_tangent(
+            &format!("modified_cam_clay isotropic plastic, eigen gap {gap:.0e}"),
+            &clay,
+            &Kinematics::at(stretch(eps)),
+            &s,
+        );
+    }
+}
