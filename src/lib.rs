@@ -1,1 +1,16 @@
-//! loam
+//! Loam: implicit MPM and Lagrangian FEM for large-deformation solid and soil mechanics.
+//!
+//! This package holds what turns a JSON case file into results: the case schema
+//! ([`case`]), model building ([`model_builder`]), the steppable simulation
+//! ([`simulation`]), monitors and output ([`output`]), and the `loam` CLI. The numerics
+//! live in the member crates `loam-laws`, `loam-fem`, `loam-mpm` and `loam-coupling`.
+
+pub mod case;
+pub mod model_builder;
+pub mod monitor;
+pub mod output;
+pub mod run;
+pub mod simulation;
+
+pub use loam_fem as fem;
+pub use loam_laws as laws;

@@ -1,1 +1,139 @@
-fn main() {}
+//! `loam`: run, check and explore Loam case files.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use loam::case::CaseError;
+use loam::run::{RunEnd, default_out_dir, run};
+use loam::simulation::Simulation;
+
+/// Implicit MPM and Lagrangian FEM for large-deformation solid and soil mechanics.
+#[derive(Parser)]
+#[command(name = "loam", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a case file and write VTK results and monitors.csv.
+    Run {
+        /// The case file (JSON).
+        case: PathBuf,
+        /// Output directory (default out/<case name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Check a case file (parse, parameters, mesh, regions) without running it.
+    Check {
+        /// The case file (JSON).
+        case: PathBuf,
+    },
+    /// Drive one material point of a law along a laboratory path and write path.csv.
+    Law {
+        /// The path file (JSON), e.g. cases/laws/mc_triaxial_drained.json.
+        path: PathBuf,
+        /// Output directory (default out/<path name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
+fn bad_input(e: &CaseError) -> ExitCode {
+    eprintln!("error: {e}");
+    ExitCode::from(2)
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    faer::set_global_parallelism(faer::Par::Seq);
+    match cli.command {
+        Command::Check { case } => match Simulation::from_file(&case) {
+            Ok(sim) => {
+                println!(
+                    "{}: ok — {} nodes, {} domains, {} equations-to-be, {} steps, monitors: {}",
+                    case.display(),
+                    sim.model.coords.len(),
+                    sim.model.domains.len(),
+                    sim.model.num_dofs(),
+                    sim.total_steps(),
+                    sim.monitor_names().join(", ")
+                );
+                ExitCode::SUCCESS
+            }
+            Err(e) => bad_input(&e),
+        },
+        Command::Run { case, out, threads, quiet } => {
+            if let Some(n) = threads {
+                if n == 0 {
+                    eprintln!("error: --threads must be at least 1");
+                    return ExitCode::from(2);
+                }
+                rayon::ThreadPoolBuilder::new().num_threads(n).build_global().expect("thread pool set once");
+            }
+            let mut sim = match Simulation::from_file(&case) {
+                Ok(s) => s,
+                Err(e) => return bad_input(&e),
+            };
+            let out = out.unwrap_or_else(|| default_out_dir(&sim.case.name));
+            match run(&mut sim, &out, !quiet) {
+                Ok((end, wall)) => {
+                    let t = &sim.stats.timings;
+                    let summary = format!(
+                        "{} steps, {} Newton iterations, {} step cuts, wall time {:.2} s (assembly {:.2} s, factorisation {:.2} s, solve {:.2} s)",
+                        sim.stats.steps, sim.stats.iterations, sim.stats.cuts, wall, t.assembly, t.factorisation, t.solve
+                    );
+                    match end {
+                        RunEnd::Finished => {
+                            println!("loam: finished t = {:.6e} s: {summary}; results in {}", sim.time(), out.display());
+                            ExitCode::SUCCESS
+                        }
+                        RunEnd::Failed(e) => {
+                            eprintln!(
+                                "error: stopped at {e}; results up to t = {:.6e} s written to {} ({summary})",
+                                e.time,
+                                out.display()
+                            );
+                            ExitCode::from(1)
+                        }
+                    }
+                }
+                Err(e) => {
+                    eprintln!("error: writing results to {}: {e}", out.display());
+                    ExitCode::from(1)
+                }
+            }
+        }
+        Command::Law { path, out } => {
+            let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "law".into());
+            let out = out.unwrap_or_else(|| default_out_dir(&name));
+            match loam_laws::driver::run_path_file(&path, &out) {
+                Ok(s) => {
+                    println!(
+                        "loam: {} ({} rows): peak q = {:.4} kPa, final p = {:.4} kPa, final q = {:.4} kPa; wrote {}",
+                        s.law,
+                        s.rows,
+                        s.peak_q / 1e3,
+                        s.final_p / 1e3,
+                        s.final_q / 1e3,
+                        out.join("path.csv").display()
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    let write_failure = matches!(e, loam_laws::driver::DriverError::Write { .. });
+                    ExitCode::from(if write_failure { 1 } else { 2 })
+                }
+            }
+        }
+    }
+}

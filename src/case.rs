@@ -1,0 +1,422 @@
+//! Case files: the JSON description of a simulation.
+//!
+//! Every object rejects unknown keys, and every error names its JSON path, e.g.
+//! `materials.beam.poisson_ratio: must lie in (-1, 0.5), got 0.5`. See the README's
+//! "Case file reference" for a commented example of every key.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use loam_fem::amplitude::Amplitude;
+use loam_fem::element::ElementType;
+use loam_fem::formulation::Formulation;
+use loam_fem::model::NewtonSettings;
+use loam_fem::scheme::TimeScheme;
+use loam_laws::MaterialSpec;
+use serde::Deserialize;
+
+/// A problem in a case file, with the JSON path (or file and line) it concerns.
+#[derive(Debug, Clone, thiserror::Error, PartialEq)]
+#[error("{location}: {message}")]
+pub struct CaseError {
+    /// JSON path such as `domains[0].mesh.rectangle.cells`, or `file:line:column`.
+    pub location: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl CaseError {
+    /// An error at `location`.
+    pub fn new(location: impl Into<String>, message: impl Into<String>) -> Self {
+        Self { location: location.into(), message: message.into() }
+    }
+}
+
+/// The whole case file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Case {
+    /// What the case shows and which reference it reproduces.
+    pub description: String,
+    /// Kinematic formulation shared by all domains (default `plane_strain`).
+    #[serde(default = "default_formulation")]
+    pub formulation: Formulation,
+    /// Out-of-plane thickness in m for plane problems (default 1).
+    #[serde(default = "one")]
+    pub thickness: f64,
+    /// Materials by name.
+    pub materials: BTreeMap<String, MaterialSpec>,
+    /// Domains (FEM meshes); nodes at the same position are shared between domains.
+    pub domains: Vec<DomainSpec>,
+    /// Named node sets.
+    #[serde(default)]
+    pub regions: BTreeMap<String, RegionSpec>,
+    /// Prescribed displacements.
+    #[serde(default)]
+    pub boundary_conditions: Vec<BoundaryConditionSpec>,
+    /// Nodal forces and surface loads.
+    #[serde(default)]
+    pub loads: Vec<LoadSpec>,
+    /// Gravity.
+    #[serde(default)]
+    pub gravity: Option<GravitySpec>,
+    /// Analysis type and time stepping.
+    pub analysis: AnalysisSpec,
+    /// Newton and linear-solver settings.
+    #[serde(default)]
+    pub solver: NewtonSettings,
+    /// Output settings.
+    #[serde(default)]
+    pub output: OutputSpec,
+    /// Named scalar time histories written to `monitors.csv`.
+    #[serde(default)]
+    pub monitors: Vec<MonitorSpec>,
+    /// Directory of the case file (for relative mesh paths); set by the loader.
+    #[serde(skip)]
+    pub directory: PathBuf,
+    /// Stem of the case file name (default output directory `out/<name>`).
+    #[serde(skip)]
+    pub name: String,
+}
+
+fn default_formulation() -> Formulation {
+    Formulation::PlaneStrain
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// A domain: a mesh with one material.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DomainSpec {
+    /// Name (used for output files `<name>_<step>.vtu`).
+    pub name: String,
+    /// Discretisation: `fem` (Lagrangian FEM).
+    #[serde(rename = "type", default = "fem")]
+    pub kind: DomainKind,
+    /// Mesh.
+    pub mesh: MeshSpec,
+    /// Material name (a key of `materials`).
+    pub material: String,
+    /// `consistent` (default) or `lumped` mass matrix.
+    #[serde(default)]
+    pub mass_matrix: MassMatrix,
+}
+
+fn fem() -> DomainKind {
+    DomainKind::Fem
+}
+
+/// Discretisation of a domain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DomainKind {
+    /// Lagrangian finite elements.
+    Fem,
+}
+
+/// Mass matrix choice.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MassMatrix {
+    /// `∫ ρ N_a N_b dV`.
+    #[default]
+    Consistent,
+    /// Row sums on the diagonal.
+    Lumped,
+}
+
+/// A mesh: generated or read from a Gmsh file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum MeshSpec {
+    /// Structured rectangle.
+    Rectangle {
+        /// Lower-left corner (m).
+        origin: [f64; 2],
+        /// Width and height (m).
+        size: [f64; 2],
+        /// Cells along x and y.
+        cells: [usize; 2],
+        /// `quad4` or `tri3`.
+        element: ElementType,
+    },
+    /// Structured box.
+    Box {
+        /// Lowest corner (m).
+        origin: [f64; 3],
+        /// Extent along x, y, z (m).
+        size: [f64; 3],
+        /// Cells along x, y, z.
+        cells: [usize; 3],
+        /// `hex8` or `tet4`.
+        element: ElementType,
+    },
+    /// Gmsh MSH 4.1 file, path relative to the case file.
+    Gmsh(PathBuf),
+}
+
+/// A named node set, selected geometrically or by a Gmsh physical group.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum RegionSpec {
+    /// Nodes with `x = value`.
+    X(f64),
+    /// Nodes with `y = value`.
+    Y(f64),
+    /// Nodes with `z = value`.
+    Z(f64),
+    /// Nodes inside an axis-aligned box (bounds included).
+    Box {
+        /// Lower corner.
+        min: Vec<f64>,
+        /// Upper corner.
+        max: Vec<f64>,
+    },
+    /// Nodes on the segment between two points.
+    Segment {
+        /// Start point.
+        from: Vec<f64>,
+        /// End point.
+        to: Vec<f64>,
+    },
+    /// The single node nearest to a point.
+    Nearest(Vec<f64>),
+    /// A Gmsh physical group by name.
+    Group(String),
+    /// Every node.
+    All(bool),
+}
+
+/// Prescribed displacement on a region.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoundaryConditionSpec {
+    /// Region name.
+    pub region: String,
+    /// One entry per component: a value in m, or `null` for a free component.
+    pub displacement: Vec<Option<f64>>,
+    /// Time function scaling the values (default constant 1).
+    #[serde(default)]
+    pub amplitude: Amplitude,
+}
+
+/// A load on a region.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum LoadSpec {
+    /// The same force (N) on every node of the region.
+    NodalForce {
+        /// Region name.
+        region: String,
+        /// Force vector in N, one entry per component.
+        force: Vec<f64>,
+        /// Time function.
+        #[serde(default)]
+        amplitude: Amplitude,
+    },
+    /// Pressure (Pa, positive pushing into the body) on the boundary facets of the region.
+    Pressure {
+        /// Region name.
+        region: String,
+        /// Pressure in Pa.
+        pressure: f64,
+        /// Time function.
+        #[serde(default)]
+        amplitude: Amplitude,
+    },
+    /// Traction vector (Pa) on the boundary facets of the region.
+    Traction {
+        /// Region name.
+        region: String,
+        /// Traction in Pa, one entry per component.
+        traction: Vec<f64>,
+        /// Time function.
+        #[serde(default)]
+        amplitude: Amplitude,
+    },
+}
+
+/// Gravity acceleration and its time function.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GravitySpec {
+    /// Acceleration in m/s², one entry per component (e.g. `[0, -9.81]`).
+    pub acceleration: Vec<f64>,
+    /// Time function (default constant 1: gravity applied suddenly).
+    #[serde(default)]
+    pub amplitude: Amplitude,
+}
+
+/// Analysis type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AnalysisType {
+    /// Equilibrium, load stepping in pseudo-time.
+    Static,
+    /// Equilibrium without inertia at each time of a slow process.
+    QuasiStatic,
+    /// Equations of motion (Newmark or Bossak).
+    Dynamic,
+}
+
+/// Time stepping.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnalysisSpec {
+    /// `static`, `quasi_static` or `dynamic`.
+    #[serde(rename = "type")]
+    pub kind: AnalysisType,
+    /// Step Δt in s (pseudo-time for static analyses).
+    pub time_step: f64,
+    /// End time in s.
+    pub end_time: f64,
+    /// Dynamic scheme (default Newmark β = 0.25, γ = 0.5).
+    #[serde(default)]
+    pub scheme: Option<TimeScheme>,
+    /// How many times a failed step is halved before the run stops (default 4).
+    #[serde(default = "default_cuts")]
+    pub max_step_cuts: u32,
+}
+
+fn default_cuts() -> u32 {
+    4
+}
+
+/// Output settings.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputSpec {
+    /// Write VTK every this many steps (default 1; 0 writes only the last state).
+    pub interval: usize,
+    /// Whether to write VTK files at all (default true).
+    pub vtk: bool,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self { interval: 1, vtk: true }
+    }
+}
+
+/// A vector component by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Component {
+    /// x (or r).
+    X,
+    /// y (or z in axisymmetry).
+    Y,
+    /// z.
+    Z,
+    /// Euclidean norm.
+    Magnitude,
+}
+
+/// A named scalar time history.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MonitorSpec {
+    /// Displacement component of the node nearest to `point`.
+    Displacement {
+        /// Column name.
+        name: String,
+        /// Location (m).
+        point: Vec<f64>,
+        /// Component.
+        component: Component,
+    },
+    /// Velocity component of the node nearest to `point`.
+    Velocity {
+        /// Column name.
+        name: String,
+        /// Location (m).
+        point: Vec<f64>,
+        /// Component.
+        component: Component,
+    },
+    /// Acceleration component of the node nearest to `point`.
+    Acceleration {
+        /// Column name.
+        name: String,
+        /// Location (m).
+        point: Vec<f64>,
+        /// Component.
+        component: Component,
+    },
+    /// Sum of the reaction forces (N) over a region.
+    Reaction {
+        /// Column name.
+        name: String,
+        /// Region name.
+        region: String,
+        /// Component.
+        component: Component,
+    },
+    /// Total kinetic energy (J).
+    KineticEnergy {
+        /// Column name.
+        name: String,
+    },
+    /// Total stored work of internal forces (J): the strain energy for elastic laws.
+    StrainEnergy {
+        /// Column name.
+        name: String,
+    },
+}
+
+impl MonitorSpec {
+    /// The monitor's column name.
+    pub fn name(&self) -> &str {
+        match self {
+            MonitorSpec::Displacement { name, .. }
+            | MonitorSpec::Velocity { name, .. }
+            | MonitorSpec::Acceleration { name, .. }
+            | MonitorSpec::Reaction { name, .. }
+            | MonitorSpec::KineticEnergy { name }
+            | MonitorSpec::StrainEnergy { name } => name,
+        }
+    }
+}
+
+impl Case {
+    /// Reads and parses a case file; syntax and type errors name the JSON path.
+    pub fn load(path: &Path) -> Result<Case, CaseError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| CaseError::new(path.display().to_string(), format!("cannot read case file: {e}")))?;
+        let mut case = Case::parse(&text).map_err(|mut e| {
+            if e.location.is_empty() || e.location.starts_with("line") {
+                e.location = format!("{}:{}", path.display(), e.location);
+            }
+            e
+        })?;
+        case.directory = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        case.name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "case".into());
+        Ok(case)
+    }
+
+    /// Parses case JSON text.
+    pub fn parse(text: &str) -> Result<Case, CaseError> {
+        let de = &mut serde_json::Deserializer::from_str(text);
+        serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let inner = e.into_inner();
+            let message = strip_position(&inner.to_string());
+            if inner.is_syntax() || inner.is_eof() || path == "." {
+                CaseError::new(format!("line {} column {}", inner.line(), inner.column()), message)
+            } else {
+                CaseError::new(path, message)
+            }
+        })
+    }
+}
+
+/// serde_json appends " at line L column C"; the path already says where.
+fn strip_position(message: &str) -> String {
+    match message.rfind(" at line ") {
+        Some(i) => message[..i].to_string(),
+        None => message.to_string(),
+    }
+}

@@ -1,0 +1,61 @@
+//! The CLI run loop: steps a [`Simulation`] to its end time with a progress bar, writes
+//! results as it goes, and on failure keeps everything converged so far.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::output::results::ResultWriter;
+use crate::simulation::{RunError, Simulation};
+
+/// How a run ended.
+#[derive(Debug)]
+pub enum RunEnd {
+    /// Reached the end time.
+    Finished,
+    /// Stopped by a step that failed after all cuts; results up to `error.time` written.
+    Failed(RunError),
+}
+
+/// Runs `sim` to its end time writing into `out_dir`; `progress` shows a progress bar.
+pub fn run(sim: &mut Simulation, out_dir: &Path, progress: bool) -> std::io::Result<(RunEnd, f64)> {
+    let start = Instant::now();
+    let mut writer = ResultWriter::create(out_dir, sim)?;
+    writer.write_step(sim, true)?;
+    let bar = if progress { ProgressBar::new(sim.total_steps() as u64) } else { ProgressBar::hidden() };
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} steps  {msg}  [{elapsed_precise} < {eta}]")
+            .expect("valid template"),
+    );
+    let end = loop {
+        if sim.finished() {
+            break RunEnd::Finished;
+        }
+        match sim.step() {
+            Ok(s) => {
+                bar.set_position(sim.step as u64);
+                bar.set_message(format!(
+                    "t = {:.4e} s  Newton {}{}  residual {:.2e}",
+                    sim.time(),
+                    s.iterations,
+                    if s.substeps > 1 { format!(" ({} sub-steps)", s.substeps) } else { String::new() },
+                    s.residual
+                ));
+                let last = sim.finished();
+                writer.write_step(sim, last)?;
+            }
+            Err(e) => break RunEnd::Failed(e),
+        }
+    };
+    if let RunEnd::Failed(_) = end {
+        writer.write_final_state(sim)?;
+    }
+    bar.finish_and_clear();
+    Ok((end, start.elapsed().as_secs_f64()))
+}
+
+/// Default output directory `out/<case name>`.
+pub fn default_out_dir(case_name: &str) -> PathBuf {
+    PathBuf::from("out").join(case_name)
+}

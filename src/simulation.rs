@@ -1,0 +1,158 @@
+//! The steppable simulation: one API for the CLI run loop, tests and the FMU.
+//!
+//! A [`Simulation`] advances a loaded case step by step to any requested time, using the
+//! case's step and halving it (up to `analysis.max_step_cuts` times) when Newton fails;
+//! results do not depend on who drives it.
+
+use std::path::Path;
+
+use loam_fem::model::{Model, PhaseTimings, StepError};
+
+use crate::case::{Case, CaseError};
+use crate::model_builder::build_model;
+use crate::monitor::Monitor;
+
+/// Why a run stopped early.
+#[derive(Debug, Clone, thiserror::Error, PartialEq)]
+#[error("step {step} (t = {time:.6e} s, Δt = {time_step:.3e} s after {cuts} cuts): {source}")]
+pub struct RunError {
+    /// Index of the step that failed (1-based).
+    pub step: usize,
+    /// Time of the last converged state.
+    pub time: f64,
+    /// Smallest step tried.
+    pub time_step: f64,
+    /// Step cuts tried.
+    pub cuts: u32,
+    /// The last failure.
+    pub source: StepError,
+}
+
+/// Counters of a run.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RunStats {
+    /// Converged steps (sub-steps included).
+    pub steps: usize,
+    /// Newton iterations (linear solves).
+    pub iterations: usize,
+    /// Step cuts after failures.
+    pub cuts: usize,
+    /// Accumulated phase timings.
+    pub timings: PhaseTimings,
+}
+
+/// What one call to [`Simulation::step`] did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StepSummary {
+    /// Newton iterations summed over sub-steps.
+    pub iterations: usize,
+    /// Sub-steps taken (1 without cuts).
+    pub substeps: usize,
+    /// Final residual norm of the last sub-step.
+    pub residual: f64,
+}
+
+/// A case being run.
+pub struct Simulation {
+    /// The case as loaded.
+    pub case: Case,
+    /// The model.
+    pub model: Model,
+    /// Monitors in case order.
+    pub monitors: Vec<Monitor>,
+    /// Steps completed (of the case's step size).
+    pub step: usize,
+    /// Counters.
+    pub stats: RunStats,
+}
+
+impl Simulation {
+    /// Loads, checks and builds a case file.
+    pub fn from_file(path: &Path) -> Result<Self, CaseError> {
+        Self::new(Case::load(path)?)
+    }
+
+    /// Checks and builds a parsed case.
+    pub fn new(case: Case) -> Result<Self, CaseError> {
+        let built = build_model(&case)?;
+        Ok(Self { case, model: built.model, monitors: built.monitors, step: 0, stats: RunStats::default() })
+    }
+
+    /// Time of the committed state.
+    pub fn time(&self) -> f64 {
+        self.model.time
+    }
+
+    /// End time of the case.
+    pub fn end_time(&self) -> f64 {
+        self.case.analysis.end_time
+    }
+
+    /// Whether the end time has been reached.
+    pub fn finished(&self) -> bool {
+        self.time() >= self.end_time() - 1e-9 * self.case.analysis.time_step
+    }
+
+    /// Number of steps the case takes.
+    pub fn total_steps(&self) -> usize {
+        (self.end_time() / self.case.analysis.time_step - 1e-9).ceil() as usize
+    }
+
+    /// Monitor names, in column order.
+    pub fn monitor_names(&self) -> Vec<&str> {
+        self.monitors.iter().map(|m| m.name.as_str()).collect()
+    }
+
+    /// Monitor values at the committed state.
+    pub fn monitor_values(&self) -> Vec<f64> {
+        self.monitors.iter().map(|m| m.evaluate(&self.model)).collect()
+    }
+
+    /// One step of the case's Δt (shortened to land on the end time).
+    pub fn step(&mut self) -> Result<StepSummary, RunError> {
+        let target = (self.time() + self.case.analysis.time_step).min(self.end_time());
+        self.advance_step_to(target)
+    }
+
+    /// Advances to `target` (> current time) in one step, cutting it on failure.
+    pub fn advance_step_to(&mut self, target: f64) -> Result<StepSummary, RunError> {
+        let mut dt = target - self.time();
+        let mut cuts = 0u32;
+        let mut summary = StepSummary::default();
+        let eps = 1e-12 * self.case.analysis.time_step;
+        while self.time() < target - eps {
+            let h = dt.min(target - self.time());
+            match self.model.solve_step(h) {
+                Ok(report) => {
+                    summary.iterations += report.iterations;
+                    summary.substeps += 1;
+                    summary.residual = report.residuals.last().copied().unwrap_or(0.0);
+                    self.stats.steps += 1;
+                    self.stats.iterations += report.iterations;
+                    self.stats.timings += report.timings;
+                }
+                Err(source) => {
+                    if cuts >= self.case.analysis.max_step_cuts {
+                        return Err(RunError { step: self.step + 1, time: self.time(), time_step: h, cuts, source });
+                    }
+                    cuts += 1;
+                    self.stats.cuts += 1;
+                    dt = h / 2.0;
+                }
+            }
+        }
+        self.step += 1;
+        Ok(summary)
+    }
+
+    /// Advances to time `t` with the case's step size (the last step shortened to land on
+    /// `t`).
+    pub fn advance_to(&mut self, t: f64) -> Result<(), RunError> {
+        let eps = 1e-9 * self.case.analysis.time_step;
+        while self.time() < t - eps {
+            let target = (self.time() + self.case.analysis.time_step).min(t);
+            self.advance_step_to(target)?;
+        }
+        Ok(())
+    }
+}
