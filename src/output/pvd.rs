@@ -128,7 +128,9 @@ mod tests {
         let three = std::fs::read_to_string(&path).unwrap();
         assert!(three.starts_with(&one[..one.find("  </Collection>").unwrap()]));
         assert!(three.contains("timestep=\"0.1\" group=\"\" part=\"0\" file=\"soil_000001.vtu\""));
-        assert!(three.contains("timestep=\"0.00000015\" group=\"\" part=\"0\" file=\"a&amp;b &lt;&quot;c&quot;&gt;.vtu\""));
+        assert!(
+            three.contains("timestep=\"0.00000015\" group=\"\" part=\"0\" file=\"a&amp;b &lt;&quot;c&quot;&gt;.vtu\"")
+        );
         assert!(three.ends_with("  </Collection>\n</VTKFile>\n"));
         assert_eq!(series.steps().len(), 3);
         assert_eq!(series.path(), path);

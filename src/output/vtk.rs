@@ -186,14 +186,8 @@ mod tests {
     }
 
     fn two_quads() -> TwoQuads {
-        let points = vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [2.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [2.0, 1.0, 0.0],
-        ];
+        let points =
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0], [2.0, 1.0, 0.0]];
         let u = (0..18).map(|k| 0.1 * k as f64 - 0.5).collect();
         let sigma = (0..54).map(|k| 1e5 * (k as f64).sin()).collect();
         TwoQuads { points, connectivity: vec![0, 1, 4, 3, 1, 2, 5, 4], u, sigma, pressure: vec![-1.5e3, 2.25e-7] }
@@ -301,8 +295,7 @@ mod tests {
     fn empty_cloud_is_written() {
         let dir = temp_dir("empty");
         let path = dir.join("none.vtu");
-        write_vtu(&path, &[], &VtuCells::Vertices, &[VtuField { name: "v", components: 3, values: &[] }], &[])
-            .unwrap();
+        write_vtu(&path, &[], &VtuCells::Vertices, &[VtuField { name: "v", components: 3, values: &[] }], &[]).unwrap();
         assert_eq!(piece(&path).num_points(), 0);
         std::fs::remove_dir_all(&dir).unwrap();
     }
@@ -320,11 +313,13 @@ mod tests {
             format!("{}: point field `u` has 17 values, expected 18 (3 per point × 6)", path.display())
         );
         let bad = [0, 1, 4, 3, 1, 2, 5, 6];
-        let err = write_vtu(&path, &m.points, &VtuCells::Mesh { element: ElementType::Quad4, connectivity: &bad }, &[], &[])
-            .unwrap_err();
+        let err =
+            write_vtu(&path, &m.points, &VtuCells::Mesh { element: ElementType::Quad4, connectivity: &bad }, &[], &[])
+                .unwrap_err();
         assert!(err.to_string().ends_with("cell 1 refers to point 6 of 6"), "{err}");
-        let err = write_vtu(&path, &m.points, &VtuCells::Mesh { element: ElementType::Tri3, connectivity: &bad }, &[], &[])
-            .unwrap_err();
+        let err =
+            write_vtu(&path, &m.points, &VtuCells::Mesh { element: ElementType::Tri3, connectivity: &bad }, &[], &[])
+                .unwrap_err();
         assert!(err.to_string().contains("not a multiple of 3"), "{err}");
         let p = VtuField { name: "p", components: 1, values: &m.pressure };
         let err = write_vtu(&path, &m.points, &mesh, &[], &[p, p]).unwrap_err();
@@ -358,9 +353,9 @@ mod tests {
         write_cloud(&dir.join("points.vtu")).unwrap();
         // floats travel as Python reprs (shortest round-trip strings), parsed exactly by Rust
         let script = r#"
-import json, sys, meshio
+import json, sys, meshio, numpy
 def flat(a):
-    return [repr(float(x)) for x in __import__("numpy").asarray(a).ravel()]
+    return [repr(float(x)) for x in numpy.asarray(a).ravel()]
 out = {}
 for name in sys.argv[1:]:
     m = meshio.read(name)
@@ -380,7 +375,8 @@ print(json.dumps(out))
         let flat = |v: &serde_json::Value| -> Vec<f64> {
             v.as_array().unwrap().iter().map(|x| x.as_str().unwrap().parse().unwrap()).collect()
         };
-        let shape = |v: &serde_json::Value| -> Vec<u64> { v.as_array().unwrap().iter().map(|x| x.as_u64().unwrap()).collect() };
+        let shape =
+            |v: &serde_json::Value| -> Vec<u64> { v.as_array().unwrap().iter().map(|x| x.as_u64().unwrap()).collect() };
 
         let r = &read[mesh.to_str().unwrap()];
         assert_eq!(flat(&r["points"]), m.points.iter().flatten().copied().collect::<Vec<_>>());
