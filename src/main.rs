@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use loam::case::CaseError;
-use loam::run::{RunEnd, default_out_dir, run};
+use loam::run::{default_out_dir, run, RunEnd};
 use loam::simulation::Simulation;
 
 /// Implicit MPM and Lagrangian FEM for large-deformation solid and soil mechanics.
@@ -93,7 +93,11 @@ fn main() -> ExitCode {
                     );
                     match end {
                         RunEnd::Finished => {
-                            println!("loam: finished t = {:.6e} s: {summary}; results in {}", sim.time(), out.display());
+                            println!(
+                                "loam: finished t = {:.6e} s: {summary}; results in {}",
+                                sim.time(),
+                                out.display()
+                            );
                             ExitCode::SUCCESS
                         }
                         RunEnd::Failed(e) => {

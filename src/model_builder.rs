@@ -6,7 +6,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use loam_fem::formulation::Formulation;
-use loam_fem::loads::{SurfaceLoad, facet_forces};
+use loam_fem::loads::{facet_forces, SurfaceLoad};
 use loam_fem::mesh::Mesh;
 use loam_fem::model::{Constraint, Load, Model};
 use loam_fem::scheme::TimeScheme;
@@ -27,7 +27,11 @@ pub struct BuiltModel {
 }
 
 fn check_positive(location: &str, value: f64) -> Result<(), CaseError> {
-    if value > 0.0 && value.is_finite() { Ok(()) } else { Err(CaseError::new(location, format!("must be > 0, got {value}"))) }
+    if value > 0.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(CaseError::new(location, format!("must be > 0, got {value}")))
+    }
 }
 
 fn check_len(location: &str, v: &[impl Sized], dim: usize) -> Result<(), CaseError> {
@@ -45,7 +49,11 @@ fn component_index(location: &str, c: Component, dim: usize) -> Result<Option<us
         Component::Z => 2,
         Component::Magnitude => return Ok(None),
     };
-    if i < dim { Ok(Some(i)) } else { Err(CaseError::new(location, format!("component z does not exist in a {dim}D model"))) }
+    if i < dim {
+        Ok(Some(i))
+    } else {
+        Err(CaseError::new(location, format!("component z does not exist in a {dim}D model")))
+    }
 }
 
 /// Builds the mesh of domain `k`.
@@ -58,7 +66,10 @@ fn build_mesh(case: &Case, k: usize) -> Result<Mesh, CaseError> {
                 check_positive(&format!("{loc}.rectangle.size[{i}]"), *s)?;
             }
             if cells.contains(&0) {
-                return Err(CaseError::new(format!("{loc}.rectangle.cells"), "needs at least one cell in each direction"));
+                return Err(CaseError::new(
+                    format!("{loc}.rectangle.cells"),
+                    "needs at least one cell in each direction",
+                ));
             }
             if element.dim() != 2 {
                 return Err(CaseError::new(format!("{loc}.rectangle.element"), "a rectangle takes quad4 or tri3"));
@@ -156,7 +167,11 @@ fn select_region(
             let d: Vec<f64> = (0..dim).map(|i| to[i] - from[i]).collect();
             let l2: f64 = d.iter().map(|x| x * x).sum();
             pick(&|c| {
-                let s = if l2 > 0.0 { ((0..dim).map(|i| (c[i] - from[i]) * d[i]).sum::<f64>() / l2).clamp(0.0, 1.0) } else { 0.0 };
+                let s = if l2 > 0.0 {
+                    ((0..dim).map(|i| (c[i] - from[i]) * d[i]).sum::<f64>() / l2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
                 (0..dim).map(|i| (c[i] - from[i] - s * d[i]).powi(2)).sum::<f64>().sqrt() <= tol
             })
         }
@@ -243,8 +258,16 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     let mut model = Model::new(dim, coords, scheme, case.solver);
     for (k, (d, (mesh, id))) in case.domains.iter().zip(meshes.into_iter().zip(ids)).enumerate() {
         let law = laws[d.material.as_str()].clone();
-        let domain = FemDomain::new(&d.name, mesh, id, case.formulation, case.thickness, law, d.mass_matrix == MassMatrix::Lumped)
-            .map_err(|e| CaseError::new(format!("domains[{k}].mesh"), format!("element {}: {}", e.element, e.message)))?;
+        let domain = FemDomain::new(
+            &d.name,
+            mesh,
+            id,
+            case.formulation,
+            case.thickness,
+            law,
+            d.mass_matrix == MassMatrix::Lumped,
+        )
+        .map_err(|e| CaseError::new(format!("domains[{k}].mesh"), format!("element {}: {}", e.element, e.message)))?;
         model.domains.push(Box::new(domain));
     }
 
@@ -320,7 +343,10 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
                 count += 1;
             }
             if count == 0 {
-                return Err(CaseError::new(format!("{loc}.region"), format!("region '{region_name}' contains no boundary edge or face")));
+                return Err(CaseError::new(
+                    format!("{loc}.region"),
+                    format!("region '{region_name}' contains no boundary edge or face"),
+                ));
             }
         }
         model.loads.push(Load { forces, amplitude: amplitude.clone() });

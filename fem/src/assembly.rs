@@ -12,7 +12,7 @@
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use rayon::prelude::*;
 
-use crate::dofs::{CONSTRAINED, DofMap};
+use crate::dofs::{DofMap, CONSTRAINED};
 
 /// Layout of element blocks in the element buffers: for block `b`, its global DOFs
 /// (`dofs[dof_ptr[b]..dof_ptr[b+1]]`), with its dense row-major matrix at
@@ -185,7 +185,11 @@ impl AssemblyPattern {
             .zip(self.transpose.par_iter())
             .fold(|| 0.0f64, |m, (v, &t)| m.max((v - values[t]).abs()))
             .reduce(|| 0.0, f64::max);
-        if amax > 0.0 { d / amax } else { 0.0 }
+        if amax > 0.0 {
+            d / amax
+        } else {
+            0.0
+        }
     }
 
     /// A faer view of the matrix with `values`.

@@ -94,7 +94,12 @@ pub trait Domain: Send + Sync {
 
     /// Fills the element matrices (row-major) and residual vectors
     /// `r_e = f_int − f_body + M ã` of this domain's blocks.
-    fn assemble(&mut self, input: &AssemblyInput<'_>, matrices: &mut [f64], vectors: &mut [f64]) -> Result<(), DomainError>;
+    fn assemble(
+        &mut self,
+        input: &AssemblyInput<'_>,
+        matrices: &mut [f64],
+        vectors: &mut [f64],
+    ) -> Result<(), DomainError>;
 
     /// The step has converged: commit histories (input as for the last assembly).
     fn commit(&mut self, input: &AssemblyInput<'_>);

@@ -109,11 +109,7 @@ impl ElementType {
             }
             ElementType::Quad4 => {
                 for (a, c) in QUAD_NODES.iter().enumerate() {
-                    dn[a] = [
-                        0.25 * c[0] * (1.0 + c[1] * xi[1]),
-                        0.25 * c[1] * (1.0 + c[0] * xi[0]),
-                        0.0,
-                    ];
+                    dn[a] = [0.25 * c[0] * (1.0 + c[1] * xi[1]), 0.25 * c[1] * (1.0 + c[0] * xi[0]), 0.0];
                 }
             }
             ElementType::Tet4 => {
@@ -137,15 +133,13 @@ impl ElementType {
         let g = 1.0 / 3f64.sqrt();
         match self {
             ElementType::Tri3 => vec![GaussPoint { xi: [1.0 / 3.0, 1.0 / 3.0, 0.0], weight: 0.5 }],
-            ElementType::Quad4 => QUAD_NODES
-                .iter()
-                .map(|c| GaussPoint { xi: [c[0] * g, c[1] * g, 0.0], weight: 1.0 })
-                .collect(),
+            ElementType::Quad4 => {
+                QUAD_NODES.iter().map(|c| GaussPoint { xi: [c[0] * g, c[1] * g, 0.0], weight: 1.0 }).collect()
+            }
             ElementType::Tet4 => vec![GaussPoint { xi: [0.25, 0.25, 0.25], weight: 1.0 / 6.0 }],
-            ElementType::Hex8 => HEX_NODES
-                .iter()
-                .map(|c| GaussPoint { xi: [c[0] * g, c[1] * g, c[2] * g], weight: 1.0 })
-                .collect(),
+            ElementType::Hex8 => {
+                HEX_NODES.iter().map(|c| GaussPoint { xi: [c[0] * g, c[1] * g, c[2] * g], weight: 1.0 }).collect()
+            }
         }
     }
 
@@ -190,14 +184,9 @@ impl ElementType {
             ElementType::Tri3 => &[&[0, 1], &[1, 2], &[2, 0]],
             ElementType::Quad4 => &[&[0, 1], &[1, 2], &[2, 3], &[3, 0]],
             ElementType::Tet4 => &[&[0, 2, 1], &[0, 1, 3], &[1, 2, 3], &[0, 3, 2]],
-            ElementType::Hex8 => &[
-                &[0, 3, 2, 1],
-                &[4, 5, 6, 7],
-                &[0, 1, 5, 4],
-                &[1, 2, 6, 5],
-                &[2, 3, 7, 6],
-                &[3, 0, 4, 7],
-            ],
+            ElementType::Hex8 => {
+                &[&[0, 3, 2, 1], &[4, 5, 6, 7], &[0, 1, 5, 4], &[1, 2, 6, 5], &[2, 3, 7, 6], &[3, 0, 4, 7]]
+            }
         }
     }
 
@@ -205,9 +194,7 @@ impl ElementType {
     pub fn contains_local(self, xi: &[f64; 3], tol: f64) -> bool {
         match self {
             ElementType::Tri3 => xi[0] >= -tol && xi[1] >= -tol && xi[0] + xi[1] <= 1.0 + tol,
-            ElementType::Tet4 => {
-                xi[0] >= -tol && xi[1] >= -tol && xi[2] >= -tol && xi[0] + xi[1] + xi[2] <= 1.0 + tol
-            }
+            ElementType::Tet4 => xi[0] >= -tol && xi[1] >= -tol && xi[2] >= -tol && xi[0] + xi[1] + xi[2] <= 1.0 + tol,
             ElementType::Quad4 => xi[0].abs() <= 1.0 + tol && xi[1].abs() <= 1.0 + tol,
             ElementType::Hex8 => xi.iter().all(|c| c.abs() <= 1.0 + tol),
         }

@@ -22,7 +22,7 @@
 //! with the hoop term `F33 = 1 + u_r/R` added for axisymmetry and `F33` condensed out by
 //! `P̃33 = 0` for plane stress.
 
-use loam_laws::{ConstitutiveLaw, Kinematics, LawError, Tangent, idx};
+use loam_laws::{idx, ConstitutiveLaw, Kinematics, LawError, Tangent};
 use nalgebra::{Matrix3, SMatrix};
 
 use crate::element::{ElementType, MAX_NODES};
@@ -246,7 +246,13 @@ pub fn evaluate_point(
                     return Err(LawError::ReturnMappingFailed { iterations: it, residual: p[(2, 2)] });
                 }
                 let cauchy = cauchy_stress(&r.first_piola, &kin.deformation_gradient);
-                return Ok(PointResponse { deformation_gradient: kin.deformation_gradient, stress: p, tangent: t, active: 4, cauchy });
+                return Ok(PointResponse {
+                    deformation_gradient: kin.deformation_gradient,
+                    stress: p,
+                    tangent: t,
+                    active: 4,
+                    cauchy,
+                });
             }
             delta_f[(2, 2)] -= p[(2, 2)] / a[(c33, c33)];
             if delta_f[(2, 2)] <= 0.0 {
@@ -264,7 +270,13 @@ pub fn evaluate_point(
         }
     }
     let cauchy = cauchy_stress(&r.first_piola, &kin.deformation_gradient);
-    Ok(PointResponse { deformation_gradient: kin.deformation_gradient, stress: p, tangent: t, active: active.len(), cauchy })
+    Ok(PointResponse {
+        deformation_gradient: kin.deformation_gradient,
+        stress: p,
+        tangent: t,
+        active: active.len(),
+        cauchy,
+    })
 }
 
 /// Cauchy stress `σ = P Fᵀ / det F`.
@@ -306,7 +318,11 @@ fn gradient_operator(
             for (c, &comp) in active.iter().enumerate() {
                 let (ci, cj) = (comp / 3, comp % 3);
                 row[c] = if comp == idx(2, 2) && dim == 2 {
-                    if i == 0 { geometry.shape[a] / geometry.radius } else { 0.0 }
+                    if i == 0 {
+                        geometry.shape[a] / geometry.radius
+                    } else {
+                        0.0
+                    }
                 } else if ci == i {
                     geometry.gradient[a][cj]
                 } else {
@@ -386,4 +402,95 @@ pub fn solid_element(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use loam_laws::neo_hookean::NeoHookean;
+
+    fn element_coords(element: ElementType) -> Vec<[f64; 3]> {
+        match element {
+            ElementType::Tri3 => vec![[0.1, 0.2, 0.0], [1.3, 0.1, 0.0], [0.5, 1.1, 0.0]],
+            ElementType::Quad4 => vec![[0.2, 0.1, 0.0], [1.4, 0.0, 0.0], [1.5, 1.2, 0.0], [0.1, 0.9, 0.0]],
+            ElementType::Tet4 => vec![[0.0, 0.0, 0.0], [1.1, 0.1, 0.0], [0.1, 0.9, 0.1], [0.2, 0.1, 1.2]],
+            ElementType::Hex8 => {
+                let mut c = Vec::new();
+                for z in [0.0, 1.0] {
+                    for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+                        c.push([x + 0.1 * y * z, y + 0.05 * x, z + 0.1 * x * y]);
+                    }
+                }
+                c
+            }
+        }
+    }
+
+    /// Element tangent vs central differences of the internal force, for every element and
+    /// formulation, with `F0 ≠ I` (the MPM pull-back) and plane-stress condensation.
+    #[test]
+    fn element_tangent_matches_finite_differences_of_internal_force() {
+        let law = NeoHookean::new(1000.0, 1.0e6, 0.3);
+        let cases = [
+            (ElementType::Tri3, Formulation::PlaneStrain),
+            (ElementType::Quad4, Formulation::PlaneStrain),
+            (ElementType::Quad4, Formulation::PlaneStress),
+            (ElementType::Tri3, Formulation::Axisymmetric),
+            (ElementType::Quad4, Formulation::Axisymmetric),
+            (ElementType::Tet4, Formulation::ThreeD),
+            (ElementType::Hex8, Formulation::ThreeD),
+        ];
+        for (element, formulation) in cases {
+            let coords = element_coords(element);
+            let nn = element.num_nodes();
+            let dim = element.dim();
+            let nd = nn * dim;
+            let geometry: Vec<PointGeometry> = element
+                .gauss_points()
+                .iter()
+                .map(|g| point_geometry(element, formulation, 1.0, &coords, &g.xi, g.weight).unwrap())
+                .collect();
+            let np = geometry.len();
+            let mut f0 = Matrix3::new(1.05, 0.03, 0.0, -0.02, 0.97, 0.0, 0.0, 0.0, 1.0);
+            if dim == 3 {
+                f0[(0, 2)] = 0.02;
+                f0[(2, 1)] = -0.01;
+                f0[(2, 2)] = 1.03;
+            } else if formulation == Formulation::Axisymmetric {
+                f0[(2, 2)] = 1.02;
+            }
+            let f0s = vec![f0; np];
+            let ctx = KernelContext { element, formulation, law: &law, time_step: 0.0 };
+            let mut disp = vec![[0.0; 3]; nn];
+            for a in 0..nn {
+                for i in 0..dim {
+                    disp[a][i] = 0.03 * ((a * 3 + i) as f64).sin();
+                }
+            }
+            let internal = |d: &[[f64; 3]], k: Option<&mut [f64]>| {
+                let mut f = vec![0.0; nd];
+                let mut out = vec![PointOutput::default(); np];
+                solid_element(&ctx, d, &geometry, &f0s, &f0s, &[], &mut [], &mut out, &mut f, k).unwrap();
+                f
+            };
+            let mut k = vec![0.0; nd * nd];
+            internal(&disp, Some(&mut k));
+            let h = 1e-6;
+            let mut err = 0.0f64;
+            let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for s in 0..nd {
+                let (mut dp, mut dm) = (disp.clone(), disp.clone());
+                dp[s / dim][s % dim] += h;
+                dm[s / dim][s % dim] -= h;
+                let (fp, fm) = (internal(&dp, None), internal(&dm, None));
+                for r in 0..nd {
+                    err = err.max(((fp[r] - fm[r]) / (2.0 * h) - k[r * nd + s]).abs() / kmax);
+                }
+            }
+            println!(
+                "{element:?} {formulation:?}: element tangent vs central FD, relative error {err:.2e} (tolerance 1e-6)"
+            );
+            assert!(err < 1e-6, "{element:?} {formulation:?}: {err}");
+        }
+    }
 }

@@ -78,7 +78,12 @@ impl LinearSolver {
     }
 
     /// Solves `A x = b` in place (`rhs` holds `b` on entry and `x` on exit).
-    pub fn solve(&mut self, pattern: &AssemblyPattern, values: &[f64], rhs: &mut [f64]) -> Result<(), LinearSolverError> {
+    pub fn solve(
+        &mut self,
+        pattern: &AssemblyPattern,
+        values: &[f64],
+        rhs: &mut [f64],
+    ) -> Result<(), LinearSolverError> {
         let n = pattern.num_equations();
         if n == 0 {
             return Ok(());
@@ -109,7 +114,9 @@ impl LinearSolver {
                     return check_finite(rhs);
                 }
                 Err(e) if self.kind == LinearSolverKind::Cholesky => {
-                    return Err(LinearSolverError::Factorisation(format!("Cholesky failed ({e}): matrix not positive definite")));
+                    return Err(LinearSolverError::Factorisation(format!(
+                        "Cholesky failed ({e}): matrix not positive definite"
+                    )));
                 }
                 Err(_) => {
                     self.timings.factorisation += t.elapsed().as_secs_f64();
@@ -119,12 +126,15 @@ impl LinearSolver {
         }
         if self.lu.is_none() {
             let t = Instant::now();
-            self.lu = Some(SymbolicLu::try_new(a.symbolic()).map_err(|e| LinearSolverError::Factorisation(format!("{e:?}")))?);
+            self.lu = Some(
+                SymbolicLu::try_new(a.symbolic()).map_err(|e| LinearSolverError::Factorisation(format!("{e:?}")))?,
+            );
             self.timings.symbolic += t.elapsed().as_secs_f64();
         }
         let t = Instant::now();
         let sym = self.lu.clone().expect("symbolic LU present");
-        let lu = Lu::try_new_with_symbolic(sym, a).map_err(|e| LinearSolverError::Factorisation(format!("LU failed: {e}")))?;
+        let lu = Lu::try_new_with_symbolic(sym, a)
+            .map_err(|e| LinearSolverError::Factorisation(format!("LU failed: {e}")))?;
         self.timings.factorisation += t.elapsed().as_secs_f64();
         let t = Instant::now();
         lu.solve_in_place(MatMut::from_column_major_slice_mut(rhs, n, 1));
@@ -134,5 +144,9 @@ impl LinearSolver {
 }
 
 fn check_finite(x: &[f64]) -> Result<(), LinearSolverError> {
-    if x.iter().all(|v| v.is_finite()) { Ok(()) } else { Err(LinearSolverError::NonFinite) }
+    if x.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(LinearSolverError::NonFinite)
+    }
 }

@@ -27,7 +27,13 @@ impl SurfaceLoad {
 
 /// Adds the nodal forces of `load` on the facet with node coordinates `coords` (outward
 /// orientation) to `forces` (one `[f64; 3]` per facet node).
-pub fn facet_forces(formulation: Formulation, thickness: f64, coords: &[[f64; 3]], load: SurfaceLoad, forces: &mut [[f64; 3]]) {
+pub fn facet_forces(
+    formulation: Formulation,
+    thickness: f64,
+    coords: &[[f64; 3]],
+    load: SurfaceLoad,
+    forces: &mut [[f64; 3]],
+) {
     let g = 1.0 / 3f64.sqrt();
     match coords.len() {
         2 => {
@@ -107,7 +113,13 @@ mod tests {
     fn pressure_on_an_edge_and_a_face_sums_to_p_times_area() {
         let mut f = [[0.0; 3]; 2];
         // bottom edge of a CCW element, outward normal −y: pressure pushes +y
-        facet_forces(Formulation::PlaneStrain, 2.0, &[[0.0, 0.0, 0.0], [3.0, 0.0, 0.0]], SurfaceLoad::Pressure(10.0), &mut f);
+        facet_forces(
+            Formulation::PlaneStrain,
+            2.0,
+            &[[0.0, 0.0, 0.0], [3.0, 0.0, 0.0]],
+            SurfaceLoad::Pressure(10.0),
+            &mut f,
+        );
         assert!((f[0][1] + f[1][1] - 10.0 * 3.0 * 2.0).abs() < 1e-12);
         let mut f = [[0.0; 3]; 4];
         let face = [[0.0, 0.0, 1.0], [2.0, 0.0, 1.0], [2.0, 1.0, 1.0], [0.0, 1.0, 1.0]];
@@ -116,7 +128,13 @@ mod tests {
         assert!((fz + 10.0).abs() < 1e-12);
         // axisymmetric annulus r ∈ [1, 2] at the top: force = p π (r2² − r1²)
         let mut f = [[0.0; 3]; 2];
-        facet_forces(Formulation::Axisymmetric, 1.0, &[[2.0, 1.0, 0.0], [1.0, 1.0, 0.0]], SurfaceLoad::Pressure(1.0), &mut f);
+        facet_forces(
+            Formulation::Axisymmetric,
+            1.0,
+            &[[2.0, 1.0, 0.0], [1.0, 1.0, 0.0]],
+            SurfaceLoad::Pressure(1.0),
+            &mut f,
+        );
         assert!((f[0][1] + f[1][1] + std::f64::consts::PI * 3.0).abs() < 1e-12);
     }
 }

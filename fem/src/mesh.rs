@@ -111,7 +111,9 @@ impl Mesh {
                         ElementType::Hex8 => connectivity.extend_from_slice(&h),
                         _ => {
                             // six positive tetrahedra sharing the diagonal h0–h6
-                            for t in [[0, 1, 2, 6], [0, 2, 3, 6], [0, 3, 7, 6], [0, 7, 4, 6], [0, 4, 5, 6], [0, 5, 1, 6]] {
+                            for t in
+                                [[0, 1, 2, 6], [0, 2, 3, 6], [0, 3, 7, 6], [0, 7, 4, 6], [0, 4, 5, 6], [0, 5, 1, 6]]
+                            {
                                 connectivity.extend(t.iter().map(|&a| h[a]));
                             }
                         }

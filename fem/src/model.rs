@@ -13,8 +13,8 @@ use serde::Deserialize;
 
 use crate::amplitude::Amplitude;
 use crate::assembly::{AssemblyPattern, BlockLayout};
+use crate::dofs::{DofMap, CONSTRAINED};
 use crate::domain::{AssemblyInput, Domain, DomainError, NodalState};
-use crate::dofs::{CONSTRAINED, DofMap};
 use crate::linear_solver::{LinearSolver, LinearSolverError, LinearSolverKind};
 use crate::scheme::TimeScheme;
 
@@ -380,8 +380,9 @@ impl Model {
                 report.timings.assembly += t.elapsed().as_secs_f64();
                 let before = ws.solver.timings;
                 ws.solver.solve(&ws.pattern, &ws.values, &mut ws.rhs)?;
-                report.timings.factorisation +=
-                    ws.solver.timings.factorisation - before.factorisation + ws.solver.timings.symbolic - before.symbolic;
+                report.timings.factorisation += ws.solver.timings.factorisation - before.factorisation
+                    + ws.solver.timings.symbolic
+                    - before.symbolic;
                 report.timings.solve += ws.solver.timings.solve - before.solve;
                 for (g, &e) in ws.dofs.equations().iter().enumerate() {
                     if e != CONSTRAINED {

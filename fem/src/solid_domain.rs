@@ -15,7 +15,7 @@ use crate::assembly::BlockLayout;
 use crate::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NodalState};
 use crate::element::{ElementType, MAX_NODES};
 use crate::formulation::Formulation;
-use crate::kernel::{KernelContext, PointGeometry, PointOutput, point_geometry, solid_element};
+use crate::kernel::{point_geometry, solid_element, KernelContext, PointGeometry, PointOutput};
 use crate::mesh::Mesh;
 
 /// A solid FEM domain of one element type and one material.
@@ -69,7 +69,8 @@ impl FemDomain {
                 message: format!("{err} (check the node ordering: counter-clockwise in 2D)"),
             };
             for gp in &rule {
-                geometry.push(point_geometry(element, formulation, thickness, &coords, &gp.xi, gp.weight).map_err(fail)?);
+                geometry
+                    .push(point_geometry(element, formulation, thickness, &coords, &gp.xi, gp.weight).map_err(fail)?);
             }
             let me = &mut mass[e * nn * nn..(e + 1) * nn * nn];
             for gp in &mass_rule {
@@ -153,7 +154,12 @@ impl Domain for FemDomain {
         }
     }
 
-    fn assemble(&mut self, input: &AssemblyInput<'_>, matrices: &mut [f64], vectors: &mut [f64]) -> Result<(), DomainError> {
+    fn assemble(
+        &mut self,
+        input: &AssemblyInput<'_>,
+        matrices: &mut [f64],
+        vectors: &mut [f64],
+    ) -> Result<(), DomainError> {
         let nn = self.element.num_nodes();
         let dim = self.dim();
         let nd = nn * dim;
@@ -164,8 +170,15 @@ impl Domain for FemDomain {
             law: self.law.as_ref(),
             time_step: input.time_step,
         };
-        let (mesh, node_ids, geometry, f_prev, identity, mass, committed) =
-            (&self.mesh, &self.node_ids, &self.geometry, &self.f_prev, &self.identity, &self.mass, &self.committed_state);
+        let (mesh, node_ids, geometry, f_prev, identity, mass, committed) = (
+            &self.mesh,
+            &self.node_ids,
+            &self.geometry,
+            &self.f_prev,
+            &self.identity,
+            &self.mass,
+            &self.committed_state,
+        );
         let name = &self.name;
         matrices
             .par_chunks_mut(nd * nd)
@@ -195,7 +208,11 @@ impl Domain for FemDomain {
                     fv,
                     input.with_tangent.then_some(&mut *km),
                 )
-                .map_err(|err| DomainError { domain: name.clone(), element: e, message: err.to_string() })?;
+                .map_err(|err| DomainError {
+                    domain: name.clone(),
+                    element: e,
+                    message: err.to_string(),
+                })?;
                 let me = &mass[e * nn * nn..(e + 1) * nn * nn];
                 for a in 0..nn {
                     for b in 0..nn {

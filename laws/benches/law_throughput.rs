@@ -23,15 +23,10 @@ fn rate(law: &dyn ConstitutiveLaw, kin: &Kinematics) -> (f64, bool) {
     let mut committed = vec![0.0; law.state_len()];
     law.initialise_state(&mut committed);
     let mut trial = committed.clone();
-    law.update(kin, &committed, &mut trial)
-        .expect("benchmark state must be valid");
+    law.update(kin, &committed, &mut trial).expect("benchmark state must be valid");
     let mut out = vec![0.0; law.state_variables().len()];
     law.state_output(&trial, &mut out);
-    let plastic = law
-        .state_variables()
-        .iter()
-        .position(|n| *n == "yield_flag")
-        .is_some_and(|i| out[i] == 1.0);
+    let plastic = law.state_variables().iter().position(|n| *n == "yield_flag").is_some_and(|i| out[i] == 1.0);
     for _ in 0..1000 {
         black_box(law.update(black_box(kin), &committed, &mut trial).unwrap());
     }
@@ -68,40 +63,21 @@ fn main() {
     println!("| law | state | evaluations/s |");
     println!("|---|---|---:|");
     for m in materials {
-        let law = serde_json::from_value::<MaterialSpec>(m)
-            .unwrap()
-            .build()
-            .unwrap();
+        let law = serde_json::from_value::<MaterialSpec>(m).unwrap().build().unwrap();
         let (lambda, mu) = law.elastic_lame();
         let states: Vec<(&str, Matrix3<f64>)> = match law.name() {
-            "modified_cam_clay" => vec![
-                ("elastic", stretch([-0.0005, 0.0002, 0.0001])),
-                ("plastic", stretch([-0.01, 0.001, 0.002])),
-            ],
+            "modified_cam_clay" => {
+                vec![("elastic", stretch([-0.0005, 0.0002, 0.0001])), ("plastic", stretch([-0.01, 0.001, 0.002]))]
+            }
             "newtonian_fluid" => vec![("viscous", stretch([-0.001, 0.0005, 0.0002]))],
             "mohr_coulomb" | "mohr_coulomb_softening" => vec![
-                (
-                    "elastic",
-                    stretch(hencky_strain(lambda, mu, [-100e3, -120e3, -150e3])),
-                ),
-                (
-                    "plastic (plane)",
-                    stretch(hencky_strain(lambda, mu, [-50e3, -200e3, -400e3])),
-                ),
-                (
-                    "plastic (edge)",
-                    stretch(hencky_strain(lambda, mu, [-100e3, -100e3, -400e3])),
-                ),
+                ("elastic", stretch(hencky_strain(lambda, mu, [-100e3, -120e3, -150e3]))),
+                ("plastic (plane)", stretch(hencky_strain(lambda, mu, [-50e3, -200e3, -400e3]))),
+                ("plastic (edge)", stretch(hencky_strain(lambda, mu, [-100e3, -100e3, -400e3]))),
             ],
             "drucker_prager" => vec![
-                (
-                    "elastic",
-                    stretch(hencky_strain(lambda, mu, [-100e3, -120e3, -150e3])),
-                ),
-                (
-                    "plastic (cone)",
-                    stretch(hencky_strain(lambda, mu, [-50e3, -200e3, -400e3])),
-                ),
+                ("elastic", stretch(hencky_strain(lambda, mu, [-100e3, -120e3, -150e3]))),
+                ("plastic (cone)", stretch(hencky_strain(lambda, mu, [-50e3, -200e3, -400e3]))),
             ],
             _ => vec![("elastic", stretch([0.01, -0.02, 0.005]))],
         };
@@ -112,12 +88,7 @@ fn main() {
                 time_step: 0.01,
             };
             let (r, plastic) = rate(law.as_ref(), &kin);
-            assert_eq!(
-                plastic,
-                label.starts_with("plastic"),
-                "{} {label}",
-                law.name()
-            );
+            assert_eq!(plastic, label.starts_with("plastic"), "{} {label}", law.name());
             println!("| {} | {label} | {:.3e} |", law.name(), r);
         }
     }

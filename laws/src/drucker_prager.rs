@@ -25,8 +25,8 @@ use serde::Deserialize;
 
 use crate::dual::{Dual, Real};
 use crate::multiplicative::{
-    self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel,
-    PrincipalResponse, CP_INV_LEN, PLASTIC_OUTPUT,
+    self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel, PrincipalResponse,
+    CP_INV_LEN, PLASTIC_OUTPUT,
 };
 use crate::{ConstitutiveLaw, Kinematics, LawError, StressResponse};
 
@@ -103,15 +103,7 @@ impl DruckerPrager {
         let (lambda, mu) = crate::material::lame(young_modulus, poisson_ratio);
         let (eta, xi) = fit.coefficients(friction_angle);
         let (eta_bar, _) = fit.coefficients(dilatancy_angle);
-        Self {
-            density,
-            lambda,
-            mu,
-            eta,
-            xi,
-            eta_bar,
-            cohesion,
-        }
+        Self { density, lambda, mu, eta, xi, eta_bar, cohesion }
     }
 
     /// Yield function `f = √J₂ + η p − ξ c` (Pa) at principal Kirchhoff stresses.
@@ -128,11 +120,7 @@ impl DruckerPrager {
         let p = (tau_b[0] + tau_b[1] + tau_b[2]) / 3.0;
         let s = tau_b.map(|t| t - p);
         let j2 = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]) * 0.5;
-        let sq = if j2.re() > 0.0 {
-            j2.sqrt()
-        } else {
-            T::cst(0.0)
-        };
+        let sq = if j2.re() > 0.0 { j2.sqrt() } else { T::cst(0.0) };
         let f = sq + p * self.eta - self.xi * self.cohesion;
         let dgamma = f / (g + k * self.eta * self.eta_bar);
         if sq.re() - g * dgamma.re() >= 0.0 && sq.re() > 0.0 {
@@ -178,26 +166,14 @@ impl PrincipalModel for DruckerPrager {
         let tau_b = hencky_stress(self.lambda, self.mu, eps_tr);
         if self.yield_function(tau_b) <= self.yield_tolerance(tau_b) {
             accumulate_plastic_strain(committed, trial, eps_tr, eps_tr, false);
-            return Ok(PrincipalResponse {
-                tau: tau_b,
-                eps_e: eps_tr,
-                dtau_deps: hencky_matrix(self.lambda, self.mu),
-            });
+            return Ok(PrincipalResponse { tau: tau_b, eps_e: eps_tr, dtau_deps: hencky_matrix(self.lambda, self.mu) });
         }
-        let eps: [Dual<3>; 3] = [
-            Dual::seed(eps_tr[0], 0),
-            Dual::seed(eps_tr[1], 1),
-            Dual::seed(eps_tr[2], 2),
-        ];
+        let eps: [Dual<3>; 3] = [Dual::seed(eps_tr[0], 0), Dual::seed(eps_tr[1], 1), Dual::seed(eps_tr[2], 2)];
         let (t, _) = self.plastic_return(eps);
         let tau = t.map(|x| x.v);
         let eps_e = hencky_strain(self.lambda, self.mu, tau);
         accumulate_plastic_strain(committed, trial, eps_tr, eps_e, true);
-        Ok(PrincipalResponse {
-            tau,
-            eps_e,
-            dtau_deps: Matrix3::from_fn(|a, b| t[a].d[b]),
-        })
+        Ok(PrincipalResponse { tau, eps_e, dtau_deps: Matrix3::from_fn(|a, b| t[a].d[b]) })
     }
 
     fn elastic_strain(&self, tau: [f64; 3]) -> Result<[f64; 3], LawError> {
@@ -222,11 +198,7 @@ impl ConstitutiveLaw for DruckerPrager {
         multiplicative::initialise(self, state);
     }
 
-    fn initialise_state_at_stress(
-        &self,
-        stress: &Matrix3<f64>,
-        state: &mut [f64],
-    ) -> Result<(), LawError> {
+    fn initialise_state_at_stress(&self, stress: &Matrix3<f64>, state: &mut [f64]) -> Result<(), LawError> {
         multiplicative::initialise_at_stress(self, stress, state)
     }
 

@@ -221,19 +221,15 @@ mod tests {
     #[test]
     fn derivatives_of_a_composite_function() {
         // f(x, y) = sqrt(x) exp(y) / (1 + x y) − sin(x) cos(y) + ln(x)
-        let f = |x: Dual<2>, y: Dual<2>| {
-            x.sqrt() * y.exp() / (x * y + 1.0) - x.sin() * y.cos() + x.ln() * 2.0 - (-y) / 3.0
-        };
+        let f =
+            |x: Dual<2>, y: Dual<2>| x.sqrt() * y.exp() / (x * y + 1.0) - x.sin() * y.cos() + x.ln() * 2.0 - (-y) / 3.0;
         let (x0, y0) = (1.3, 0.4);
         let r = f(Dual::seed(x0, 0), Dual::seed(y0, 1));
         let h = 1e-6;
         let g = |x: f64, y: f64| f(Dual::cst(x), Dual::cst(y)).v;
         let fx = (g(x0 + h, y0) - g(x0 - h, y0)) / (2.0 * h);
         let fy = (g(x0, y0 + h) - g(x0, y0 - h)) / (2.0 * h);
-        println!(
-            "dual: df/dx {:.12} vs FD {fx:.12}; df/dy {:.12} vs FD {fy:.12}",
-            r.d[0], r.d[1]
-        );
+        println!("dual: df/dx {:.12} vs FD {fx:.12}; df/dy {:.12} vs FD {fy:.12}", r.d[0], r.d[1]);
         assert!((r.d[0] - fx).abs() < 1e-8 && (r.d[1] - fy).abs() < 1e-8);
     }
 }

@@ -12,9 +12,7 @@ pub enum LawError {
         det_f: f64,
     },
     /// The local return mapping did not converge.
-    #[error(
-        "return mapping did not converge after {iterations} iterations (residual {residual:.3e})"
-    )]
+    #[error("return mapping did not converge after {iterations} iterations (residual {residual:.3e})")]
     ReturnMappingFailed {
         /// Local iterations spent.
         iterations: usize,
@@ -42,9 +40,6 @@ pub struct ParameterError {
 impl ParameterError {
     /// Shorthand used by the parameter checks.
     pub fn new(parameter: &'static str, problem: impl Into<String>) -> Self {
-        Self {
-            parameter,
-            problem: problem.into(),
-        }
+        Self { parameter, problem: problem.into() }
     }
 }

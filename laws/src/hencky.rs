@@ -13,9 +13,7 @@
 
 use nalgebra::Matrix3;
 
-use crate::multiplicative::{
-    checked_inverse, hencky_matrix, hencky_stress, kirchhoff_update, PrincipalResponse,
-};
+use crate::multiplicative::{checked_inverse, hencky_matrix, hencky_stress, kirchhoff_update, PrincipalResponse};
 use crate::tensor::piola_from_kirchhoff;
 use crate::{ConstitutiveLaw, Kinematics, LawError, StressResponse};
 
@@ -34,11 +32,7 @@ impl Hencky {
     /// From Young's modulus `E` (Pa) and Poisson's ratio `ν`.
     pub fn new(density: f64, young_modulus: f64, poisson_ratio: f64) -> Self {
         let (lambda, mu) = crate::material::lame(young_modulus, poisson_ratio);
-        Self {
-            density,
-            lambda,
-            mu,
-        }
+        Self { density, lambda, mu }
     }
 }
 
@@ -71,10 +65,7 @@ impl ConstitutiveLaw for Hencky {
             })
         })?;
         let (first_piola, tangent) = piola_from_kirchhoff(&f_inv, &ku.tau, &ku.dtau_df);
-        Ok(StressResponse {
-            first_piola,
-            tangent,
-        })
+        Ok(StressResponse { first_piola, tangent })
     }
 }
 
@@ -86,10 +77,7 @@ mod tests {
     #[test]
     fn tangent_matches_central_differences() {
         let law = Hencky::new(1000.0, 1.0e7, 0.3);
-        for f in [
-            Matrix3::identity(),
-            Matrix3::new(1.1, 0.2, 0.05, -0.1, 0.95, 0.02, 0.03, 0.01, 1.05),
-        ] {
+        for f in [Matrix3::identity(), Matrix3::new(1.1, 0.2, 0.05, -0.1, 0.95, 0.02, 0.03, 0.01, 1.05)] {
             let err = tangent_relative_error(&law, &Kinematics::at(f), &[]).unwrap();
             println!("hencky tangent: relative error vs central FD {err:.2e} (tolerance 1e-6)");
             assert!(err < 1e-6);

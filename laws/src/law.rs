@@ -22,11 +22,7 @@ pub struct Kinematics {
 impl Kinematics {
     /// Kinematics of a static evaluation at `F` from the undeformed state.
     pub fn at(deformation_gradient: Matrix3<f64>) -> Self {
-        Self {
-            deformation_gradient,
-            previous_deformation_gradient: Matrix3::identity(),
-            time_step: 0.0,
-        }
+        Self { deformation_gradient, previous_deformation_gradient: Matrix3::identity(), time_step: 0.0 }
     }
 }
 
@@ -62,11 +58,7 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     /// (Pa, tension positive), e.g. a geostatic `K0` state. Laws whose history can hold an
     /// elastic prestrain (the multiplicative elasto-plastic laws) override this; the
     /// default accepts only a zero stress.
-    fn initialise_state_at_stress(
-        &self,
-        stress: &Matrix3<f64>,
-        state: &mut [f64],
-    ) -> Result<(), LawError> {
+    fn initialise_state_at_stress(&self, stress: &Matrix3<f64>, state: &mut [f64]) -> Result<(), LawError> {
         self.initialise_state(state);
         if stress.iter().all(|v| *v == 0.0) {
             Ok(())
@@ -90,12 +82,8 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     /// Evaluates stress and consistent tangent at `kinematics`, starting from the committed
     /// history `committed` and writing the updated (trial) history into `trial`.
     /// Neither the law nor this call commits anything.
-    fn update(
-        &self,
-        kinematics: &Kinematics,
-        committed: &[f64],
-        trial: &mut [f64],
-    ) -> Result<StressResponse, LawError>;
+    fn update(&self, kinematics: &Kinematics, committed: &[f64], trial: &mut [f64])
+        -> Result<StressResponse, LawError>;
 
     /// Small-strain elastic constants `(λ, μ)` at the reference state, used for time-step
     /// estimates and penalty scaling.

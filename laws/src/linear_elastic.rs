@@ -29,11 +29,7 @@ impl LinearElastic {
     /// From Young's modulus `E` (Pa) and Poisson's ratio `ν`.
     pub fn new(density: f64, young_modulus: f64, poisson_ratio: f64) -> Self {
         let (lambda, mu) = crate::material::lame(young_modulus, poisson_ratio);
-        Self {
-            density,
-            lambda,
-            mu,
-        }
+        Self { density, lambda, mu }
     }
 }
 
@@ -68,16 +64,13 @@ impl ConstitutiveLaw for LinearElastic {
                 for k in 0..3 {
                     for l in 0..3 {
                         let d = |a: usize, b: usize| if a == b { 1.0 } else { 0.0 };
-                        tangent[(idx(i, j), idx(k, l))] = self.lambda * d(i, j) * d(k, l)
-                            + self.mu * (d(i, k) * d(j, l) + d(i, l) * d(j, k));
+                        tangent[(idx(i, j), idx(k, l))] =
+                            self.lambda * d(i, j) * d(k, l) + self.mu * (d(i, k) * d(j, l) + d(i, l) * d(j, k));
                     }
                 }
             }
         }
-        Ok(StressResponse {
-            first_piola,
-            tangent,
-        })
+        Ok(StressResponse { first_piola, tangent })
     }
 }
 
@@ -89,14 +82,9 @@ mod tests {
     #[test]
     fn tangent_matches_central_differences() {
         let law = LinearElastic::new(1000.0, 1.0e7, 0.3);
-        for f in [
-            Matrix3::identity(),
-            Matrix3::new(1.1, 0.2, 0.05, -0.1, 0.95, 0.02, 0.03, 0.01, 1.05),
-        ] {
+        for f in [Matrix3::identity(), Matrix3::new(1.1, 0.2, 0.05, -0.1, 0.95, 0.02, 0.03, 0.01, 1.05)] {
             let err = tangent_relative_error(&law, &Kinematics::at(f), &[]).unwrap();
-            println!(
-                "linear_elastic tangent: relative error vs central FD {err:.2e} (tolerance 1e-6)"
-            );
+            println!("linear_elastic tangent: relative error vs central FD {err:.2e} (tolerance 1e-6)");
             assert!(err < 1e-6);
         }
     }

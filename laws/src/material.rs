@@ -23,10 +23,7 @@ use crate::{ConstitutiveLaw, ParameterError};
 /// `λ = E ν / ((1+ν)(1−2ν))`, `μ = E / (2(1+ν))`.
 pub fn lame(young_modulus: f64, poisson_ratio: f64) -> (f64, f64) {
     let (e, nu) = (young_modulus, poisson_ratio);
-    (
-        e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
-        e / (2.0 * (1.0 + nu)),
-    )
+    (e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), e / (2.0 * (1.0 + nu)))
 }
 
 /// Isotropic elastic parameters shared by the elastic and elasto-plastic laws.
@@ -48,10 +45,7 @@ impl ElasticParameters {
         positive("young_modulus", self.young_modulus)?;
         let nu = self.poisson_ratio;
         if !(nu > -1.0 && nu < 0.5) {
-            return Err(ParameterError::new(
-                "poisson_ratio",
-                format!("must lie in (-1, 0.5), got {nu}"),
-            ));
+            return Err(ParameterError::new("poisson_ratio", format!("must lie in (-1, 0.5), got {nu}")));
         }
         Ok(())
     }
@@ -62,10 +56,7 @@ pub fn positive(parameter: &'static str, value: f64) -> Result<(), ParameterErro
     if value > 0.0 && value.is_finite() {
         Ok(())
     } else {
-        Err(ParameterError::new(
-            parameter,
-            format!("must be > 0, got {value}"),
-        ))
+        Err(ParameterError::new(parameter, format!("must be > 0, got {value}")))
     }
 }
 
@@ -74,10 +65,7 @@ pub fn non_negative(parameter: &'static str, value: f64) -> Result<(), Parameter
     if value >= 0.0 && value.is_finite() {
         Ok(())
     } else {
-        Err(ParameterError::new(
-            parameter,
-            format!("must be >= 0, got {value}"),
-        ))
+        Err(ParameterError::new(parameter, format!("must be >= 0, got {value}")))
     }
 }
 
@@ -89,10 +77,7 @@ fn check_strength(
     (dilatancy_key, dilatancy_angle): (&'static str, f64),
 ) -> Result<Strength<f64>, ParameterError> {
     if !(0.0..90.0).contains(&friction_angle) {
-        return Err(ParameterError::new(
-            friction_key,
-            format!("must lie in [0, 90) degrees, got {friction_angle}"),
-        ));
+        return Err(ParameterError::new(friction_key, format!("must lie in [0, 90) degrees, got {friction_angle}")));
     }
     non_negative(cohesion_key, cohesion)?;
     if friction_angle == 0.0 && cohesion == 0.0 {
@@ -102,10 +87,7 @@ fn check_strength(
         ));
     }
     if dilatancy_angle.is_nan() || dilatancy_angle < 0.0 {
-        return Err(ParameterError::new(
-            dilatancy_key,
-            format!("must be >= 0 degrees, got {dilatancy_angle}"),
-        ));
+        return Err(ParameterError::new(dilatancy_key, format!("must be >= 0 degrees, got {dilatancy_angle}")));
     }
     if dilatancy_angle > friction_angle {
         return Err(ParameterError::new(
@@ -245,30 +227,16 @@ pub enum MaterialSpec {
 impl MaterialSpec {
     /// Checks the parameters and builds the law. The error names the offending key.
     pub fn build(&self) -> Result<Box<dyn ConstitutiveLaw>, ParameterError> {
-        let elastic = |density, young_modulus, poisson_ratio| {
-            ElasticParameters {
-                density,
-                young_modulus,
-                poisson_ratio,
-            }
-            .check()
-        };
+        let elastic =
+            |density, young_modulus, poisson_ratio| ElasticParameters { density, young_modulus, poisson_ratio }.check();
         Ok(match *self {
             MaterialSpec::LinearElastic(p) => {
                 p.check()?;
-                Box::new(LinearElastic::new(
-                    p.density,
-                    p.young_modulus,
-                    p.poisson_ratio,
-                ))
+                Box::new(LinearElastic::new(p.density, p.young_modulus, p.poisson_ratio))
             }
             MaterialSpec::SaintVenantKirchhoff(p) => {
                 p.check()?;
-                Box::new(SaintVenantKirchhoff::new(
-                    p.density,
-                    p.young_modulus,
-                    p.poisson_ratio,
-                ))
+                Box::new(SaintVenantKirchhoff::new(p.density, p.young_modulus, p.poisson_ratio))
             }
             MaterialSpec::NeoHookean(p) => {
                 p.check()?;
@@ -307,23 +275,12 @@ impl MaterialSpec {
                     ("residual_dilatancy_angle", p.residual_dilatancy_angle),
                 )?;
                 for (key, r, pk) in [
-                    (
-                        "residual_friction_angle",
-                        p.residual_friction_angle,
-                        p.peak_friction_angle,
-                    ),
+                    ("residual_friction_angle", p.residual_friction_angle, p.peak_friction_angle),
                     ("residual_cohesion", p.residual_cohesion, p.peak_cohesion),
-                    (
-                        "residual_dilatancy_angle",
-                        p.residual_dilatancy_angle,
-                        p.peak_dilatancy_angle,
-                    ),
+                    ("residual_dilatancy_angle", p.residual_dilatancy_angle, p.peak_dilatancy_angle),
                 ] {
                     if r > pk {
-                        return Err(ParameterError::new(
-                            key,
-                            format!("must not exceed its peak value {pk}, got {r}"),
-                        ));
+                        return Err(ParameterError::new(key, format!("must not exceed its peak value {pk}, got {r}")));
                     }
                 }
                 non_negative("shape_factor", p.shape_factor)?;
@@ -331,38 +288,26 @@ impl MaterialSpec {
                     p.density,
                     p.young_modulus,
                     p.poisson_ratio,
-                    ExponentialSoftening {
-                        peak,
-                        residual,
-                        shape_factor: p.shape_factor,
-                    },
+                    ExponentialSoftening { peak, residual, shape_factor: p.shape_factor },
                 ))
             }
             MaterialSpec::ModifiedCamClay(p) => {
                 positive("density", p.density)?;
                 positive("preconsolidation_pressure", p.preconsolidation_pressure)?;
                 if !(p.ocr >= 1.0 && p.ocr.is_finite()) {
-                    return Err(ParameterError::new(
-                        "ocr",
-                        format!("must be >= 1, got {}", p.ocr),
-                    ));
+                    return Err(ParameterError::new("ocr", format!("must be >= 1, got {}", p.ocr)));
                 }
                 positive("swelling_slope", p.swelling_slope)?;
                 if !(p.compression_slope > p.swelling_slope && p.compression_slope.is_finite()) {
                     return Err(ParameterError::new(
                         "compression_slope",
-                        format!(
-                            "must exceed swelling_slope ({}), got {}",
-                            p.swelling_slope, p.compression_slope
-                        ),
+                        format!("must exceed swelling_slope ({}), got {}", p.swelling_slope, p.compression_slope),
                     ));
                 }
                 positive("critical_state_slope", p.critical_state_slope)?;
                 non_negative("initial_shear_modulus", p.initial_shear_modulus)?;
                 non_negative("alpha_shear", p.alpha_shear)?;
-                if p.initial_shear_modulus + p.alpha_shear * p.preconsolidation_pressure / p.ocr
-                    <= 0.0
-                {
+                if p.initial_shear_modulus + p.alpha_shear * p.preconsolidation_pressure / p.ocr <= 0.0 {
                     return Err(ParameterError::new(
                         "initial_shear_modulus",
                         "must be > 0 when alpha_shear = 0 (no shear stiffness)",
@@ -400,11 +345,7 @@ impl MaterialSpec {
                 positive("density", p.density)?;
                 non_negative("viscosity", p.viscosity)?;
                 positive("bulk_modulus", p.bulk_modulus)?;
-                Box::new(NewtonianFluid {
-                    density: p.density,
-                    viscosity: p.viscosity,
-                    bulk_modulus: p.bulk_modulus,
-                })
+                Box::new(NewtonianFluid { density: p.density, viscosity: p.viscosity, bulk_modulus: p.bulk_modulus })
             }
         })
     }

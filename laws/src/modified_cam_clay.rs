@@ -39,9 +39,7 @@
 use nalgebra::{Matrix2, Matrix3};
 
 use crate::dual::{Dual, Real};
-use crate::multiplicative::{
-    self, accumulate_plastic_strain, PrincipalModel, PrincipalResponse, CP_INV_LEN,
-};
+use crate::multiplicative::{self, accumulate_plastic_strain, PrincipalModel, PrincipalResponse, CP_INV_LEN};
 use crate::{ConstitutiveLaw, Kinematics, LawError, StressResponse};
 
 /// Names of the MCC state variables, in slot order.
@@ -98,11 +96,7 @@ impl ModifiedCamClay {
 
     /// Elastic law and residuals at unknowns `x = (ε_v, Δλ)` and trial invariants.
     fn invariants<T: Real>(&self, x: [T; 2], ev_tr: T, es_tr: T, pc_n: f64) -> Invariants<T> {
-        let (kap, lam, m2) = (
-            self.swelling_slope,
-            self.compression_slope,
-            self.critical_state_slope.powi(2),
-        );
+        let (kap, lam, m2) = (self.swelling_slope, self.compression_slope, self.critical_state_slope.powi(2));
         let [ev, dl] = x;
         let w = (ev / kap).exp() * self.reference_pressure();
         let mu = w * self.alpha_shear + self.initial_shear_modulus;
@@ -113,13 +107,7 @@ impl ModifiedCamClay {
         let pc = ((ev_tr - ev) / (lam - kap)).exp() * pc_n;
         let r1 = ev - ev_tr + dl * (p * 2.0 - pc);
         let r2 = (q * q / m2 + p * (p - pc)) / (pc_n * pc_n);
-        Invariants {
-            residual: [r1, r2],
-            p,
-            mu,
-            rho,
-            pc,
-        }
+        Invariants { residual: [r1, r2], p, mu, rho, pc }
     }
 
     /// Newton solution `(ε_v, Δλ)` of the plastic return.
@@ -144,10 +132,7 @@ impl ModifiedCamClay {
             let step = j
                 .try_inverse()
                 .map(|ji| ji * nalgebra::Vector2::new(-r[0].v, -r[1].v))
-                .ok_or(LawError::ReturnMappingFailed {
-                    iterations: 0,
-                    residual: norm(&r),
-                })?;
+                .ok_or(LawError::ReturnMappingFailed { iterations: 0, residual: norm(&r) })?;
             // Backtracking on the residual norm, keeping Δλ ≥ 0.
             let mut t = 1.0;
             loop {
@@ -161,10 +146,7 @@ impl ModifiedCamClay {
                 t *= 0.5;
             }
         }
-        Err(LawError::ReturnMappingFailed {
-            iterations: MAX_ITERATIONS,
-            residual: norm(&r),
-        })
+        Err(LawError::ReturnMappingFailed { iterations: MAX_ITERATIONS, residual: norm(&r) })
     }
 }
 
@@ -186,20 +168,12 @@ impl PrincipalModel for ModifiedCamClay {
     ) -> Result<PrincipalResponse, LawError> {
         let pc_n = committed[3];
         // Trial invariants as functions of the principal trial strains.
-        let e: [Dual<3>; 3] = [
-            Dual::seed(eps_tr[0], 0),
-            Dual::seed(eps_tr[1], 1),
-            Dual::seed(eps_tr[2], 2),
-        ];
+        let e: [Dual<3>; 3] = [Dual::seed(eps_tr[0], 0), Dual::seed(eps_tr[1], 1), Dual::seed(eps_tr[2], 2)];
         let ev_tr = -(e[0] + e[1] + e[2]);
         let dev = e.map(|ea| ea + ev_tr / 3.0);
         let es2 = (dev[0] * dev[0] + dev[1] * dev[1] + dev[2] * dev[2]) * (2.0 / 3.0);
         // ε_s,tr is not differentiable at 0, where τ depends on it only through even terms.
-        let es_tr = if es2.v > 1e-28 {
-            es2.sqrt()
-        } else {
-            Dual::cst(es2.v.max(0.0).sqrt())
-        };
+        let es_tr = if es2.v > 1e-28 { es2.sqrt() } else { Dual::cst(es2.v.max(0.0).sqrt()) };
         let trial_state = self.invariants([ev_tr.v, 0.0], ev_tr.v, es_tr.v, pc_n);
         let q_tr = 3.0 * trial_state.mu * es_tr.v;
         let f_tr = self.yield_function(trial_state.p, q_tr, pc_n);
@@ -225,40 +199,28 @@ impl PrincipalModel for ModifiedCamClay {
                 .residual;
             let jx = Matrix2::new(rx[0].d[0], rx[0].d[1], rx[1].d[0], rx[1].d[1]);
             let ji = Matrix2::new(ri[0].d[0], ri[0].d[1], ri[1].d[0], ri[1].d[1]);
-            let dx = -jx.try_inverse().ok_or(LawError::ReturnMappingFailed {
-                iterations: 0,
-                residual: 0.0,
-            })? * ji;
+            let dx = -jx.try_inverse().ok_or(LawError::ReturnMappingFailed { iterations: 0, residual: 0.0 })? * ji;
             (x, dx)
         } else {
             ([ev_tr.v, 0.0], Matrix2::new(1.0, 0.0, 0.0, 0.0))
         };
         let dv = ev_tr - ev_tr.v;
         let ds = es_tr - es_tr.v;
-        let xd = [
-            dv * dx[(0, 0)] + ds * dx[(0, 1)] + x[0],
-            dv * dx[(1, 0)] + ds * dx[(1, 1)] + x[1],
-        ];
+        let xd = [dv * dx[(0, 0)] + ds * dx[(0, 1)] + x[0], dv * dx[(1, 0)] + ds * dx[(1, 1)] + x[1]];
         let inv = self.invariants(xd, ev_tr, es_tr, pc_n);
         let two_mu_rho = inv.mu * inv.rho * 2.0;
         let tau = dev.map(|d| d * two_mu_rho - inv.p);
         let eps_e: [f64; 3] = dev.map(|d| inv.rho.v * d.v - x[0] / 3.0);
         accumulate_plastic_strain(committed, trial, eps_tr, eps_e, plastic);
         trial[3] = if plastic { inv.pc.v } else { pc_n };
-        Ok(PrincipalResponse {
-            tau: tau.map(|t| t.v),
-            eps_e,
-            dtau_deps: Matrix3::from_fn(|a, b| tau[a].d[b]),
-        })
+        Ok(PrincipalResponse { tau: tau.map(|t| t.v), eps_e, dtau_deps: Matrix3::from_fn(|a, b| tau[a].d[b]) })
     }
 
     fn elastic_strain(&self, tau: [f64; 3]) -> Result<[f64; 3], LawError> {
         let p = -(tau[0] + tau[1] + tau[2]) / 3.0;
         if p.is_nan() || p <= 0.0 {
             return Err(LawError::InitialStress {
-                problem: format!(
-                    "modified_cam_clay needs a compressive mean stress, got p = {p:.3e} Pa"
-                ),
+                problem: format!("modified_cam_clay needs a compressive mean stress, got p = {p:.3e} Pa"),
             });
         }
         let s = tau.map(|t| t + p);
@@ -299,11 +261,7 @@ impl ConstitutiveLaw for ModifiedCamClay {
 
     /// Starts at rest under `stress`; the preconsolidation pressure stays `p′c` and the
     /// stress must lie inside `f ≤ 0`. The reference pressure `p_r = p′c/OCR` is unchanged.
-    fn initialise_state_at_stress(
-        &self,
-        stress: &Matrix3<f64>,
-        state: &mut [f64],
-    ) -> Result<(), LawError> {
+    fn initialise_state_at_stress(&self, stress: &Matrix3<f64>, state: &mut [f64]) -> Result<(), LawError> {
         multiplicative::initialise_at_stress(self, stress, state)
     }
 

@@ -33,8 +33,8 @@ use nalgebra::Matrix3;
 
 use crate::dual::{Dual, Real};
 use crate::multiplicative::{
-    self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel,
-    PrincipalResponse, CP_INV_LEN, PLASTIC_OUTPUT,
+    self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel, PrincipalResponse,
+    CP_INV_LEN, PLASTIC_OUTPUT,
 };
 use crate::{ConstitutiveLaw, Kinematics, LawError, StressResponse};
 
@@ -104,16 +104,7 @@ impl MohrCoulomb {
         dilatancy_angle: f64,
     ) -> Self {
         let (lambda, mu) = crate::material::lame(young_modulus, poisson_ratio);
-        Self {
-            density,
-            lambda,
-            mu,
-            strength: ConstantStrength(Strength {
-                friction_angle,
-                cohesion,
-                dilatancy_angle,
-            }),
-        }
+        Self { density, lambda, mu, strength: ConstantStrength(Strength { friction_angle, cohesion, dilatancy_angle }) }
     }
 }
 
@@ -129,11 +120,7 @@ pub fn mohr_coulomb_coefficients<T: Real>(s: &Strength<T>) -> (T, T, T) {
 }
 
 fn cross<T: Real>(a: [T; 3], b: [T; 3]) -> [T; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 fn dot<T: Real>(a: [T; 3], b: [T; 3]) -> T {
@@ -168,20 +155,13 @@ pub fn clausen_return<T: Real>(
     let z = T::cst(0.0);
     let one = T::cst(1.0);
     let de = |v: [T; 3]| hencky_stress(lambda, mu, v);
-    let scale = sb
-        .iter()
-        .fold(sc.re().abs(), |a, s| a.max(s.re().abs()))
-        .max(1.0);
+    let scale = sb.iter().fold(sc.re().abs(), |a, s| a.max(s.re().abs())).max(1.0);
     let tol = 1e-12 * scale;
     let f = k * sb[0] - sb[2] - sc;
     let db = de([m, z, -one]);
     let adb = k * db[0] - db[2];
     let ratio = f / adb;
-    let sp = [
-        sb[0] - db[0] * ratio,
-        sb[1] - db[1] * ratio,
-        sb[2] - db[2] * ratio,
-    ];
+    let sp = [sb[0] - db[0] * ratio, sb[1] - db[1] * ratio, sb[2] - db[2] * ratio];
     if sp[0].re() >= sp[1].re() - tol && sp[1].re() >= sp[2].re() - tol {
         return Ok((sp, Region::Plane));
     }
@@ -208,10 +188,7 @@ pub fn clausen_return<T: Real>(
         let a = sc / (k - 1.0);
         return Ok(([a, a, a], Region::Apex));
     }
-    Err(LawError::ReturnMappingFailed {
-        iterations: 0,
-        residual: f.re(),
-    })
+    Err(LawError::ReturnMappingFailed { iterations: 0, residual: f.re() })
 }
 
 /// Result of the plastic return at a fixed κ, differentiated with respect to
@@ -239,34 +216,19 @@ impl<S: StrengthEvolution> MohrCoulombLaw<S> {
         if self.yield_function(tau_b, committed[0]) <= self.yield_tolerance(tau_b) {
             return Region::Elastic;
         }
-        self.plastic_evaluation(eps_tr, committed[0])
-            .map(|e| e.region)
-            .unwrap_or(Region::Elastic)
+        self.plastic_evaluation(eps_tr, committed[0]).map(|e| e.region).unwrap_or(Region::Elastic)
     }
 
     fn yield_tolerance(&self, tau: [f64; 3]) -> f64 {
         1e-10 * tau.iter().fold(1.0_f64, |a, t| a.max(t.abs()))
     }
 
-    fn plastic_evaluation(
-        &self,
-        eps_tr: [f64; 3],
-        kappa: f64,
-    ) -> Result<PlasticEvaluation, LawError> {
-        let eps: [Dual<4>; 3] = [
-            Dual::seed(eps_tr[0], 0),
-            Dual::seed(eps_tr[1], 1),
-            Dual::seed(eps_tr[2], 2),
-        ];
+    fn plastic_evaluation(&self, eps_tr: [f64; 3], kappa: f64) -> Result<PlasticEvaluation, LawError> {
+        let eps: [Dual<4>; 3] = [Dual::seed(eps_tr[0], 0), Dual::seed(eps_tr[1], 1), Dual::seed(eps_tr[2], 2)];
         let (k, sc, m) = mohr_coulomb_coefficients(&self.strength.at(Dual::seed(kappa, 3)));
         let tau_b = hencky_stress(self.lambda, self.mu, eps);
         let mut perm = [0usize, 1, 2];
-        perm.sort_by(|&a, &b| {
-            tau_b[b]
-                .v
-                .partial_cmp(&tau_b[a].v)
-                .unwrap_or(std::cmp::Ordering::Equal)
-        });
+        perm.sort_by(|&a, &b| tau_b[b].v.partial_cmp(&tau_b[a].v).unwrap_or(std::cmp::Ordering::Equal));
         let sorted = perm.map(|a| tau_b[a]);
         let (ts, region) = clausen_return(sorted, self.lambda, self.mu, k, sc, m)?;
         let mut tau = tau_b;
@@ -276,19 +238,9 @@ impl<S: StrengthEvolution> MohrCoulombLaw<S> {
         let e = hencky_strain(self.lambda, self.mu, tau);
         let d = [eps[0] - e[0], eps[1] - e[1], eps[2] - e[2]];
         let vol = (d[0] + d[1] + d[2]) / 3.0;
-        let n2 = d
-            .iter()
-            .fold(Dual::cst(0.0), |acc, di| acc + (*di - vol) * (*di - vol));
-        let delta_kappa = if n2.v > 1e-300 {
-            (n2 * (2.0 / 3.0)).sqrt()
-        } else {
-            Dual::cst(0.0)
-        };
-        Ok(PlasticEvaluation {
-            tau,
-            delta_kappa,
-            region,
-        })
+        let n2 = d.iter().fold(Dual::cst(0.0), |acc, di| acc + (*di - vol) * (*di - vol));
+        let delta_kappa = if n2.v > 1e-300 { (n2 * (2.0 / 3.0)).sqrt() } else { Dual::cst(0.0) };
+        Ok(PlasticEvaluation { tau, delta_kappa, region })
     }
 }
 
@@ -314,11 +266,7 @@ impl<S: StrengthEvolution> PrincipalModel for MohrCoulombLaw<S> {
         let tau_b = hencky_stress(self.lambda, self.mu, eps_tr);
         if self.yield_function(tau_b, kappa_n) <= self.yield_tolerance(tau_b) {
             accumulate_plastic_strain(committed, trial, eps_tr, eps_tr, false);
-            return Ok(PrincipalResponse {
-                tau: tau_b,
-                eps_e: eps_tr,
-                dtau_deps: hencky_matrix(self.lambda, self.mu),
-            });
+            return Ok(PrincipalResponse { tau: tau_b, eps_e: eps_tr, dtau_deps: hencky_matrix(self.lambda, self.mu) });
         }
         let mut kappa = kappa_n;
         let mut residual = f64::INFINITY;
@@ -328,23 +276,14 @@ impl<S: StrengthEvolution> PrincipalModel for MohrCoulombLaw<S> {
             let r = Dual::<4>::seed(kappa, 3) - ev.delta_kappa - kappa_n;
             let converged = !self.strength.evolves() || r.v.abs() <= 1e-12 * (1.0 + kappa.abs());
             if converged {
-                let kappa_new = if self.strength.evolves() {
-                    kappa
-                } else {
-                    kappa_n + ev.delta_kappa.v
-                };
+                let kappa_new = if self.strength.evolves() { kappa } else { kappa_n + ev.delta_kappa.v };
                 let dkappa = [-r.d[0] / r.d[3], -r.d[1] / r.d[3], -r.d[2] / r.d[3]];
-                let dtau_deps =
-                    Matrix3::from_fn(|a, b| ev.tau[a].d[b] + ev.tau[a].d[3] * dkappa[b]);
+                let dtau_deps = Matrix3::from_fn(|a, b| ev.tau[a].d[b] + ev.tau[a].d[3] * dkappa[b]);
                 let tau = ev.tau.map(|t| t.v);
                 let eps_e = hencky_strain(self.lambda, self.mu, tau);
                 accumulate_plastic_strain(committed, trial, eps_tr, eps_e, true);
                 trial[0] = kappa_new;
-                return Ok(PrincipalResponse {
-                    tau,
-                    eps_e,
-                    dtau_deps,
-                });
+                return Ok(PrincipalResponse { tau, eps_e, dtau_deps });
             }
             residual = r.v;
             if iteration == MAX_ITERATIONS {
@@ -352,10 +291,7 @@ impl<S: StrengthEvolution> PrincipalModel for MohrCoulombLaw<S> {
             }
             kappa = (kappa - r.v / r.d[3]).max(kappa_n);
         }
-        Err(LawError::ReturnMappingFailed {
-            iterations: MAX_ITERATIONS,
-            residual,
-        })
+        Err(LawError::ReturnMappingFailed { iterations: MAX_ITERATIONS, residual })
     }
 
     fn elastic_strain(&self, tau: [f64; 3]) -> Result<[f64; 3], LawError> {
@@ -380,11 +316,7 @@ impl<S: StrengthEvolution> ConstitutiveLaw for MohrCoulombLaw<S> {
         multiplicative::initialise(self, state);
     }
 
-    fn initialise_state_at_stress(
-        &self,
-        stress: &Matrix3<f64>,
-        state: &mut [f64],
-    ) -> Result<(), LawError> {
+    fn initialise_state_at_stress(&self, stress: &Matrix3<f64>, state: &mut [f64]) -> Result<(), LawError> {
         multiplicative::initialise_at_stress(self, stress, state)
     }
 
@@ -416,14 +348,7 @@ mod tests {
     use crate::tensor::tangent_relative_error;
 
     fn law() -> MohrCoulomb {
-        MohrCoulomb::new(
-            2000.0,
-            5.0e7,
-            0.3,
-            25f64.to_radians(),
-            5.0e3,
-            5f64.to_radians(),
-        )
+        MohrCoulomb::new(2000.0, 5.0e7, 0.3, 25f64.to_radians(), 5.0e3, 5f64.to_radians())
     }
 
     /// Trial principal Kirchhoff stresses (kPa) chosen to land in each return region

@@ -53,19 +53,9 @@ pub type MohrCoulombSoftening = MohrCoulombLaw<ExponentialSoftening>;
 
 impl MohrCoulombSoftening {
     /// From `E` (Pa), `ν` and the softening strength.
-    pub fn new(
-        density: f64,
-        young_modulus: f64,
-        poisson_ratio: f64,
-        softening: ExponentialSoftening,
-    ) -> Self {
+    pub fn new(density: f64, young_modulus: f64, poisson_ratio: f64, softening: ExponentialSoftening) -> Self {
         let (lambda, mu) = crate::material::lame(young_modulus, poisson_ratio);
-        Self {
-            density,
-            lambda,
-            mu,
-            strength: softening,
-        }
+        Self { density, lambda, mu, strength: softening }
     }
 }
 
@@ -88,11 +78,7 @@ mod tests {
             2000.0,
             5.0e7,
             0.3,
-            ExponentialSoftening {
-                peak: s(30.0, 10e3, 8.0),
-                residual: s(20.0, 2e3, 0.0),
-                shape_factor: 40.0,
-            },
+            ExponentialSoftening { peak: s(30.0, 10e3, 8.0), residual: s(20.0, 2e3, 0.0), shape_factor: 40.0 },
         )
     }
 
@@ -107,15 +93,16 @@ mod tests {
             ([-100.0, -100.0, -400.0], 0.02),
             ([30.0, 40.0, 35.0], 0.005),
         ] {
-            let eps =
-                crate::multiplicative::hencky_strain(law.lambda, law.mu, tau_kpa.map(|t| t * 1e3));
+            let eps = crate::multiplicative::hencky_strain(law.lambda, law.mu, tau_kpa.map(|t| t * 1e3));
             let mut state = vec![0.0; law.state_len()];
             law.initialise_state(&mut state);
             state[CP_INV_LEN] = kappa;
             let region = law.region(eps, &state[CP_INV_LEN..]);
             let f = rot * Matrix3::from_diagonal(&eps.map(f64::exp).into()) * rot.transpose();
             let err = tangent_relative_error(&law, &Kinematics::at(f), &state).unwrap();
-            println!("mohr_coulomb_softening {region:?} (κ_n = {kappa}): tangent error vs FD {err:.2e} (tolerance 1e-6)");
+            println!(
+                "mohr_coulomb_softening {region:?} (κ_n = {kappa}): tangent error vs FD {err:.2e} (tolerance 1e-6)"
+            );
             assert_ne!(region, Region::Elastic);
             assert!(err < 1e-6);
         }

@@ -128,11 +128,7 @@ pub fn kirchhoff_update(
             }
         }
     }
-    Ok(KirchhoffUpdate {
-        tau: spec.compose(r.tau),
-        dtau_df,
-        b_e: spec.compose(r.eps_e.map(|e| (2.0 * e).exp())),
-    })
+    Ok(KirchhoffUpdate { tau: spec.compose(r.tau), dtau_df, b_e: spec.compose(r.eps_e.map(|e| (2.0 * e).exp())) })
 }
 
 /// Inverse of `F` with the inversion check used by every law.
@@ -141,8 +137,7 @@ pub fn checked_inverse(F: &Matrix3<f64>) -> Result<Matrix3<f64>, LawError> {
     if !det_f.is_finite() || det_f <= 0.0 {
         return Err(LawError::InvertedDeformation { det_f });
     }
-    F.try_inverse()
-        .ok_or(LawError::InvertedDeformation { det_f })
+    F.try_inverse().ok_or(LawError::InvertedDeformation { det_f })
 }
 
 /// Full update of a [`PrincipalModel`] with history layout `[Cp⁻¹ (6) | internal]`.
@@ -161,10 +156,7 @@ pub fn update<M: PrincipalModel + ?Sized>(
     })?;
     write_sym(&(f_inv * ku.b_e * f_inv.transpose()), trial_cp);
     let (first_piola, tangent) = piola_from_kirchhoff(&f_inv, &ku.tau, &ku.dtau_df);
-    Ok(StressResponse {
-        first_piola,
-        tangent,
-    })
+    Ok(StressResponse { first_piola, tangent })
 }
 
 /// Virgin history: `Cp⁻¹ = I` and the model's virgin internal variables.
@@ -185,39 +177,26 @@ pub fn initialise_at_stress<M: PrincipalModel + ?Sized>(
     initialise(model, state);
     let scale = stress.amax().max(1.0);
     if (stress - stress.transpose()).amax() > 1e-12 * scale {
-        return Err(LawError::InitialStress {
-            problem: "the initial stress must be symmetric".into(),
-        });
+        return Err(LawError::InitialStress { problem: "the initial stress must be symmetric".into() });
     }
-    let spec = Spectral::of(stress).ok_or_else(|| LawError::InitialStress {
-        problem: "the initial stress is not finite".into(),
-    })?;
+    let spec = Spectral::of(stress)
+        .ok_or_else(|| LawError::InitialStress { problem: "the initial stress is not finite".into() })?;
     let eps_e = model.elastic_strain(spec.values)?;
     // Admissibility: the state must be elastic at the virgin internal variables.
     let committed = state[CP_INV_LEN..].to_vec();
     let mut scratch = committed.clone();
     let r = model.principal_update(eps_e, &committed, &mut scratch)?;
-    let mismatch = (0..3)
-        .map(|a| (r.tau[a] - spec.values[a]).abs())
-        .fold(0.0, f64::max);
+    let mismatch = (0..3).map(|a| (r.tau[a] - spec.values[a]).abs()).fold(0.0, f64::max);
     if mismatch > 1e-8 * scale {
-        return Err(LawError::InitialStress {
-            problem: "the initial stress lies outside the yield surface".into(),
-        });
+        return Err(LawError::InitialStress { problem: "the initial stress lies outside the yield surface".into() });
     }
-    write_sym(
-        &spec.compose(eps_e.map(|e| (2.0 * e).exp())),
-        &mut state[..CP_INV_LEN],
-    );
+    write_sym(&spec.compose(eps_e.map(|e| (2.0 * e).exp())), &mut state[..CP_INV_LEN]);
     Ok(())
 }
 
 /// Names of the internal variables shared by the soil laws, in their slot order.
-pub const PLASTIC_OUTPUT: [&str; 3] = [
-    "accumulated_plastic_deviatoric_strain",
-    "accumulated_plastic_volumetric_strain",
-    "yield_flag",
-];
+pub const PLASTIC_OUTPUT: [&str; 3] =
+    ["accumulated_plastic_deviatoric_strain", "accumulated_plastic_volumetric_strain", "yield_flag"];
 
 /// Updates the shared internal variables `[ε̄_p^d, ε_p^v, yield flag]` from the plastic
 /// log-strain increment `Δε_p = ε_tr − ε_e` (principal):
@@ -230,11 +209,7 @@ pub fn accumulate_plastic_strain(
     eps_e: [f64; 3],
     plastic: bool,
 ) {
-    let d = [
-        eps_tr[0] - eps_e[0],
-        eps_tr[1] - eps_e[1],
-        eps_tr[2] - eps_e[2],
-    ];
+    let d = [eps_tr[0] - eps_e[0], eps_tr[1] - eps_e[1], eps_tr[2] - eps_e[2]];
     let vol = d[0] + d[1] + d[2];
     let dev = (2.0 / 3.0 * d.iter().map(|v| (v - vol / 3.0).powi(2)).sum::<f64>()).sqrt();
     trial[0] = committed[0] + if plastic { dev } else { 0.0 };

@@ -29,11 +29,7 @@ impl NeoHookean {
     /// From Young's modulus `E` (Pa) and Poisson's ratio `ν`.
     pub fn new(density: f64, young_modulus: f64, poisson_ratio: f64) -> Self {
         let (lambda, mu) = crate::material::lame(young_modulus, poisson_ratio);
-        Self {
-            density,
-            lambda,
-            mu,
-        }
+        Self { density, lambda, mu }
     }
 }
 
@@ -61,9 +57,7 @@ impl ConstitutiveLaw for NeoHookean {
         if det_f <= 0.0 || !det_f.is_finite() {
             return Err(LawError::InvertedDeformation { det_f });
         }
-        let f_inv: Matrix3<f64> = f
-            .try_inverse()
-            .ok_or(LawError::InvertedDeformation { det_f })?;
+        let f_inv: Matrix3<f64> = f.try_inverse().ok_or(LawError::InvertedDeformation { det_f })?;
         let ln_j = det_f.ln();
         let c = self.lambda * ln_j - self.mu;
         let first_piola = self.mu * f + c * f_inv.transpose();
@@ -72,8 +66,7 @@ impl ConstitutiveLaw for NeoHookean {
             for jj in 0..3 {
                 for k in 0..3 {
                     for l in 0..3 {
-                        let mut v = self.lambda * f_inv[(jj, i)] * f_inv[(l, k)]
-                            - c * f_inv[(jj, k)] * f_inv[(l, i)];
+                        let mut v = self.lambda * f_inv[(jj, i)] * f_inv[(l, k)] - c * f_inv[(jj, k)] * f_inv[(l, i)];
                         if i == k && jj == l {
                             v += self.mu;
                         }
@@ -82,10 +75,7 @@ impl ConstitutiveLaw for NeoHookean {
                 }
             }
         }
-        Ok(StressResponse {
-            first_piola,
-            tangent,
-        })
+        Ok(StressResponse { first_piola, tangent })
     }
 }
 
@@ -99,11 +89,8 @@ mod tests {
         let law = NeoHookean::new(1000.0, 9.0e7, 0.3);
         let f = Matrix3::new(1.1, 0.2, 0.05, -0.1, 0.95, 0.02, 0.03, 0.01, 1.05);
         let r = law.update(&Kinematics::at(f), &[], &mut []).unwrap();
-        let fd = finite_difference_tangent(&f, 1e-6, |g| {
-            law.update(&Kinematics::at(*g), &[], &mut [])
-                .unwrap()
-                .first_piola
-        });
+        let fd =
+            finite_difference_tangent(&f, 1e-6, |g| law.update(&Kinematics::at(*g), &[], &mut []).unwrap().first_piola);
         let err = (r.tangent - fd).amax() / r.tangent.amax();
         println!("neo-Hookean tangent: relative error vs central FD {err:.2e} (tolerance 1e-6)");
         assert!(err < 1e-6);
@@ -112,9 +99,7 @@ mod tests {
     #[test]
     fn stress_free_in_reference_state() {
         let law = NeoHookean::new(1000.0, 9.0e7, 0.3);
-        let r = law
-            .update(&Kinematics::at(Matrix3::identity()), &[], &mut [])
-            .unwrap();
+        let r = law.update(&Kinematics::at(Matrix3::identity()), &[], &mut []).unwrap();
         assert!(r.first_piola.amax() < 1e-6);
     }
 }

@@ -84,10 +84,7 @@ impl ConstitutiveLaw for NewtonianFluid {
             }
         }
         let (first_piola, tangent) = piola_from_kirchhoff(&f_inv, &tau, &dtau_df);
-        Ok(StressResponse {
-            first_piola,
-            tangent,
-        })
+        Ok(StressResponse { first_piola, tangent })
     }
 }
 
@@ -98,19 +95,11 @@ mod tests {
 
     #[test]
     fn tangent_with_and_without_time_step() {
-        let law = NewtonianFluid {
-            density: 1000.0,
-            viscosity: 1e3,
-            bulk_modulus: 2e6,
-        };
+        let law = NewtonianFluid { density: 1000.0, viscosity: 1e3, bulk_modulus: 2e6 };
         let f = Matrix3::new(1.02, 0.05, 0.0, -0.01, 0.97, 0.02, 0.0, 0.01, 1.01);
         let fn_ = Matrix3::new(1.01, 0.03, 0.0, 0.0, 0.99, 0.01, 0.0, 0.0, 1.0);
         for dt in [0.0, 1e-3] {
-            let kin = Kinematics {
-                deformation_gradient: f,
-                previous_deformation_gradient: fn_,
-                time_step: dt,
-            };
+            let kin = Kinematics { deformation_gradient: f, previous_deformation_gradient: fn_, time_step: dt };
             let err = tangent_relative_error(&law, &kin, &[]).unwrap();
             println!("newtonian_fluid Δt = {dt}: tangent error vs FD {err:.2e} (tolerance 1e-6)");
             assert!(err < 1e-6);
@@ -120,19 +109,12 @@ mod tests {
     /// Simple shear at rate γ̇ from the reference state: σ_xy = η γ̇ (to first order in γ̇ Δt).
     #[test]
     fn shear_stress_is_viscosity_times_rate() {
-        let law = NewtonianFluid {
-            density: 1000.0,
-            viscosity: 2.0,
-            bulk_modulus: 2e6,
-        };
+        let law = NewtonianFluid { density: 1000.0, viscosity: 2.0, bulk_modulus: 2e6 };
         let (rate, dt) = (0.5, 1e-4);
         let mut f = Matrix3::identity();
         f[(0, 1)] = rate * dt;
-        let kin = Kinematics {
-            deformation_gradient: f,
-            previous_deformation_gradient: Matrix3::identity(),
-            time_step: dt,
-        };
+        let kin =
+            Kinematics { deformation_gradient: f, previous_deformation_gradient: Matrix3::identity(), time_step: dt };
         let r = law.update(&kin, &[], &mut []).unwrap();
         let sigma = r.first_piola * f.transpose() / f.determinant();
         println!(

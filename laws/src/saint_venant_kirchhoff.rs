@@ -30,11 +30,7 @@ impl SaintVenantKirchhoff {
     /// From Young's modulus `E` (Pa) and Poisson's ratio `ν`.
     pub fn new(density: f64, young_modulus: f64, poisson_ratio: f64) -> Self {
         let (lambda, mu) = crate::material::lame(young_modulus, poisson_ratio);
-        Self {
-            density,
-            lambda,
-            mu,
-        }
+        Self { density, lambda, mu }
     }
 }
 
@@ -68,8 +64,7 @@ impl ConstitutiveLaw for SaintVenantKirchhoff {
             for jj in 0..3 {
                 for k in 0..3 {
                     for l in 0..3 {
-                        let mut v =
-                            self.lambda * f[(i, jj)] * f[(k, l)] + self.mu * f[(i, l)] * f[(k, jj)];
+                        let mut v = self.lambda * f[(i, jj)] * f[(k, l)] + self.mu * f[(i, l)] * f[(k, jj)];
                         if i == k {
                             v += s[(l, jj)];
                         }
@@ -81,10 +76,7 @@ impl ConstitutiveLaw for SaintVenantKirchhoff {
                 }
             }
         }
-        Ok(StressResponse {
-            first_piola,
-            tangent,
-        })
+        Ok(StressResponse { first_piola, tangent })
     }
 }
 
@@ -96,10 +88,7 @@ mod tests {
     #[test]
     fn tangent_matches_central_differences() {
         let law = SaintVenantKirchhoff::new(1000.0, 1.0e7, 0.3);
-        for f in [
-            Matrix3::identity(),
-            Matrix3::new(1.1, 0.2, 0.05, -0.1, 0.95, 0.02, 0.03, 0.01, 1.05),
-        ] {
+        for f in [Matrix3::identity(), Matrix3::new(1.1, 0.2, 0.05, -0.1, 0.95, 0.02, 0.03, 0.01, 1.05)] {
             let err = tangent_relative_error(&law, &Kinematics::at(f), &[]).unwrap();
             println!("saint_venant_kirchhoff tangent: relative error vs central FD {err:.2e} (tolerance 1e-6)");
             assert!(err < 1e-6);

@@ -39,10 +39,7 @@ impl Spectral {
             return None;
         }
         let e = SymmetricEigen::try_new(*m, f64::EPSILON, 200)?;
-        Some(Self {
-            values: [e.eigenvalues[0], e.eigenvalues[1], e.eigenvalues[2]],
-            vectors: e.eigenvectors,
-        })
+        Some(Self { values: [e.eigenvalues[0], e.eigenvalues[1], e.eigenvalues[2]], vectors: e.eigenvectors })
     }
 
     /// `Σ_a y_a n_a ⊗ n_a` on this eigenbasis.
@@ -56,10 +53,7 @@ impl Spectral {
 /// eigenvalue functions `y_a(x)` and Jacobian `dydx[(a, c)] = ∂y_a/∂x_c` (module doc).
 /// The diagonal of the returned matrix is unused (zero).
 pub fn isotropic_theta(x: [f64; 3], y: [f64; 3], dydx: &Matrix3<f64>) -> Matrix3<f64> {
-    let scale = x
-        .iter()
-        .fold(0.0_f64, |m, v| m.max(v.abs()))
-        .max(f64::MIN_POSITIVE);
+    let scale = x.iter().fold(0.0_f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
     let mut theta = Matrix3::zeros();
     for a in 0..3 {
         for b in 0..3 {
@@ -80,11 +74,7 @@ pub fn isotropic_theta(x: [f64; 3], y: [f64; 3], dydx: &Matrix3<f64>) -> Matrix3
 /// Differential `dY` of the isotropic function for a symmetric increment `dX̃` given in the
 /// eigenbasis, returned in the eigenbasis.
 #[inline]
-pub fn isotropic_differential(
-    dydx: &Matrix3<f64>,
-    theta: &Matrix3<f64>,
-    dx: &Matrix3<f64>,
-) -> Matrix3<f64> {
+pub fn isotropic_differential(dydx: &Matrix3<f64>, theta: &Matrix3<f64>, dx: &Matrix3<f64>) -> Matrix3<f64> {
     let mut dy = theta.component_mul(dx);
     for a in 0..3 {
         dy[(a, a)] = (0..3).map(|c| dydx[(a, c)] * dx[(c, c)]).sum();
@@ -116,9 +106,7 @@ mod tests {
             let h = 1e-6;
             let fd = (f(&(x + dir * h)) - f(&(x - dir * h))) / (2.0 * h);
             let err = (dy - fd).amax() / fd.amax();
-            println!(
-                "d ln X at eigenvalues {vals:?}: relative error vs FD {err:.2e} (tolerance 1e-7)"
-            );
+            println!("d ln X at eigenvalues {vals:?}: relative error vs FD {err:.2e} (tolerance 1e-7)");
             assert!(err < 1e-7);
         }
     }

@@ -18,11 +18,7 @@ pub const fn idx(i: usize, j: usize) -> usize {
 /// `P = τ F^{-T}`,
 /// `∂P_iJ/∂F_mN = Σ_k ∂τ_ik/∂F_mN F^{-1}_Jk − τ_ik F^{-1}_Jm F^{-1}_Nk`
 /// (using `∂F^{-1}_Jk/∂F_mN = −F^{-1}_Jm F^{-1}_Nk`).
-pub fn piola_from_kirchhoff(
-    f_inv: &Matrix3<f64>,
-    tau: &Matrix3<f64>,
-    dtau_df: &Tangent,
-) -> (Matrix3<f64>, Tangent) {
+pub fn piola_from_kirchhoff(f_inv: &Matrix3<f64>, tau: &Matrix3<f64>, dtau_df: &Tangent) -> (Matrix3<f64>, Tangent) {
     let p = tau * f_inv.transpose();
     let mut a = Tangent::zeros();
     for i in 0..3 {
@@ -83,10 +79,7 @@ pub fn tangent_relative_error(
     let r = law.update(kinematics, committed, &mut trial)?;
     let mut failure = None;
     let mut stress = |g: &Matrix3<f64>| {
-        let kin = crate::Kinematics {
-            deformation_gradient: *g,
-            ..*kinematics
-        };
+        let kin = crate::Kinematics { deformation_gradient: *g, ..*kinematics };
         match law.update(&kin, committed, &mut trial) {
             Ok(s) => s.first_piola,
             Err(e) => {

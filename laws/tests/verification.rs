@@ -28,10 +28,7 @@ fn cases_dir() -> PathBuf {
 }
 
 fn build(material: serde_json::Value) -> Box<dyn ConstitutiveLaw> {
-    serde_json::from_value::<MaterialSpec>(material)
-        .unwrap()
-        .build()
-        .unwrap()
+    serde_json::from_value::<MaterialSpec>(material).unwrap().build().unwrap()
 }
 
 fn virgin(law: &dyn ConstitutiveLaw) -> Vec<f64> {
@@ -80,20 +77,10 @@ fn mcc(ocr: f64) -> ModifiedCamClay {
 #[test]
 fn tangent_of_elastic_laws() {
     let e = |law: &str| json!({"law": law, "density": 1000.0, "young_modulus": 1e7, "poisson_ratio": 0.3});
-    for name in [
-        "linear_elastic",
-        "saint_venant_kirchhoff",
-        "neo_hookean",
-        "hencky",
-    ] {
+    for name in ["linear_elastic", "saint_venant_kirchhoff", "neo_hookean", "hencky"] {
         let law = build(e(name));
         let s = virgin(law.as_ref());
-        check_tangent(
-            &format!("{name} at F = I"),
-            law.as_ref(),
-            &Kinematics::at(Matrix3::identity()),
-            &s,
-        );
+        check_tangent(&format!("{name} at F = I"), law.as_ref(), &Kinematics::at(Matrix3::identity()), &s);
         check_tangent(
             &format!("{name} at a general F"),
             law.as_ref(),
@@ -107,20 +94,13 @@ fn tangent_of_elastic_laws() {
             &s,
         );
     }
-    let fluid = build(
-        json!({"law": "newtonian_fluid", "density": 1000.0, "viscosity": 1e4, "bulk_modulus": 2e6}),
-    );
+    let fluid = build(json!({"law": "newtonian_fluid", "density": 1000.0, "viscosity": 1e4, "bulk_modulus": 2e6}));
     let kin = Kinematics {
         deformation_gradient: general([0.02, -0.01, 0.005]),
         previous_deformation_gradient: general([0.015, -0.008, 0.004]),
         time_step: 1e-2,
     };
-    check_tangent(
-        "newtonian_fluid with Δt = 0.01 s",
-        fluid.as_ref(),
-        &kin,
-        &[],
-    );
+    check_tangent("newtonian_fluid with Δt = 0.01 s", fluid.as_ref(), &kin, &[]);
 }
 
 /// Mohr–Coulomb in every return region of Clausen et al. (2007), from a virgin state and
@@ -141,17 +121,10 @@ fn mohr_coulomb_regions_tangent_and_yield_surface() {
         let region = law.region(eps, &s[CP_INV_LEN..]);
         assert_eq!(region, expected);
         let F = general(eps);
-        check_tangent(
-            &format!("mohr_coulomb {region:?}"),
-            &law,
-            &Kinematics::at(F),
-            &s,
-        );
+        check_tangent(&format!("mohr_coulomb {region:?}"), &law, &Kinematics::at(F), &s);
         let mut trial = s.clone();
         let r = law.update(&Kinematics::at(F), &s, &mut trial).unwrap();
-        let tau_new = Spectral::of(&(r.first_piola * F.transpose()))
-            .unwrap()
-            .values;
+        let tau_new = Spectral::of(&(r.first_piola * F.transpose())).unwrap().values;
         let f = law.yield_function(tau_new, trial[CP_INV_LEN]);
         println!("mohr_coulomb {region:?}: yield function after return {f:.3e} Pa (reference 0 when plastic, < 0 when elastic)");
         if region == Region::Elastic {
@@ -162,12 +135,7 @@ fn mohr_coulomb_regions_tangent_and_yield_surface() {
         // Exactly repeated stresses in the compression-edge state (F axisymmetric).
         if region == Region::CompressionEdge {
             let Fd = Matrix3::from_diagonal(&Vector3::from(eps.map(f64::exp)));
-            check_tangent(
-                "mohr_coulomb compression edge, F = diag(a, a, b)",
-                &law,
-                &Kinematics::at(Fd),
-                &s,
-            );
+            check_tangent("mohr_coulomb compression edge, F = diag(a, a, b)", &law, &Kinematics::at(Fd), &s);
         }
     }
     // Continued loading from a committed plastic state (Cp ≠ I).
@@ -176,24 +144,17 @@ fn mohr_coulomb_regions_tangent_and_yield_surface() {
     let mut s1 = s0.clone();
     law.update(&Kinematics::at(F1), &s0, &mut s1).unwrap();
     let F2 = F1 * Matrix3::from_diagonal(&Vector3::new(1.001, 1.0, 0.996));
-    check_tangent(
-        "mohr_coulomb reloading from a plastic history",
-        &law,
-        &Kinematics::at(F2),
-        &s1,
-    );
+    check_tangent("mohr_coulomb reloading from a plastic history", &law, &Kinematics::at(F2), &s1);
 }
 
 /// Strain softening, Drucker–Prager (all fits, cone and apex) and MCC on both sides of the
 /// critical state, with the stress back on the yield surface.
 #[test]
 fn tangent_of_softening_drucker_prager_and_cam_clay() {
-    let soft = build(
-        json!({"law": "mohr_coulomb_softening", "density": 2000.0, "young_modulus": 5e7,
+    let soft = build(json!({"law": "mohr_coulomb_softening", "density": 2000.0, "young_modulus": 5e7,
         "poisson_ratio": 0.3, "peak_friction_angle": 30.0, "residual_friction_angle": 20.0,
         "peak_cohesion": 1e4, "residual_cohesion": 2e3, "peak_dilatancy_angle": 8.0,
-        "residual_dilatancy_angle": 0.0, "shape_factor": 40.0}),
-    );
+        "residual_dilatancy_angle": 0.0, "shape_factor": 40.0}));
     let (lambda, mu) = soft.elastic_lame();
     for (tau, label) in [
         ([-50e3, -200e3, -400e3], "plane"),
@@ -209,20 +170,8 @@ fn tangent_of_softening_drucker_prager_and_cam_clay() {
             &s,
         );
     }
-    for fit in [
-        DruckerPragerFit::Outer,
-        DruckerPragerFit::Inner,
-        DruckerPragerFit::PlaneStrain,
-    ] {
-        let law = DruckerPrager::new(
-            2000.0,
-            5e7,
-            0.3,
-            30f64.to_radians(),
-            5e3,
-            10f64.to_radians(),
-            fit,
-        );
+    for fit in [DruckerPragerFit::Outer, DruckerPragerFit::Inner, DruckerPragerFit::PlaneStrain] {
+        let law = DruckerPrager::new(2000.0, 5e7, 0.3, 30f64.to_radians(), 5e3, 10f64.to_radians(), fit);
         for (tau, expected) in [
             ([-50e3, -200e3, -400e3], DruckerPragerRegion::Cone),
             ([-20e3, -400e3, -400e3], DruckerPragerRegion::Cone),
@@ -232,19 +181,10 @@ fn tangent_of_softening_drucker_prager_and_cam_clay() {
             assert_eq!(law.region(eps), expected);
             let s = virgin(&law);
             let F = general(eps);
-            check_tangent(
-                &format!("drucker_prager {fit:?} {expected:?}"),
-                &law,
-                &Kinematics::at(F),
-                &s,
-            );
+            check_tangent(&format!("drucker_prager {fit:?} {expected:?}"), &law, &Kinematics::at(F), &s);
             let mut trial = s.clone();
             let r = law.update(&Kinematics::at(F), &s, &mut trial).unwrap();
-            let f = law.yield_function(
-                Spectral::of(&(r.first_piola * F.transpose()))
-                    .unwrap()
-                    .values,
-            );
+            let f = law.yield_function(Spectral::of(&(r.first_piola * F.transpose())).unwrap().values);
             println!("drucker_prager {fit:?} {expected:?}: yield function after return {f:.3e} Pa (reference 0)");
             assert!(f.abs() < 1e-9 * 400e3);
         }
@@ -276,12 +216,7 @@ fn tangent_of_softening_drucker_prager_and_cam_clay() {
         assert_eq!(out[2], 1.0);
         assert_eq!(measured_side, side);
         assert!((f / (pc * pc)).abs() < 1e-10);
-        check_tangent(
-            &format!("modified_cam_clay OCR {ocr} ({side} side)"),
-            &law,
-            &Kinematics::at(F),
-            &s,
-        );
+        check_tangent(&format!("modified_cam_clay OCR {ocr} ({side} side)"), &law, &Kinematics::at(F), &s);
     }
 }
 
@@ -295,14 +230,10 @@ fn objectivity_under_superposed_rotation() {
         build(e("neo_hookean")),
         build(e("hencky")),
         build(mc_json()),
-        build(
-            json!({"law": "drucker_prager", "density": 2000.0, "young_modulus": 5e7, "poisson_ratio": 0.3,
-            "friction_angle": 30.0, "cohesion": 5e3, "dilatancy_angle": 10.0, "fit": "plane_strain"}),
-        ),
+        build(json!({"law": "drucker_prager", "density": 2000.0, "young_modulus": 5e7, "poisson_ratio": 0.3,
+            "friction_angle": 30.0, "cohesion": 5e3, "dilatancy_angle": 10.0, "fit": "plane_strain"})),
         Box::new(mcc(1.2)),
-        build(
-            json!({"law": "newtonian_fluid", "density": 1000.0, "viscosity": 10.0, "bulk_modulus": 2e6}),
-        ),
+        build(json!({"law": "newtonian_fluid", "density": 1000.0, "viscosity": 10.0, "bulk_modulus": 2e6})),
     ];
     let F = general([-0.01, 0.002, 0.004]);
     let Fn = general([-0.008, 0.0015, 0.003]);
@@ -315,22 +246,11 @@ fn objectivity_under_superposed_rotation() {
             time_step: 0.01,
         };
         let p1 = law.update(&kin(F, Fn), &s, &mut t1).unwrap().first_piola;
-        let p2 = law
-            .update(&kin(q * F, q * Fn), &s, &mut t2)
-            .unwrap()
-            .first_piola;
+        let p2 = law.update(&kin(q * F, q * Fn), &s, &mut t2).unwrap().first_piola;
         let err = (p2 - q * p1).amax() / p1.amax();
-        let hist = t1
-            .iter()
-            .zip(&t2)
-            .fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
-        println!(
-            "{}: |P(QF) − Q P(F)|/|P| = {err:.2e}, history difference {hist:.2e} (tolerance 1e-10)",
-            law.name()
-        );
-        assert!(
-            err < 1e-10 && hist < 1e-10 * (1.0 + t1.iter().fold(0.0_f64, |m, v| m.max(v.abs())))
-        );
+        let hist = t1.iter().zip(&t2).fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
+        println!("{}: |P(QF) − Q P(F)|/|P| = {err:.2e}, history difference {hist:.2e} (tolerance 1e-10)", law.name());
+        assert!(err < 1e-10 && hist < 1e-10 * (1.0 + t1.iter().fold(0.0_f64, |m, v| m.max(v.abs()))));
     }
 }
 
@@ -338,19 +258,13 @@ fn objectivity_under_superposed_rotation() {
 #[test]
 fn benchmark_10_mohr_coulomb_drained_triaxial_peak() {
     let out = std::env::temp_dir().join("loam_laws_verification/mc_triaxial_drained");
-    let summary =
-        driver::run_path_file(&cases_dir().join("mc_triaxial_drained.json"), &out).unwrap();
+    let summary = driver::run_path_file(&cases_dir().join("mc_triaxial_drained.json"), &out).unwrap();
     let (phi, c, s3) = (25f64.to_radians(), 5e3, 100e3);
-    let closed =
-        s3 * (1.0 + phi.sin()) / (1.0 - phi.sin()) + 2.0 * c * phi.cos() / (1.0 - phi.sin()) - s3;
+    let closed = s3 * (1.0 + phi.sin()) / (1.0 - phi.sin()) + 2.0 * c * phi.cos() / (1.0 - phi.sin()) - s3;
     let csv = std::fs::read_to_string(&summary.csv).unwrap();
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     let qcol = header.iter().position(|h| *h == "q").unwrap();
-    let peak = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').nth(qcol).unwrap().parse::<f64>().unwrap())
-        .fold(0.0, f64::max);
+    let peak = csv.lines().skip(1).map(|l| l.split(',').nth(qcol).unwrap().parse::<f64>().unwrap()).fold(0.0, f64::max);
     println!(
         "benchmark 10 MC drained triaxial: peak q {:.3} kPa (path.csv), reference 162.1 kPa (closed form {:.3} kPa), tolerance 1 %",
         peak / 1e3,
@@ -387,7 +301,10 @@ fn drucker_prager_outer_fit_matches_mohr_coulomb_in_compression() {
     let law = file.material.build().unwrap();
     let t = driver::run_path(law.as_ref(), &file).unwrap();
     let peak = t.column("q").unwrap().into_iter().fold(0.0, f64::max);
-    println!("drucker_prager outer fit drained triaxial: peak q {:.3} kPa, reference 162.1 kPa (MC), tolerance 1 %", peak / 1e3);
+    println!(
+        "drucker_prager outer fit drained triaxial: peak q {:.3} kPa, reference 162.1 kPa (MC), tolerance 1 %",
+        peak / 1e3
+    );
     assert!((peak - 162.1e3).abs() < 0.01 * 162.1e3);
 }
 
@@ -395,17 +312,12 @@ fn drucker_prager_outer_fit_matches_mohr_coulomb_in_compression() {
 /// critical state line q = M p′.
 #[test]
 fn benchmark_10_cam_clay_undrained_ends_on_critical_state_line() {
-    let file = driver::parse_path_file(
-        &std::fs::read_to_string(cases_dir().join("mcc_triaxial_undrained.json")).unwrap(),
-    )
-    .unwrap();
+    let file =
+        driver::parse_path_file(&std::fs::read_to_string(cases_dir().join("mcc_triaxial_undrained.json")).unwrap())
+            .unwrap();
     let law = file.material.build().unwrap();
     let t = driver::run_path(law.as_ref(), &file).unwrap();
-    let (p, q, j) = (
-        t.column("p").unwrap(),
-        t.column("q").unwrap(),
-        t.column("J").unwrap(),
-    );
+    let (p, q, j) = (t.column("p").unwrap(), t.column("q").unwrap(), t.column("J").unwrap());
     let (pf, qf) = (*p.last().unwrap(), *q.last().unwrap());
     let m = 1.0;
     println!(
@@ -424,10 +336,9 @@ fn benchmark_10_cam_clay_undrained_ends_on_critical_state_line() {
 /// Benchmark 10: drained isotropic loading of MCC follows the NCL slope λ̂ in ln v – ln p′.
 #[test]
 fn benchmark_10_cam_clay_isotropic_loading_follows_lambda() {
-    let file = driver::parse_path_file(
-        &std::fs::read_to_string(cases_dir().join("mcc_isotropic_compression.json")).unwrap(),
-    )
-    .unwrap();
+    let file =
+        driver::parse_path_file(&std::fs::read_to_string(cases_dir().join("mcc_isotropic_compression.json")).unwrap())
+            .unwrap();
     let law = file.material.build().unwrap();
     let t = driver::run_path(law.as_ref(), &file).unwrap();
     let (p, j) = (t.column("p").unwrap(), t.column("J").unwrap());
@@ -444,7 +355,11 @@ fn benchmark_10_cam_clay_isotropic_loading_follows_lambda() {
     assert!((slope_cauchy - 0.1 / 1.1).abs() < 1e-3 * 0.1);
     let pc = t.column("preconsolidation_pressure").unwrap();
     let pk = j[b] * p[b];
-    println!("MCC isotropic NCL: final p_c {:.3} kPa, Kirchhoff p {:.3} kPa (reference: equal on the NCL)", pc[b] / 1e3, pk / 1e3);
+    println!(
+        "MCC isotropic NCL: final p_c {:.3} kPa, Kirchhoff p {:.3} kPa (reference: equal on the NCL)",
+        pc[b] / 1e3,
+        pk / 1e3
+    );
     assert!((pc[b] - pk).abs() < 1e-8 * pk);
 }
 
@@ -482,9 +397,7 @@ fn softening_reaches_residual_strength() {
 #[test]
 fn elastic_paths_match_closed_forms() {
     let run = |name: &str| {
-        let file =
-            driver::parse_path_file(&std::fs::read_to_string(cases_dir().join(name)).unwrap())
-                .unwrap();
+        let file = driver::parse_path_file(&std::fs::read_to_string(cases_dir().join(name)).unwrap()).unwrap();
         let law = file.material.build().unwrap();
         driver::run_path(law.as_ref(), &file).unwrap()
     };
@@ -494,9 +407,7 @@ fn elastic_paths_match_closed_forms() {
     let m = e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
     let reference = m * ((-0.01f64).exp() - 1.0);
     let syy = *t.column("sigma_yy").unwrap().last().unwrap();
-    println!(
-        "linear_elastic oedometer: σ_yy {syy:.3} Pa, reference {reference:.3} Pa (tolerance 1e-9)"
-    );
+    println!("linear_elastic oedometer: σ_yy {syy:.3} Pa, reference {reference:.3} Pa (tolerance 1e-9)");
     assert!((syy - reference).abs() < 1e-9 * reference.abs());
     // Neo-Hookean simple shear at constant height: σ_xy = μ γ.
     let t = run("neo_hookean_simple_shear.json");
@@ -507,22 +418,13 @@ fn elastic_paths_match_closed_forms() {
     // Hencky isotropic compression: J p = −K ln J.
     let t = run("hencky_isotropic_compression.json");
     let k = 1e8 / (3.0 * (1.0 - 2.0 * 0.3));
-    let (p, j) = (
-        *t.column("p").unwrap().last().unwrap(),
-        *t.column("J").unwrap().last().unwrap(),
-    );
-    println!(
-        "hencky isotropic: J p = {:.3} Pa, reference −K ln J = {:.3} Pa (tolerance 1e-9)",
-        j * p,
-        -k * j.ln()
-    );
+    let (p, j) = (*t.column("p").unwrap().last().unwrap(), *t.column("J").unwrap().last().unwrap());
+    println!("hencky isotropic: J p = {:.3} Pa, reference −K ln J = {:.3} Pa (tolerance 1e-9)", j * p, -k * j.ln());
     assert!((j * p + k * j.ln()).abs() < 1e-9 * j * p);
     // Newtonian fluid simple shear: σ_xy = η γ̇ = 1 Pa·s × 0.1 1/s.
     let t = run("newtonian_fluid_simple_shear.json");
     let sxy = *t.column("sigma_xy").unwrap().last().unwrap();
-    println!(
-        "newtonian_fluid simple shear: σ_xy {sxy:.6} Pa, reference η γ̇ = 0.1 Pa (tolerance 1e-9)"
-    );
+    println!("newtonian_fluid simple shear: σ_xy {sxy:.6} Pa, reference η γ̇ = 0.1 Pa (tolerance 1e-9)");
     assert!((sxy - 0.1).abs() < 1e-9);
     // St Venant–Kirchhoff simple shear at constant height: closed form
     // S = λ tr(E) I + 2μE, σ = F S Fᵀ/J with J = 1.
@@ -533,23 +435,21 @@ fn elastic_paths_match_closed_forms() {
     let ee = 0.5 * (f.transpose() * f - Matrix3::identity());
     let sigma = f * (Matrix3::identity() * (lambda * ee.trace()) + 2.0 * mu * ee) * f.transpose();
     let sxy = *t.column("sigma_xy").unwrap().last().unwrap();
-    println!("saint_venant_kirchhoff simple shear γ = 0.5: σ_xy {sxy:.3} Pa, reference {:.3} Pa (tolerance 1e-9)", sigma[(0, 1)]);
+    println!(
+        "saint_venant_kirchhoff simple shear γ = 0.5: σ_xy {sxy:.3} Pa, reference {:.3} Pa (tolerance 1e-9)",
+        sigma[(0, 1)]
+    );
     assert!((sxy - sigma[(0, 1)]).abs() < 1e-9 * sigma[(0, 1)]);
 }
 
 /// Every case file under cases/laws runs and writes a path.csv with the required columns.
 #[test]
 fn every_case_file_runs() {
-    let mut names: Vec<_> = std::fs::read_dir(cases_dir())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
+    let mut names: Vec<_> = std::fs::read_dir(cases_dir()).unwrap().map(|e| e.unwrap().path()).collect();
     names.sort();
     let mut laws = std::collections::BTreeSet::new();
     for p in names {
-        let out = std::env::temp_dir()
-            .join("loam_laws_verification")
-            .join(p.file_stem().unwrap());
+        let out = std::env::temp_dir().join("loam_laws_verification").join(p.file_stem().unwrap());
         let s = driver::run_path_file(&p, &out).unwrap();
         println!(
             "{}: {} rows, law {}, peak q {:.3} kPa",
@@ -591,38 +491,24 @@ fn initial_stress_states() {
     let clay = json!({"law": "modified_cam_clay", "density": 1800.0, "preconsolidation_pressure": 2e5, "ocr": 2.0,
         "swelling_slope": 0.02, "compression_slope": 0.1, "critical_state_slope": 1.0,
         "initial_shear_modulus": 2e6, "alpha_shear": 50.0});
-    let f = file(
-        clay.clone(),
-        json!({"geostatic": {"vertical_stress": 1e5, "k0": 0.6}}),
-    );
+    let f = file(clay.clone(), json!({"geostatic": {"vertical_stress": 1e5, "k0": 0.6}}));
     let law = f.material.build().unwrap();
     let t = driver::run_path(law.as_ref(), &f).unwrap();
-    let (sxx, syy) = (
-        t.column("sigma_xx").unwrap()[0],
-        t.column("sigma_yy").unwrap()[0],
+    let (sxx, syy) = (t.column("sigma_xx").unwrap()[0], t.column("sigma_yy").unwrap()[0]);
+    println!(
+        "MCC geostatic start: σ_xx {sxx:.3} Pa, σ_yy {syy:.3} Pa, reference −60000, −100000 Pa (tolerance 1e-6 Pa)"
     );
-    println!("MCC geostatic start: σ_xx {sxx:.3} Pa, σ_yy {syy:.3} Pa, reference −60000, −100000 Pa (tolerance 1e-6 Pa)");
     assert!((sxx + 6e4).abs() < 1e-6 && (syy + 1e5).abs() < 1e-6);
-    let f = file(
-        mc_json(),
-        json!({"geostatic": {"vertical_stress": 1e5, "k0": 0.5}}),
-    );
+    let f = file(mc_json(), json!({"geostatic": {"vertical_stress": 1e5, "k0": 0.5}}));
     let law = f.material.build().unwrap();
     let t = driver::run_path(law.as_ref(), &f).unwrap();
     assert!((t.column("sigma_xx").unwrap()[0] + 5e4).abs() < 1e-6);
-    let f = file(
-        mc_json(),
-        json!({"geostatic": {"vertical_stress": 1e5, "k0": 0.1}}),
-    );
-    let e = driver::run_path(f.material.build().unwrap().as_ref(), &f)
-        .unwrap_err()
-        .to_string();
+    let f = file(mc_json(), json!({"geostatic": {"vertical_stress": 1e5, "k0": 0.1}}));
+    let e = driver::run_path(f.material.build().unwrap().as_ref(), &f).unwrap_err().to_string();
     println!("MC K0 = 0.1 (outside the yield surface): {e}");
     assert!(e.starts_with("initial_stress:") && e.contains("yield surface"));
     let f = file(clay, json!({"isotropic": 5e5}));
-    let e = driver::run_path(f.material.build().unwrap().as_ref(), &f)
-        .unwrap_err()
-        .to_string();
+    let e = driver::run_path(f.material.build().unwrap().as_ref(), &f).unwrap_err().to_string();
     println!("MCC p = 500 kPa > p'c: {e}");
     assert!(e.contains("yield surface"));
 }
@@ -667,22 +553,13 @@ fn parameter_checks_name_the_key() {
         (clay("critical_state_slope", 0.0), "critical_state_slope"),
         (clay("ocr", 0.9), "ocr"),
         (clay("initial_shear_modulus", 0.0), "initial_shear_modulus"),
-        (
-            soft("residual_friction_angle", 35.0),
-            "residual_friction_angle",
-        ),
+        (soft("residual_friction_angle", 35.0), "residual_friction_angle"),
         (soft("residual_cohesion", 2e4), "residual_cohesion"),
         (soft("shape_factor", -1.0), "shape_factor"),
-        (
-            json!({"law": "newtonian_fluid", "density": 1000.0, "viscosity": 1.0, "bulk_modulus": 0.0}),
-            "bulk_modulus",
-        ),
+        (json!({"law": "newtonian_fluid", "density": 1000.0, "viscosity": 1.0, "bulk_modulus": 0.0}), "bulk_modulus"),
     ];
     for (m, key) in cases {
-        let e = serde_json::from_value::<MaterialSpec>(m)
-            .unwrap()
-            .build()
-            .unwrap_err();
+        let e = serde_json::from_value::<MaterialSpec>(m).unwrap().build().unwrap_err();
         println!("rejected: {e} (expected key {key})");
         assert_eq!(e.parameter, key);
     }
@@ -716,10 +593,7 @@ fn driver_errors_name_the_json_path() {
         (unknown, "path"),
         (unknown_material, "material"),
         (with("/path/axial_strain", json!(-0.1)), "path.axial_strain"),
-        (
-            with("/material/friction_angle", json!(95.0)),
-            "material.friction_angle",
-        ),
+        (with("/material/friction_angle", json!(95.0)), "material.friction_angle"),
         (with("/path/drainage", json!("partially")), "path"),
         (with("/description", json!(3)), "description"),
     ];
@@ -737,10 +611,8 @@ fn driver_errors_name_the_json_path() {
 #[test]
 fn extension_simple_shear_and_increment_paths() {
     let run = |path: serde_json::Value, material: serde_json::Value| {
-        let f = driver::parse_path_file(
-            &json!({"description": "t", "material": material, "path": path}).to_string(),
-        )
-        .unwrap();
+        let f = driver::parse_path_file(&json!({"description": "t", "material": material, "path": path}).to_string())
+            .unwrap();
         driver::run_path(f.material.build().unwrap().as_ref(), &f).unwrap()
     };
     let mut mc = mc_json();
@@ -764,20 +636,11 @@ fn extension_simple_shear_and_increment_paths() {
         json!({"type": "triaxial", "drainage": "undrained", "loading": "compression", "confining_pressure": 1e5, "axial_strain": 0.05, "steps": 100}),
         mc.clone(),
     );
-    let ev = t
-        .column("volumetric_strain")
-        .unwrap()
-        .into_iter()
-        .fold(0.0_f64, |m, v| m.max(v.abs()));
-    println!(
-        "MC undrained triaxial: max |volumetric strain| {ev:.2e} (reference 0, tolerance 1e-12)"
-    );
+    let ev = t.column("volumetric_strain").unwrap().into_iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    println!("MC undrained triaxial: max |volumetric strain| {ev:.2e} (reference 0, tolerance 1e-12)");
     assert!(ev < 1e-12);
     // Simple shear at constant vertical stress.
-    let t = run(
-        json!({"type": "simple_shear", "shear_strain": 0.05, "steps": 50, "vertical_stress": 1e5}),
-        mc,
-    );
+    let t = run(json!({"type": "simple_shear", "shear_strain": 0.05, "steps": 50, "vertical_stress": 1e5}), mc);
     let syy = t.column("sigma_yy").unwrap();
     let tau = *t.column("sigma_xy").unwrap().last().unwrap();
     println!(
@@ -788,9 +651,7 @@ fn extension_simple_shear_and_increment_paths() {
     assert!(syy.iter().all(|s| (s + 1e5).abs() < 1e-4));
     assert!(tau > 0.0);
     // Strain-increment table: ten vertical increments of −0.001 on a linear elastic solid.
-    let incs: Vec<[f64; 9]> = (0..10)
-        .map(|_| [0.0, 0.0, 0.0, 0.0, -0.001, 0.0, 0.0, 0.0, 0.0])
-        .collect();
+    let incs: Vec<[f64; 9]> = (0..10).map(|_| [0.0, 0.0, 0.0, 0.0, -0.001, 0.0, 0.0, 0.0, 0.0]).collect();
     let t = run(
         json!({"type": "strain_increments", "increments": incs}),
         json!({"law": "linear_elastic", "density": 1000.0, "young_modulus": 1e8, "poisson_ratio": 0.3}),

@@ -65,9 +65,7 @@ pub enum DriverError {
         source: LawError,
     },
     /// The mixed stress/strain control did not converge.
-    #[error(
-        "step {step}: mixed stress/strain control did not converge (residual {residual:.3e} Pa)"
-    )]
+    #[error("step {step}: mixed stress/strain control did not converge (residual {residual:.3e} Pa)")]
     ControlNotConverged {
         /// Step of the stage.
         step: usize,
@@ -78,10 +76,7 @@ pub enum DriverError {
 
 impl DriverError {
     fn input(json_path: impl Into<String>, problem: impl Into<String>) -> Self {
-        Self::Input {
-            json_path: json_path.into(),
-            problem: problem.into(),
-        }
+        Self::Input { json_path: json_path.into(), problem: problem.into() }
     }
 }
 
@@ -152,35 +147,19 @@ pub fn parse_path_file(text: &str) -> Result<PathFile, DriverError> {
     let de = &mut serde_json::Deserializer::from_str(text);
     serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
-        DriverError::input(
-            if path.is_empty() {
-                ".".to_string()
-            } else {
-                path
-            },
-            e.into_inner().to_string(),
-        )
+        DriverError::input(if path.is_empty() { ".".to_string() } else { path }, e.into_inner().to_string())
     })
 }
 
 /// Reads the path file `path`, drives the material point and writes `out_dir/path.csv`.
 pub fn run_path_file(path: &Path, out_dir: &Path) -> Result<PathSummary, DriverError> {
-    let text = std::fs::read_to_string(path).map_err(|source| DriverError::Read {
-        file: path.into(),
-        source,
-    })?;
+    let text = std::fs::read_to_string(path).map_err(|source| DriverError::Read { file: path.into(), source })?;
     let file = parse_path_file(&text)?;
     let law = file.material.build()?;
     let table = run_path(law.as_ref(), &file)?;
-    std::fs::create_dir_all(out_dir).map_err(|source| DriverError::Write {
-        file: out_dir.into(),
-        source,
-    })?;
+    std::fs::create_dir_all(out_dir).map_err(|source| DriverError::Write { file: out_dir.into(), source })?;
     let csv = out_dir.join("path.csv");
-    std::fs::write(&csv, table.to_csv()).map_err(|source| DriverError::Write {
-        file: csv.clone(),
-        source,
-    })?;
+    std::fs::write(&csv, table.to_csv()).map_err(|source| DriverError::Write { file: csv.clone(), source })?;
     let p = table.column("p").unwrap_or_default();
     let q = table.column("q").unwrap_or_default();
     Ok(PathSummary {
@@ -238,11 +217,7 @@ impl Point<'_> {
         groups: &[(Vec<usize>, f64)],
         step: usize,
     ) -> Result<Evaluation, DriverError> {
-        let kin = Kinematics {
-            deformation_gradient: *F,
-            previous_deformation_gradient: self.F,
-            time_step: self.dt,
-        };
+        let kin = Kinematics { deformation_gradient: *F, previous_deformation_gradient: self.F, time_step: self.dt };
         let response = self
             .law
             .update(&kin, &self.committed, &mut self.trial)
@@ -255,12 +230,7 @@ impl Point<'_> {
             })
             .collect();
         let norm = residual.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-        Ok(Evaluation {
-            response,
-            sigma,
-            residual,
-            norm,
-        })
+        Ok(Evaluation { response, sigma, residual, norm })
     }
 
     /// One step under `control`: Newton with backtracking on the unknown diagonal entries of
@@ -277,20 +247,14 @@ impl Point<'_> {
             };
             F[(a, a)] = self.F[(a, a)];
             let tied = groups.iter_mut().find(|(m, t)| {
-                *t == target
-                    && (self.F[(m[0], m[0])] - self.F[(a, a)]).abs() <= 1e-12 * self.F[(a, a)].abs()
+                *t == target && (self.F[(m[0], m[0])] - self.F[(a, a)]).abs() <= 1e-12 * self.F[(a, a)].abs()
             });
             match tied {
                 Some((members, _)) => members.push(a),
                 None => groups.push((vec![a], target)),
             }
         }
-        let scale = control
-            .stress
-            .iter()
-            .flatten()
-            .fold(self.sigma.amax(), |m, s| m.max(s.abs()))
-            .max(1.0);
+        let scale = control.stress.iter().flatten().fold(self.sigma.amax(), |m, s| m.max(s.abs())).max(1.0);
         let mut cur = self.evaluate(&F, &groups, step)?;
         for _ in 0..MAX_CONTROL_ITERATIONS {
             if cur.norm <= 1e-10 * scale {
@@ -301,10 +265,8 @@ impl Point<'_> {
             }
             let n = groups.len();
             let j = F.determinant();
-            let f_inv = F.try_inverse().ok_or(DriverError::Law {
-                step,
-                source: LawError::InvertedDeformation { det_f: j },
-            })?;
+            let f_inv =
+                F.try_inverse().ok_or(DriverError::Law { step, source: LawError::InvertedDeformation { det_f: j } })?;
             let (A, P, sigma) = (&cur.response.tangent, &cur.response.first_piola, &cur.sigma);
             let dsigma = |a: usize, b: usize| {
                 let dp_f: f64 = (0..3).map(|k| A[(idx(a, k), idx(b, b))] * F[(a, k)]).sum();
@@ -313,19 +275,10 @@ impl Point<'_> {
             };
             let jac = nalgebra::DMatrix::from_fn(n, n, |r, c| {
                 let (rows, cols) = (&groups[r].0, &groups[c].0);
-                rows.iter()
-                    .map(|&a| cols.iter().map(|&b| dsigma(a, b)).sum::<f64>())
-                    .sum::<f64>()
-                    / rows.len() as f64
+                rows.iter().map(|&a| cols.iter().map(|&b| dsigma(a, b)).sum::<f64>()).sum::<f64>() / rows.len() as f64
             });
             let rhs = nalgebra::DVector::from_iterator(n, cur.residual.iter().map(|v| -v));
-            let delta = jac
-                .lu()
-                .solve(&rhs)
-                .ok_or(DriverError::ControlNotConverged {
-                    step,
-                    residual: cur.norm,
-                })?;
+            let delta = jac.lu().solve(&rhs).ok_or(DriverError::ControlNotConverged { step, residual: cur.norm })?;
             let mut t = 1.0;
             loop {
                 let mut cand = F;
@@ -343,10 +296,7 @@ impl Point<'_> {
                 t *= 0.5;
             }
         }
-        Err(DriverError::ControlNotConverged {
-            step,
-            residual: cur.norm,
-        })
+        Err(DriverError::ControlNotConverged { step, residual: cur.norm })
     }
 }
 
@@ -359,21 +309,15 @@ fn check(json_path: &str, ok: bool, problem: impl FnOnce() -> String) -> Result<
 }
 
 fn check_steps(steps: usize) -> Result<(), DriverError> {
-    check("path.steps", steps >= 1, || {
-        format!("must be >= 1, got {steps}")
-    })
+    check("path.steps", steps >= 1, || format!("must be >= 1, got {steps}"))
 }
 
 fn check_strain(key: &str, value: f64, max: f64) -> Result<(), DriverError> {
-    check(&format!("path.{key}"), value > 0.0 && value <= max, || {
-        format!("must lie in (0, {max}], got {value}")
-    })
+    check(&format!("path.{key}"), value > 0.0 && value <= max, || format!("must lie in (0, {max}], got {value}"))
 }
 
 fn check_pressure(key: &str, value: f64) -> Result<(), DriverError> {
-    check(key, value >= 0.0 && value.is_finite(), || {
-        format!("must be >= 0 Pa (compression positive), got {value}")
-    })
+    check(key, value >= 0.0 && value.is_finite(), || format!("must be >= 0 Pa (compression positive), got {value}"))
 }
 
 /// The initial Cauchy stress of a path file.
@@ -384,16 +328,9 @@ fn initial_stress(spec: &Option<InitialStress>) -> Result<Option<Matrix3<f64>>, 
             check_pressure("initial_stress.isotropic", p)?;
             Some(Matrix3::identity() * -p)
         }
-        Some(InitialStress::Geostatic {
-            vertical_stress,
-            k0,
-        }) => {
+        Some(InitialStress::Geostatic { vertical_stress, k0 }) => {
             check_pressure("initial_stress.geostatic.vertical_stress", vertical_stress)?;
-            check(
-                "initial_stress.geostatic.k0",
-                k0 > 0.0 && k0.is_finite(),
-                || format!("must be > 0, got {k0}"),
-            )?;
+            check("initial_stress.geostatic.k0", k0 > 0.0 && k0.is_finite(), || format!("must be > 0, got {k0}"))?;
             Some(Matrix3::from_diagonal(&nalgebra::Vector3::new(
                 -k0 * vertical_stress,
                 -vertical_stress,
@@ -401,14 +338,8 @@ fn initial_stress(spec: &Option<InitialStress>) -> Result<Option<Matrix3<f64>>, 
             )))
         }
         Some(InitialStress::Components(s)) => {
-            check(
-                "initial_stress.components",
-                s.iter().all(|v| v.is_finite()),
-                || "must be finite".into(),
-            )?;
-            Some(Matrix3::new(
-                s[0], s[3], s[5], s[3], s[1], s[4], s[5], s[4], s[2],
-            ))
+            check("initial_stress.components", s.iter().all(|v| v.is_finite()), || "must be finite".into())?;
+            Some(Matrix3::new(s[0], s[3], s[5], s[3], s[1], s[4], s[5], s[4], s[2]))
         }
     })
 }
@@ -416,9 +347,7 @@ fn initial_stress(spec: &Option<InitialStress>) -> Result<Option<Matrix3<f64>>, 
 /// Drives `law` along the path of `file` and returns the output table.
 pub fn run_path(law: &dyn ConstitutiveLaw, file: &PathFile) -> Result<PathTable, DriverError> {
     let dt = file.time_step.unwrap_or(0.0);
-    check("time_step", dt >= 0.0 && dt.is_finite(), || {
-        format!("must be >= 0 s, got {dt}")
-    })?;
+    check("time_step", dt >= 0.0 && dt.is_finite(), || format!("must be >= 0 s, got {dt}"))?;
     let mut committed = vec![0.0; law.state_len()];
     match initial_stress(&file.initial_stress)? {
         Some(s) => law
@@ -426,29 +355,16 @@ pub fn run_path(law: &dyn ConstitutiveLaw, file: &PathFile) -> Result<PathTable,
             .map_err(|e| DriverError::input("initial_stress", e.to_string()))?,
         None => law.initialise_state(&mut committed),
     }
-    let mut point = Point {
-        law,
-        F: Matrix3::identity(),
-        sigma: Matrix3::zeros(),
-        trial: committed.clone(),
-        committed,
-        dt,
-    };
+    let mut point =
+        Point { law, F: Matrix3::identity(), sigma: Matrix3::zeros(), trial: committed.clone(), committed, dt };
     // Stress at rest.
-    point.step(
-        &Control {
-            F: Matrix3::identity(),
-            stress: [None; 3],
-        },
-        0,
-    )?;
+    point.step(&Control { F: Matrix3::identity(), stress: [None; 3] }, 0)?;
 
     let ramp = |point: &mut Point, target: [Option<f64>; 3]| -> Result<(), DriverError> {
         let start = point.sigma;
         for k in 1..=CONSOLIDATION_STEPS {
             let t = k as f64 / CONSOLIDATION_STEPS as f64;
-            let stress =
-                [0, 1, 2].map(|a| target[a].map(|s| start[(a, a)] + t * (s - start[(a, a)])));
+            let stress = [0, 1, 2].map(|a| target[a].map(|s| start[(a, a)] + t * (s - start[(a, a)])));
             point.step(&Control { F: point.F, stress }, 0)?;
         }
         Ok(())
@@ -457,31 +373,19 @@ pub fn run_path(law: &dyn ConstitutiveLaw, file: &PathFile) -> Result<PathTable,
     let mut steps: Vec<Control> = Vec::new();
     let F0;
     match &file.path {
-        &PathSpec::Triaxial {
-            drainage,
-            loading,
-            confining_pressure,
-            axial_strain,
-            steps: n,
-        } => {
+        &PathSpec::Triaxial { drainage, loading, confining_pressure, axial_strain, steps: n } => {
             check_pressure("path.confining_pressure", confining_pressure)?;
             check_strain("axial_strain", axial_strain, 1.0)?;
             check_steps(n)?;
             ramp(&mut point, [Some(-confining_pressure); 3])?;
             F0 = point.F;
-            let sign = if loading == Loading::Compression {
-                -1.0
-            } else {
-                1.0
-            };
+            let sign = if loading == Loading::Compression { -1.0 } else { 1.0 };
             for k in 1..=n {
                 let ea = sign * axial_strain * k as f64 / n as f64;
                 let mut F = F0;
                 F[(1, 1)] = F0[(1, 1)] * ea.exp();
                 let stress = match drainage {
-                    Drainage::Drained => {
-                        [Some(-confining_pressure), None, Some(-confining_pressure)]
-                    }
+                    Drainage::Drained => [Some(-confining_pressure), None, Some(-confining_pressure)],
                     Drainage::Undrained => {
                         F[(0, 0)] = F0[(0, 0)] * (-0.5 * ea).exp();
                         F[(2, 2)] = F0[(2, 2)] * (-0.5 * ea).exp();
@@ -491,46 +395,30 @@ pub fn run_path(law: &dyn ConstitutiveLaw, file: &PathFile) -> Result<PathTable,
                 steps.push(Control { F, stress });
             }
         }
-        &PathSpec::Oedometric {
-            axial_strain,
-            steps: n,
-        } => {
+        &PathSpec::Oedometric { axial_strain, steps: n } => {
             check_strain("axial_strain", axial_strain, 1.0)?;
             check_steps(n)?;
             F0 = point.F;
             for k in 1..=n {
                 let mut F = F0;
                 F[(1, 1)] = F0[(1, 1)] * (-axial_strain * k as f64 / n as f64).exp();
-                steps.push(Control {
-                    F,
-                    stress: [None; 3],
-                });
+                steps.push(Control { F, stress: [None; 3] });
             }
         }
-        &PathSpec::IsotropicCompression {
-            final_pressure,
-            steps: n,
-        } => {
-            check(
-                "path.final_pressure",
-                final_pressure > 0.0 && final_pressure.is_finite(),
-                || format!("must be > 0 Pa (compression positive), got {final_pressure}"),
-            )?;
+        &PathSpec::IsotropicCompression { final_pressure, steps: n } => {
+            check("path.final_pressure", final_pressure > 0.0 && final_pressure.is_finite(), || {
+                format!("must be > 0 Pa (compression positive), got {final_pressure}")
+            })?;
             check_steps(n)?;
             F0 = point.F;
             let start = point.sigma;
             for k in 1..=n {
                 let t = k as f64 / n as f64;
-                let stress =
-                    [0, 1, 2].map(|a| Some(start[(a, a)] + t * (-final_pressure - start[(a, a)])));
+                let stress = [0, 1, 2].map(|a| Some(start[(a, a)] + t * (-final_pressure - start[(a, a)])));
                 steps.push(Control { F: F0, stress });
             }
         }
-        &PathSpec::SimpleShear {
-            shear_strain,
-            steps: n,
-            vertical_stress,
-        } => {
+        &PathSpec::SimpleShear { shear_strain, steps: n, vertical_stress } => {
             check_strain("shear_strain", shear_strain, 10.0)?;
             check_steps(n)?;
             if let Some(v) = vertical_stress {
@@ -542,29 +430,17 @@ pub fn run_path(law: &dyn ConstitutiveLaw, file: &PathFile) -> Result<PathTable,
                 let mut dF = Matrix3::identity();
                 dF[(0, 1)] = shear_strain * k as f64 / n as f64;
                 let F = dF * F0;
-                steps.push(Control {
-                    F,
-                    stress: [None, vertical_stress.map(|v| -v), None],
-                });
+                steps.push(Control { F, stress: [None, vertical_stress.map(|v| -v), None] });
             }
         }
         PathSpec::StrainIncrements { increments } => {
-            check("path.increments", !increments.is_empty(), || {
-                "must hold at least one increment".into()
-            })?;
+            check("path.increments", !increments.is_empty(), || "must hold at least one increment".into())?;
             F0 = point.F;
             let mut F = F0;
             for (k, d) in increments.iter().enumerate() {
-                check(
-                    &format!("path.increments[{k}]"),
-                    d.iter().all(|v| v.is_finite()),
-                    || "must be finite".into(),
-                )?;
+                check(&format!("path.increments[{k}]"), d.iter().all(|v| v.is_finite()), || "must be finite".into())?;
                 F = (Matrix3::identity() + Matrix3::from_row_slice(d)) * F;
-                steps.push(Control {
-                    F,
-                    stress: [None; 3],
-                });
+                steps.push(Control { F, stress: [None; 3] });
             }
         }
     }
@@ -589,12 +465,9 @@ pub fn run_path(law: &dyn ConstitutiveLaw, file: &PathFile) -> Result<PathTable,
     .map(|s| s.to_string())
     .collect();
     columns.extend(law.state_variables().iter().map(|s| s.to_string()));
-    let F0_inv = F0.try_inverse().ok_or(DriverError::Law {
-        step: 0,
-        source: LawError::InvertedDeformation {
-            det_f: F0.determinant(),
-        },
-    })?;
+    let F0_inv = F0
+        .try_inverse()
+        .ok_or(DriverError::Law { step: 0, source: LawError::InvertedDeformation { det_f: F0.determinant() } })?;
     let mut rows = vec![row(&point, 0, &F0_inv)?];
     for (k, control) in steps.iter().enumerate() {
         point.step(control, k + 1)?;
@@ -609,10 +482,7 @@ fn row(point: &Point, step: usize, F0_inv: &Matrix3<f64>) -> Result<Vec<f64>, Dr
     let det = dF.determinant();
     let spec = Spectral::of(&(dF * dF.transpose()))
         .filter(|s| s.values.iter().all(|v| *v > 0.0))
-        .ok_or(DriverError::Law {
-            step,
-            source: LawError::InvertedDeformation { det_f: det },
-        })?;
+        .ok_or(DriverError::Law { step, source: LawError::InvertedDeformation { det_f: det } })?;
     let eps = spec.compose(spec.values.map(|v| 0.5 * v.ln()));
     let s = &point.sigma;
     let p = -s.trace() / 3.0;
