@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Loam's whole test suite: Rust unit, validation and CLI tests, then the Python checks
+# (VTK files read by meshio, FMUs run by fmpy) in a virtual environment it sets up itself.
+#   scripts/test.sh          the default suite (minutes)
+#   LOAM_LONG=1 scripts/test.sh   also the long validation runs (ignored tests)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+echo "== Rust: cargo test (workspace, test profile opt-level 2)"
+if [ "${LOAM_LONG:-0}" = "1" ]; then
+  cargo test --workspace -- --include-ignored
+else
+  cargo test --workspace
+fi
+
+echo "== Python: virtual environment for meshio/fmpy checks (.venv)"
+if [ ! -x .venv/bin/python ]; then
+  python3 -m venv .venv
+fi
+.venv/bin/python -m pip install --quiet --disable-pip-version-check -r scripts/requirements.txt
+
+echo "== Python: VTK output read by meshio"
+cargo build --release --quiet
+.venv/bin/python scripts/check_vtk.py
