@@ -336,3 +336,22 @@ impl Domain for FemDomain {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use loam_laws::neo_hookean::NeoHookean;
+
+    /// An inverted (clockwise) element is rejected with its index, never a panic.
+    #[test]
+    fn inverted_element_is_reported_by_index() {
+        let mut mesh = Mesh::rectangle([0.0, 0.0], [2.0, 1.0], [2, 1], ElementType::Quad4);
+        mesh.connectivity[4..8].reverse();
+        let n = mesh.coords.len();
+        let law = Arc::new(NeoHookean::new(1000.0, 1e6, 0.3));
+        let err = FemDomain::new("d", mesh, (0..n).collect(), Formulation::PlaneStrain, 1.0, law, false).err().unwrap();
+        println!("{err}");
+        assert_eq!(err.element, 1);
+        assert!(err.message.contains("inverted"));
+    }
+}

@@ -1,0 +1,160 @@
+//! The `loam` command line: acceptance runs and bad input (one-line message naming the
+//! JSON path, exit code 2, never a panic).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn loam() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_loam"))
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("loam-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn last_monitor(csv: &Path, column: &str) -> f64 {
+    let text = std::fs::read_to_string(csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let k = header.iter().position(|h| *h == column).expect("column present");
+    lines.last().unwrap().split(',').nth(k).unwrap().parse().unwrap()
+}
+
+/// Issue 2 acceptance: `loam run cases/cantilever_fem.json --out D` writes D/monitors.csv
+/// whose last tip_uy is within 3 % of −0.39256 m, and a .pvd series.
+#[test]
+fn run_cantilever_writes_monitors_and_vtk() {
+    let out = temp_dir("cantilever");
+    let status = loam()
+        .args(["run", "cases/cantilever_fem.json", "--quiet", "--out"])
+        .arg(&out)
+        .current_dir(root())
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let tip = last_monitor(&out.join("monitors.csv"), "tip_uy");
+    println!("loam run: last tip_uy {tip:.6} m vs −0.39256 m (tolerance 3 %)");
+    assert!((tip + 0.39256).abs() / 0.39256 < 0.03);
+    assert!(out.join("beam.pvd").exists() && out.join("beam_000001.vtu").exists());
+}
+
+/// Issue 3 acceptance: `loam law cases/laws/mc_triaxial_drained.json --out D` writes
+/// D/path.csv whose largest q is within 1 % of 162.1 kPa.
+#[test]
+fn law_driver_mohr_coulomb_triaxial_peak() {
+    let out = temp_dir("law");
+    let status = loam()
+        .args(["law", "cases/laws/mc_triaxial_drained.json", "--out"])
+        .arg(&out)
+        .current_dir(root())
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let text = std::fs::read_to_string(out.join("path.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let kq = header.iter().position(|h| *h == "q").unwrap();
+    let q = lines.map(|l| l.split(',').nth(kq).unwrap().parse::<f64>().unwrap()).fold(0.0, f64::max);
+    println!("loam law: peak q {:.3} kPa vs 162.1 kPa (tolerance 1 %)", q / 1e3);
+    assert!((q - 162.1e3).abs() / 162.1e3 < 0.01);
+}
+
+/// Writes the cantilever case with `edit` applied to its JSON and runs `loam check`.
+fn check_edited(name: &str, edit: impl FnOnce(&mut serde_json::Value)) -> (i32, String) {
+    let text = std::fs::read_to_string(root().join("cases/cantilever_fem.json")).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    edit(&mut json);
+    let dir = temp_dir(name);
+    let path = dir.join("case.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&json).unwrap()).unwrap();
+    check_file(&path)
+}
+
+fn check_file(path: &Path) -> (i32, String) {
+    let out = loam().arg("check").arg(path).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).trim().to_string();
+    (out.status.code().unwrap_or(-1), stderr)
+}
+
+fn expect_bad(name: &str, (code, msg): (i32, String), must_contain: &[&str]) {
+    println!("{name}: exit {code}: {msg}");
+    assert_eq!(code, 2, "{name}: exit code");
+    assert_eq!(msg.lines().count(), 1, "{name}: one-line message");
+    assert!(!msg.contains("panicked"), "{name}: panic");
+    for m in must_contain {
+        assert!(msg.contains(m), "{name}: message should name '{m}': {msg}");
+    }
+}
+
+#[test]
+fn bad_input_exits_2_naming_the_json_path() {
+    use serde_json::json;
+    expect_bad(
+        "unknown key",
+        check_edited("unknown", |j| j["solver"]["max_iteration"] = json!(3)),
+        &["solver", "max_iteration"],
+    );
+    expect_bad("unknown top key", check_edited("unknown-top", |j| j["gravityy"] = json!(1)), &["gravityy"]);
+    expect_bad(
+        "wrong type",
+        check_edited("type", |j| j["analysis"]["time_step"] = json!("one")),
+        &["analysis.time_step"],
+    );
+    expect_bad(
+        "E <= 0",
+        check_edited("young", |j| j["materials"]["beam"]["young_modulus"] = json!(-1.0)),
+        &["materials.beam.young_modulus", "> 0"],
+    );
+    expect_bad(
+        "nu out of range",
+        check_edited("nu", |j| j["materials"]["beam"]["poisson_ratio"] = json!(0.5)),
+        &["materials.beam.poisson_ratio"],
+    );
+    expect_bad(
+        "missing material",
+        check_edited("mat", |j| j["domains"][0]["material"] = json!("steel")),
+        &["domains[0].material", "steel"],
+    );
+    expect_bad(
+        "empty region",
+        check_edited("region", |j| j["regions"]["clamp"] = json!({"x": -5.0})),
+        &["regions.clamp", "no node"],
+    );
+    expect_bad(
+        "unknown region",
+        check_edited("bcregion", |j| j["boundary_conditions"][0]["region"] = json!("wall")),
+        &["boundary_conditions[0].region", "wall"],
+    );
+    expect_bad(
+        "vector length",
+        check_edited("len", |j| j["gravity"]["acceleration"] = json!([0.0, -9.81, 0.0])),
+        &["gravity.acceleration"],
+    );
+    expect_bad(
+        "missing mesh file",
+        check_edited("mesh", |j| j["domains"][0]["mesh"] = json!({"gmsh": "nowhere.msh"})),
+        &["domains[0].mesh.gmsh", "nowhere.msh"],
+    );
+    expect_bad(
+        "inverted element",
+        check_edited("inverted", |j| j["domains"][0]["mesh"]["rectangle"]["size"] = json!([7.0, -1.0])),
+        &["domains[0].mesh.rectangle.size[1]"],
+    );
+    let dir = temp_dir("syntax");
+    std::fs::write(dir.join("bad.json"), "{\n  \"description\": \"x\",\n  \"materials\": {,\n}").unwrap();
+    expect_bad("syntax error", check_file(&dir.join("bad.json")), &["line 3"]);
+    std::fs::write(dir.join("corrupt.msh"), "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 2 1 2\n").unwrap();
+    expect_bad(
+        "corrupt mesh",
+        check_edited("corrupt", |j| j["domains"][0]["mesh"] = json!({"gmsh": dir.join("corrupt.msh")})),
+        &["domains[0].mesh.gmsh"],
+    );
+    expect_bad("no case file", check_file(Path::new("/nonexistent/case.json")), &["cannot read"]);
+}
