@@ -15,7 +15,7 @@ use crate::amplitude::Amplitude;
 use crate::assembly::{AssemblyPattern, BlockLayout};
 use crate::dofs::{DofMap, CONSTRAINED};
 use crate::domain::{AssemblyInput, Domain, DomainError, NodalState};
-use crate::linear_solver::{LinearSolver, LinearSolverError, LinearSolverKind};
+use crate::linear_solver::{LinearSolver, LinearSolverError, LinearSolverKind, SolverTimings};
 use crate::scheme::TimeScheme;
 
 /// Which norms decide convergence.
@@ -152,6 +152,35 @@ struct Workspace {
     solver: LinearSolver,
 }
 
+impl Workspace {
+    /// Every domain fills its part of the element buffers.
+    fn assemble_domains(
+        &mut self,
+        domains: &mut [Box<dyn Domain>],
+        input: &AssemblyInput<'_>,
+    ) -> Result<(), DomainError> {
+        let mut mats = self.matrices.as_mut_slice();
+        let mut vecs = self.vectors.as_mut_slice();
+        for (k, d) in domains.iter_mut().enumerate() {
+            let (m, rest_m) = mats.split_at_mut(self.domain_matrix[k + 1] - self.domain_matrix[k]);
+            let (v, rest_v) = vecs.split_at_mut(self.domain_vector[k + 1] - self.domain_vector[k]);
+            d.assemble(input, m, v)?;
+            mats = rest_m;
+            vecs = rest_v;
+        }
+        Ok(())
+    }
+}
+
+/// Seconds of one [`Model::assemble_only`], by half.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct AssemblyTimings {
+    /// Element kernels writing the element buffers.
+    pub kernels: f64,
+    /// Gather of the element buffers into the residual and the matrix values.
+    pub gather: f64,
+}
+
 /// Nodes, domains, constraints, loads and the solution state.
 pub struct Model {
     /// Components per node (2 or 3).
@@ -270,6 +299,38 @@ impl Model {
         });
     }
 
+    /// Accumulated times of the linear solver (symbolic analyses, numeric factorisations,
+    /// solves) since the pattern was built.
+    pub fn solver_timings(&self) -> SolverTimings {
+        self.workspace.as_ref().map_or_else(SolverTimings::default, |w| w.solver.timings)
+    }
+
+    /// Assembles once at the current iterate, as the first Newton iteration of a static
+    /// step of length 0 would (element kernels, then gather of residual and tangent), and
+    /// discards the result. For benchmarks and profiling (`benches/fem_newton.rs`); the
+    /// committed state and the domains' histories are not changed.
+    pub fn assemble_only(&mut self) -> Result<AssemblyTimings, StepError> {
+        self.prepare();
+        let gf = self.gravity.1.at(self.time);
+        let input = AssemblyInput {
+            state: &self.state,
+            committed: &self.committed,
+            inertial_acceleration: None,
+            mass_coefficient: 0.0,
+            gravity: self.gravity.0.map(|g| g * gf),
+            time_step: 0.0,
+            with_tangent: true,
+        };
+        let ws = self.workspace.as_mut().expect("prepared");
+        let t = Instant::now();
+        ws.assemble_domains(&mut self.domains, &input)?;
+        let kernels = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        ws.pattern.gather_vector(&ws.vectors, &mut ws.residual);
+        ws.pattern.gather_matrix(&ws.matrices, &mut ws.values);
+        Ok(AssemblyTimings { kernels, gather: t.elapsed().as_secs_f64() })
+    }
+
     /// Advances from the committed state by `dt`. On success the new state is committed
     /// and `time` advanced; on failure nothing committed changes (call again with a
     /// smaller step).
@@ -321,15 +382,7 @@ impl Model {
                     time_step: dt,
                     with_tangent: true,
                 };
-                let mut mats = ws.matrices.as_mut_slice();
-                let mut vecs = ws.vectors.as_mut_slice();
-                for (k, d) in self.domains.iter_mut().enumerate() {
-                    let (m, rest_m) = mats.split_at_mut(ws.domain_matrix[k + 1] - ws.domain_matrix[k]);
-                    let (v, rest_v) = vecs.split_at_mut(ws.domain_vector[k + 1] - ws.domain_vector[k]);
-                    d.assemble(&input, m, v)?;
-                    mats = rest_m;
-                    vecs = rest_v;
-                }
+                ws.assemble_domains(&mut self.domains, &input)?;
                 ws.pattern.gather_vector(&ws.vectors, &mut ws.residual);
                 for (r, f) in ws.residual.iter_mut().zip(&f_ext) {
                     *r -= f;
