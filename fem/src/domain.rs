@@ -80,6 +80,19 @@ pub struct DomainOutput {
     pub cell_fields: Vec<Field>,
 }
 
+/// Vector quantities of tracked points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PointQuantity {
+    /// Position in the current configuration.
+    Position,
+    /// Displacement from the initial position.
+    Displacement,
+    /// Velocity.
+    Velocity,
+    /// Acceleration.
+    Acceleration,
+}
+
 /// A contributor of element blocks to the global system.
 pub trait Domain: Send + Sync {
     /// The domain's name from the case file.
@@ -87,6 +100,25 @@ pub trait Domain: Send + Sync {
 
     /// Kinematic formulation (all domains of a model share one).
     fn formulation(&self) -> Formulation;
+
+    /// Initialisation phase of a step, before any assembly: particle domains locate their
+    /// points, reset their grid nodes in `committed` (displacement 0, velocity and
+    /// acceleration projected from the points) and return `true` if their element blocks
+    /// changed (which rebuilds the sparsity pattern). Mesh domains do nothing.
+    fn begin_step(&mut self, _committed: &mut NodalState) -> bool {
+        false
+    }
+
+    /// The tracked point (material point) nearest to `x`: its id and distance. Mesh
+    /// domains have none.
+    fn nearest_point(&self, _x: &[f64]) -> Option<(usize, f64)> {
+        None
+    }
+
+    /// A vector quantity of tracked point `id` (material point), if this domain has it.
+    fn point_quantity(&self, _id: usize, _quantity: PointQuantity) -> Option<[f64; 3]> {
+        None
+    }
 
     /// Appends this domain's element blocks (global DOF ids) to `layout`, in the order
     /// in which [`Domain::assemble`] fills its buffers.

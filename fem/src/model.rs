@@ -337,6 +337,15 @@ impl Model {
     pub fn solve_step(&mut self, dt: f64) -> Result<StepReport, StepError> {
         let mut report = StepReport::default();
         let t0 = Instant::now();
+        // initialisation phase of particle domains (locate, project); a changed set of
+        // element blocks invalidates the sparsity pattern
+        let mut topology_changed = false;
+        for d in self.domains.iter_mut() {
+            topology_changed |= d.begin_step(&mut self.committed);
+        }
+        if topology_changed {
+            self.invalidate_pattern();
+        }
         self.prepare();
         report.timings.pattern += t0.elapsed().as_secs_f64();
         let t_new = self.time + dt;

@@ -1,1 +1,22 @@
-//! mpm (placeholder)
+//! The implicit Material Point Method (Iaconeta et al. 2017; Chandra et al. 2021), built on
+//! `loam-fem`'s kernels, assembly and Newton loop.
+//!
+//! Key design decision: **the MPM grid is just another `Domain`**. Its material points are
+//! handed to the same solid element kernel as FEM Gauss points (weight = current volume,
+//! `F0` = the point's deformation gradient at the start of the step), so the
+//! updated-Lagrangian phase is ordinary assembly into the shared system. What is particular
+//! to MPM happens around it, in the seed's three phases:
+//!
+//! 1. *initialisation* ([`mpm_domain::MpmDomain`]'s `begin_step`): locate points in the
+//!    grid (O(1) per point on a structured grid), sort them by cell, reset the grid and
+//!    project mass, momentum and acceleration to its nodes;
+//! 2. *updated-Lagrangian phase*: Newton on the global system (in `loam-fem`);
+//! 3. *convective phase* (`commit`): interpolate `Δu` and `a` back to the points,
+//!    `v_p ← v_p + Δt/2 (a_p^n + a_p^{n+1})`, `x_p ← x_p + Δu_p`, commit `F`, volume and
+//!    law state; the grid returns to its reference position.
+
+#![allow(non_snake_case)]
+
+pub mod grid;
+pub mod material_points;
+pub mod mpm_domain;
