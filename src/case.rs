@@ -71,6 +71,10 @@ pub struct Case {
     /// Named scalar time histories written to `monitors.csv`.
     #[serde(default)]
     pub monitors: Vec<MonitorSpec>,
+    /// Variables of the case as an FMU (`loam fmu`), and the inputs the library API
+    /// [`crate::simulation::Simulation::set_input`] accepts.
+    #[serde(default)]
+    pub fmu: Option<FmuSpec>,
     /// Directory of the case file (for relative mesh paths); set by the loader.
     #[serde(skip)]
     pub directory: PathBuf,
@@ -93,11 +97,18 @@ fn one() -> f64 {
 pub struct DomainSpec {
     /// Name (used for output files `<name>_<step>.vtu`).
     pub name: String,
-    /// Discretisation: `fem` (Lagrangian FEM).
+    /// Discretisation: `fem` (Lagrangian FEM, default) or `mpm` (material points).
     #[serde(rename = "type", default = "fem")]
     pub kind: DomainKind,
-    /// Mesh.
-    pub mesh: MeshSpec,
+    /// Mesh (FEM domains).
+    #[serde(default)]
+    pub mesh: Option<MeshSpec>,
+    /// Structured background grid (MPM domains).
+    #[serde(default)]
+    pub grid: Option<GridSpec>,
+    /// Where the material points are (MPM domains).
+    #[serde(default)]
+    pub material_points: Option<BodySpec>,
     /// Material name (a key of `materials`).
     pub material: String,
     /// `consistent` (default) or `lumped` mass matrix.
@@ -115,6 +126,51 @@ fn fem() -> DomainKind {
 pub enum DomainKind {
     /// Lagrangian finite elements.
     Fem,
+    /// Implicit material point method on a background grid.
+    Mpm,
+}
+
+/// A structured MPM background grid.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    /// Lowest corner (m), one entry per coordinate.
+    pub origin: Vec<f64>,
+    /// Extent (m), one entry per coordinate.
+    pub size: Vec<f64>,
+    /// Cells per direction.
+    pub cells: Vec<usize>,
+    /// `quad4` or `tri3` (2D), `hex8` (3D).
+    pub element: ElementType,
+}
+
+/// Where an MPM body's material points are.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum BodySpec {
+    /// At Gauss positions of the cells of a body mesh (as Kratos' body model part).
+    Cells {
+        /// The body mesh.
+        mesh: MeshSpec,
+        /// Points per cell: 1, 4, 9, 16 (quad4); 1, 8, 27, 64 (hex8); 1, 3 (tri3); 1, 4 (tet4).
+        points_per_cell: usize,
+    },
+    /// On a square lattice inside a disk (2D).
+    Disk {
+        /// Centre (m).
+        centre: [f64; 2],
+        /// Radius (m).
+        radius: f64,
+        /// Lattice spacing (m).
+        spacing: f64,
+    },
+    /// On a square lattice inside a polygon (2D, vertices in order).
+    Polygon {
+        /// Vertices (m).
+        vertices: Vec<[f64; 2]>,
+        /// Lattice spacing (m).
+        spacing: f64,
+    },
 }
 
 /// Mass matrix choice.
@@ -194,6 +250,9 @@ pub enum RegionSpec {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BoundaryConditionSpec {
+    /// Optional name, by which an FMU input can drive it.
+    #[serde(default)]
+    pub name: Option<String>,
     /// Region name.
     pub region: String,
     /// One entry per component: a value in m, or `null` for a free component.
@@ -209,6 +268,9 @@ pub struct BoundaryConditionSpec {
 pub enum LoadSpec {
     /// The same force (N) on every node of the region.
     NodalForce {
+        /// Optional name, by which an FMU input can drive it.
+        #[serde(default)]
+        name: Option<String>,
         /// Region name.
         region: String,
         /// Force vector in N, one entry per component.
@@ -219,6 +281,9 @@ pub enum LoadSpec {
     },
     /// Pressure (Pa, positive pushing into the body) on the boundary facets of the region.
     Pressure {
+        /// Optional name, by which an FMU input can drive it.
+        #[serde(default)]
+        name: Option<String>,
         /// Region name.
         region: String,
         /// Pressure in Pa.
@@ -229,6 +294,9 @@ pub enum LoadSpec {
     },
     /// Traction vector (Pa) on the boundary facets of the region.
     Traction {
+        /// Optional name, by which an FMU input can drive it.
+        #[serde(default)]
+        name: Option<String>,
         /// Region name.
         region: String,
         /// Traction in Pa, one entry per component.
@@ -237,6 +305,17 @@ pub enum LoadSpec {
         #[serde(default)]
         amplitude: Amplitude,
     },
+}
+
+impl LoadSpec {
+    /// The load's optional name.
+    pub fn name(&self) -> Option<&str> {
+        match self {
+            LoadSpec::NodalForce { name, .. } | LoadSpec::Pressure { name, .. } | LoadSpec::Traction { name, .. } => {
+                name.as_deref()
+            }
+        }
+    }
 }
 
 /// Gravity acceleration and its time function.
@@ -355,6 +434,24 @@ pub enum MonitorSpec {
         /// Component.
         component: Component,
     },
+    /// Displacement component of the material point nearest to `point` at the start.
+    MaterialPointDisplacement {
+        /// Column name.
+        name: String,
+        /// Location (m).
+        point: Vec<f64>,
+        /// Component.
+        component: Component,
+    },
+    /// Velocity component of the material point nearest to `point` at the start.
+    MaterialPointVelocity {
+        /// Column name.
+        name: String,
+        /// Location (m).
+        point: Vec<f64>,
+        /// Component.
+        component: Component,
+    },
     /// Total kinetic energy (J).
     KineticEnergy {
         /// Column name.
@@ -375,10 +472,83 @@ impl MonitorSpec {
             | MonitorSpec::Velocity { name, .. }
             | MonitorSpec::Acceleration { name, .. }
             | MonitorSpec::Reaction { name, .. }
+            | MonitorSpec::MaterialPointDisplacement { name, .. }
+            | MonitorSpec::MaterialPointVelocity { name, .. }
             | MonitorSpec::KineticEnergy { name }
             | MonitorSpec::StrainEnergy { name } => name,
         }
     }
+}
+
+/// The variables a case exposes as an FMU (FMI 3.0 co-simulation), and the named inputs
+/// of the library API.
+///
+/// An input *replaces the amplitude factor* of its target while it is set: a load's
+/// forces become `forces · value`, a boundary condition's prescribed displacements
+/// `displacement · value`, gravity `acceleration · value`. Declare the target with unit
+/// magnitude (e.g. `"force": [0, -1]`, `"displacement": [null, 1]`) to make the input
+/// the force in N or the displacement in m. A value holds until the next
+/// [`crate::simulation::Simulation::set_input`] (zero-order hold); until the first one,
+/// the target's own `amplitude` applies. The FMU sets every input to its `start` when
+/// it is instantiated or reset.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FmuSpec {
+    /// Inputs (FMI causality `input`).
+    #[serde(default)]
+    pub inputs: Vec<FmuInputSpec>,
+    /// Outputs (FMI causality `output`); absent means every monitor, named as the monitor.
+    #[serde(default)]
+    pub outputs: Option<Vec<FmuOutputSpec>>,
+}
+
+/// A named input.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FmuInputSpec {
+    /// Variable name (unique among inputs and outputs, not `time`).
+    pub name: String,
+    /// What the input drives: `{"load": NAME}`, `{"boundary_condition": NAME}` or
+    /// `"gravity"`.
+    pub drives: InputTarget,
+    /// Unit of the value, e.g. `N`, `m` or `1` (default `1`: a factor).
+    #[serde(default)]
+    pub unit: Option<String>,
+    /// Value the FMU starts with (FMI `start`).
+    pub start: f64,
+    /// What the input means.
+    #[serde(default)]
+    pub description: Option<String>,
+}
+
+/// What an input drives.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum InputTarget {
+    /// The factor of the load with this `name`.
+    Load(String),
+    /// The factor of the prescribed displacements of the boundary condition with this
+    /// `name`.
+    BoundaryCondition(String),
+    /// The gravity factor.
+    Gravity,
+}
+
+/// A named output: the value of a monitor.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FmuOutputSpec {
+    /// Variable name (unique among inputs and outputs, not `time`).
+    pub name: String,
+    /// Monitor name (default: the output's name).
+    #[serde(default)]
+    pub monitor: Option<String>,
+    /// Unit (default: the monitor's SI unit).
+    #[serde(default)]
+    pub unit: Option<String>,
+    /// What the output means.
+    #[serde(default)]
+    pub description: Option<String>,
 }
 
 impl Case {

@@ -5,6 +5,8 @@
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
+use loam_fem::domain::PointQuantity;
+use loam_fem::element::ElementType;
 use loam_fem::formulation::Formulation;
 use loam_fem::loads::{facet_forces, SurfaceLoad};
 use loam_fem::mesh::Mesh;
@@ -12,8 +14,14 @@ use loam_fem::model::{Constraint, Load, Model};
 use loam_fem::scheme::TimeScheme;
 use loam_fem::solid_domain::FemDomain;
 use loam_laws::ConstitutiveLaw;
+use loam_mpm::grid::StructuredGrid;
+use loam_mpm::material_points::{self, MaterialPoints};
+use loam_mpm::mpm_domain::MpmDomain;
 
-use crate::case::{AnalysisType, Case, CaseError, Component, LoadSpec, MassMatrix, MeshSpec, MonitorSpec, RegionSpec};
+use crate::case::{
+    AnalysisType, BodySpec, Case, CaseError, Component, DomainKind, InputTarget, LoadSpec, MassMatrix, MeshSpec,
+    MonitorSpec, RegionSpec,
+};
 use crate::monitor::{Monitor, MonitorKind};
 
 /// A model ready to run, with the monitors resolved to nodes and regions.
@@ -24,6 +32,49 @@ pub struct BuiltModel {
     pub monitors: Vec<Monitor>,
     /// Node sets of the regions (global ids).
     pub regions: BTreeMap<String, Vec<usize>>,
+    /// Named inputs (`fmu.inputs`), resolved to their targets in the model.
+    pub inputs: Vec<ModelInput>,
+    /// Named outputs (`fmu.outputs`, or every monitor), resolved to monitors.
+    pub outputs: Vec<ModelOutput>,
+}
+
+/// Where an input acts in the [`Model`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InputSlot {
+    /// `model.loads[i]`.
+    Load(usize),
+    /// `model.constraints[i]`.
+    Constraint(usize),
+    /// `model.gravity`.
+    Gravity,
+}
+
+/// A named input resolved to its target.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelInput {
+    /// Variable name.
+    pub name: String,
+    /// The amplitude it replaces.
+    pub slot: InputSlot,
+    /// Unit (`1` for a factor).
+    pub unit: String,
+    /// Start value (FMI `start`).
+    pub start: f64,
+    /// Description.
+    pub description: String,
+}
+
+/// A named output resolved to a monitor.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelOutput {
+    /// Variable name.
+    pub name: String,
+    /// Index into the monitors.
+    pub monitor: usize,
+    /// Unit.
+    pub unit: String,
+    /// Description.
+    pub description: String,
 }
 
 fn check_positive(location: &str, value: f64) -> Result<(), CaseError> {
@@ -56,11 +107,10 @@ fn component_index(location: &str, c: Component, dim: usize) -> Result<Option<us
     }
 }
 
-/// Builds the mesh of domain `k`.
-fn build_mesh(case: &Case, k: usize) -> Result<Mesh, CaseError> {
-    let loc = format!("domains[{k}].mesh");
+/// Builds the mesh described by `spec` (at JSON path `loc`).
+fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh, CaseError> {
     let dim = case.formulation.dim();
-    let mesh = match &case.domains[k].mesh {
+    let mesh = match spec {
         MeshSpec::Rectangle { origin, size, cells, element } => {
             for (i, s) in size.iter().enumerate() {
                 check_positive(&format!("{loc}.rectangle.size[{i}]"), *s)?;
@@ -103,6 +153,142 @@ fn build_mesh(case: &Case, k: usize) -> Result<Mesh, CaseError> {
         return Err(CaseError::new(loc, "axisymmetric meshes need r = x ≥ 0"));
     }
     Ok(mesh)
+}
+
+/// The mesh of domain `k` (for MPM: the grid, with the grid and the material points).
+fn build_discretisation(
+    case: &Case,
+    k: usize,
+    density: f64,
+) -> Result<(Mesh, Option<(StructuredGrid, MaterialPoints)>), CaseError> {
+    let d = &case.domains[k];
+    let loc = format!("domains[{k}]");
+    let dim = case.formulation.dim();
+    let misplaced = |key: &str| {
+        CaseError::new(
+            format!("{loc}.{key}"),
+            format!(
+                "does not apply to an {} domain",
+                match d.kind {
+                    DomainKind::Fem => "fem",
+                    DomainKind::Mpm => "mpm",
+                }
+            ),
+        )
+    };
+    match d.kind {
+        DomainKind::Fem => {
+            if d.grid.is_some() {
+                return Err(misplaced("grid"));
+            }
+            if d.material_points.is_some() {
+                return Err(misplaced("material_points"));
+            }
+            let spec =
+                d.mesh.as_ref().ok_or_else(|| CaseError::new(format!("{loc}.mesh"), "an fem domain needs a mesh"))?;
+            Ok((build_mesh(case, &format!("{loc}.mesh"), spec)?, None))
+        }
+        DomainKind::Mpm => {
+            if d.mesh.is_some() {
+                return Err(misplaced("mesh"));
+            }
+            let g =
+                d.grid.as_ref().ok_or_else(|| CaseError::new(format!("{loc}.grid"), "an mpm domain needs a grid"))?;
+            check_len(&format!("{loc}.grid.origin"), &g.origin, dim)?;
+            check_len(&format!("{loc}.grid.size"), &g.size, dim)?;
+            check_len(&format!("{loc}.grid.cells"), &g.cells, dim)?;
+            for (i, v) in g.size.iter().enumerate() {
+                check_positive(&format!("{loc}.grid.size[{i}]"), *v)?;
+            }
+            if g.cells.contains(&0) {
+                return Err(CaseError::new(format!("{loc}.grid.cells"), "needs at least one cell in each direction"));
+            }
+            if g.element.dim() != dim || g.element == ElementType::Tet4 {
+                return Err(CaseError::new(
+                    format!("{loc}.grid.element"),
+                    format!(
+                        "a structured {} grid takes {}",
+                        case.formulation.name(),
+                        if dim == 2 { "quad4 or tri3" } else { "hex8" }
+                    ),
+                ));
+            }
+            let mut origin = [0.0; 3];
+            let mut size = [1.0; 3];
+            let mut cells = [1; 3];
+            origin[..dim].copy_from_slice(&g.origin);
+            size[..dim].copy_from_slice(&g.size);
+            cells[..dim].copy_from_slice(&g.cells);
+            if case.formulation == Formulation::Axisymmetric && origin[0] < -1e-12 {
+                return Err(CaseError::new(format!("{loc}.grid.origin"), "axisymmetric grids need r = x ≥ 0"));
+            }
+            let grid = StructuredGrid::new(origin, size, cells, g.element);
+            let body_loc = format!("{loc}.material_points");
+            let body = d
+                .material_points
+                .as_ref()
+                .ok_or_else(|| CaseError::new(&body_loc, "an mpm domain needs material_points"))?;
+            let (f, t) = (case.formulation, case.thickness);
+            let points = match body {
+                BodySpec::Cells { mesh, points_per_cell } => {
+                    let m = build_mesh(case, &format!("{body_loc}.cells.mesh"), mesh)?;
+                    material_points::from_mesh(&m, *points_per_cell, f, t, density)
+                        .map_err(|e| CaseError::new(format!("{body_loc}.cells.points_per_cell"), e))?
+                }
+                BodySpec::Disk { centre, radius, spacing } => {
+                    check_positive(&format!("{body_loc}.disk.radius"), *radius)?;
+                    check_positive(&format!("{body_loc}.disk.spacing"), *spacing)?;
+                    let (c, r) = (*centre, *radius);
+                    material_points::from_lattice_2d(
+                        [c[0] - r, c[1] - r],
+                        [c[0] + r, c[1] + r],
+                        *spacing,
+                        f,
+                        t,
+                        density,
+                        |x, y| (x - c[0]).powi(2) + (y - c[1]).powi(2) <= r * r,
+                    )
+                }
+                BodySpec::Polygon { vertices, spacing } => {
+                    check_positive(&format!("{body_loc}.polygon.spacing"), *spacing)?;
+                    if vertices.len() < 3 {
+                        return Err(CaseError::new(
+                            format!("{body_loc}.polygon.vertices"),
+                            "needs at least 3 vertices",
+                        ));
+                    }
+                    let lo = [0, 1].map(|d| vertices.iter().map(|v| v[d]).fold(f64::MAX, f64::min));
+                    let hi = [0, 1].map(|d| vertices.iter().map(|v| v[d]).fold(f64::MIN, f64::max));
+                    material_points::from_lattice_2d(lo, hi, *spacing, f, t, density, |x, y| {
+                        point_in_polygon(vertices, x, y)
+                    })
+                }
+            };
+            if points.is_empty() {
+                return Err(CaseError::new(body_loc, "generates no material point"));
+            }
+            if let Some(p) = points.position.iter().position(|x| grid.locate(x).is_none()) {
+                return Err(CaseError::new(
+                    body_loc,
+                    format!("material point at {:?} lies outside the grid", &points.position[p][..dim]),
+                ));
+            }
+            Ok((grid.mesh.clone(), Some((grid, points))))
+        }
+    }
+}
+
+/// Even–odd rule.
+fn point_in_polygon(vertices: &[[f64; 2]], x: f64, y: f64) -> bool {
+    let mut inside = false;
+    let n = vertices.len();
+    for i in 0..n {
+        let (a, b) = (vertices[i], vertices[(i + n - 1) % n]);
+        if (a[1] > y) != (b[1] > y) && x < (b[0] - a[0]) * (y - a[1]) / (b[1] - a[1]) + a[0] {
+            inside = !inside;
+        }
+    }
+    inside
 }
 
 /// Merges coincident nodes of several meshes into one global node set.
@@ -244,7 +430,13 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
             ));
         }
     }
-    let meshes = case.domains.iter().enumerate().map(|(k, _)| build_mesh(case, k)).collect::<Result<Vec<_>, _>>()?;
+    let mut meshes = Vec::new();
+    let mut bodies = Vec::new();
+    for (k, d) in case.domains.iter().enumerate() {
+        let (mesh, body) = build_discretisation(case, k, laws[d.material.as_str()].density())?;
+        meshes.push(mesh);
+        bodies.push(body);
+    }
     let (coords, ids) = merge_nodes(&meshes);
     let mut groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
     for (m, id) in meshes.iter().zip(&ids) {
@@ -256,8 +448,20 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
         }
     }
     let mut model = Model::new(dim, coords, scheme, case.solver);
-    for (k, (d, (mesh, id))) in case.domains.iter().zip(meshes.into_iter().zip(ids)).enumerate() {
+    for (k, ((d, body), (mesh, id))) in case.domains.iter().zip(bodies).zip(meshes.into_iter().zip(ids)).enumerate() {
         let law = laws[d.material.as_str()].clone();
+        if let Some((grid, points)) = body {
+            model.domains.push(Box::new(MpmDomain::new(
+                &d.name,
+                grid,
+                id,
+                case.formulation,
+                case.thickness,
+                law,
+                points,
+            )));
+            continue;
+        }
         let domain = FemDomain::new(
             &d.name,
             mesh,
@@ -287,6 +491,7 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
         regions.get(name).ok_or_else(|| CaseError::new(loc, format!("no region named '{name}' in regions")))
     };
 
+    let mut constraint_of_bc = Vec::with_capacity(case.boundary_conditions.len());
     for (k, bc) in case.boundary_conditions.iter().enumerate() {
         let nodes = region(format!("boundary_conditions[{k}].region"), &bc.region)?;
         check_len(&format!("boundary_conditions[{k}].displacement"), &bc.displacement, dim)?;
@@ -300,10 +505,12 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
                 }
             }
         }
+        constraint_of_bc.push(model.constraints.len());
         model.constraints.push(c);
     }
 
     let facets: Vec<Vec<usize>> = model.domains.iter().flat_map(|d| d.boundary_facets()).collect();
+    let mut load_of_load = Vec::with_capacity(case.loads.len());
     for (k, l) in case.loads.iter().enumerate() {
         let loc = format!("loads[{k}]");
         let (region_name, amplitude) = match l {
@@ -349,6 +556,7 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
                 ));
             }
         }
+        load_of_load.push(model.loads.len());
         model.loads.push(Load { forces, amplitude: amplitude.clone() });
     }
 
@@ -387,10 +595,169 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
                 nodes: region(format!("{loc}.region"), r)?.clone(),
                 component: component_index(&format!("{loc}.component"), *component, dim)?,
             },
+            MonitorSpec::MaterialPointDisplacement { point, component, .. }
+            | MonitorSpec::MaterialPointVelocity { point, component, .. } => {
+                check_len(&format!("{loc}.point"), point, dim)?;
+                let nearest = model
+                    .domains
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(k, d)| d.nearest_point(point).map(|(id, dist)| (k, id, dist)))
+                    .min_by(|a, b| a.2.total_cmp(&b.2))
+                    .ok_or_else(|| CaseError::new(format!("{loc}.type"), "the model has no material points"))?;
+                let quantity = match m {
+                    MonitorSpec::MaterialPointDisplacement { .. } => PointQuantity::Displacement,
+                    _ => PointQuantity::Velocity,
+                };
+                MonitorKind::MaterialPoint {
+                    domain: nearest.0,
+                    id: nearest.1,
+                    quantity,
+                    component: component_index(&format!("{loc}.component"), *component, dim)?,
+                }
+            }
             MonitorSpec::KineticEnergy { .. } => MonitorKind::KineticEnergy,
             MonitorSpec::StrainEnergy { .. } => MonitorKind::StrainEnergy,
         };
         monitors.push(Monitor { name: m.name().to_string(), kind });
     }
-    Ok(BuiltModel { model, monitors, regions })
+    let (inputs, outputs) = resolve_fmu_variables(case, &constraint_of_bc, &load_of_load, &monitors)?;
+    Ok(BuiltModel { model, monitors, regions, inputs, outputs })
+}
+
+/// SI unit of a monitor's value.
+pub fn monitor_unit(kind: &MonitorKind) -> &'static str {
+    match kind {
+        MonitorKind::Displacement { .. } => "m",
+        MonitorKind::Velocity { .. } => "m/s",
+        MonitorKind::Acceleration { .. } => "m/s2",
+        MonitorKind::Reaction { .. } => "N",
+        MonitorKind::MaterialPoint { quantity, .. } => match quantity {
+            PointQuantity::Position | PointQuantity::Displacement => "m",
+            PointQuantity::Velocity => "m/s",
+            PointQuantity::Acceleration => "m/s2",
+        },
+        MonitorKind::KineticEnergy | MonitorKind::StrainEnergy => "J",
+    }
+}
+
+/// Resolves `fmu.inputs` to loads, constraints or gravity, and `fmu.outputs` (default:
+/// every monitor) to monitors; names must be unique, non-empty and not `time`.
+fn resolve_fmu_variables(
+    case: &Case,
+    constraint_of_bc: &[usize],
+    load_of_load: &[usize],
+    monitors: &[Monitor],
+) -> Result<(Vec<ModelInput>, Vec<ModelOutput>), CaseError> {
+    let mut bc_names = BTreeMap::new();
+    for (k, bc) in case.boundary_conditions.iter().enumerate() {
+        if let Some(name) = &bc.name {
+            if bc_names.insert(name.as_str(), constraint_of_bc[k]).is_some() {
+                return Err(CaseError::new(
+                    format!("boundary_conditions[{k}].name"),
+                    format!("duplicate boundary condition name '{name}'"),
+                ));
+            }
+        }
+    }
+    let mut load_names = BTreeMap::new();
+    for (k, l) in case.loads.iter().enumerate() {
+        if let Some(name) = l.name() {
+            if load_names.insert(name, load_of_load[k]).is_some() {
+                return Err(CaseError::new(format!("loads[{k}].name"), format!("duplicate load name '{name}'")));
+            }
+        }
+    }
+    let Some(fmu) = &case.fmu else {
+        let outputs = monitors
+            .iter()
+            .enumerate()
+            .map(|(i, m)| ModelOutput {
+                name: m.name.clone(),
+                monitor: i,
+                unit: monitor_unit(&m.kind).into(),
+                description: String::new(),
+            })
+            .collect();
+        return Ok((Vec::new(), outputs));
+    };
+    let mut names = std::collections::BTreeSet::new();
+    let mut check_name = |loc: String, name: &str| -> Result<(), CaseError> {
+        if name.is_empty() || name == "time" || name.chars().any(char::is_control) {
+            return Err(CaseError::new(loc, "must be non-empty, not 'time', without control characters"));
+        }
+        if !names.insert(name.to_string()) {
+            return Err(CaseError::new(loc, format!("duplicate FMU variable name '{name}'")));
+        }
+        Ok(())
+    };
+    let mut inputs = Vec::new();
+    for (k, i) in fmu.inputs.iter().enumerate() {
+        let loc = format!("fmu.inputs[{k}]");
+        check_name(format!("{loc}.name"), &i.name)?;
+        if !i.start.is_finite() {
+            return Err(CaseError::new(format!("{loc}.start"), format!("must be finite, got {}", i.start)));
+        }
+        let slot = match &i.drives {
+            InputTarget::Load(n) => InputSlot::Load(*load_names.get(n.as_str()).ok_or_else(|| {
+                CaseError::new(format!("{loc}.drives.load"), format!("no load named '{n}' in loads"))
+            })?),
+            InputTarget::BoundaryCondition(n) => InputSlot::Constraint(*bc_names.get(n.as_str()).ok_or_else(|| {
+                CaseError::new(
+                    format!("{loc}.drives.boundary_condition"),
+                    format!("no boundary condition named '{n}' in boundary_conditions"),
+                )
+            })?),
+            InputTarget::Gravity => {
+                if case.gravity.is_none() {
+                    return Err(CaseError::new(format!("{loc}.drives"), "the case has no gravity to scale"));
+                }
+                InputSlot::Gravity
+            }
+        };
+        if inputs.iter().any(|j: &ModelInput| j.slot == slot) {
+            return Err(CaseError::new(format!("{loc}.drives"), "another input already drives this target"));
+        }
+        inputs.push(ModelInput {
+            name: i.name.clone(),
+            slot,
+            unit: i.unit.clone().unwrap_or_else(|| "1".into()),
+            start: i.start,
+            description: i.description.clone().unwrap_or_default(),
+        });
+    }
+    let mut outputs = Vec::new();
+    match &fmu.outputs {
+        None => {
+            for (i, m) in monitors.iter().enumerate() {
+                check_name(format!("monitors[{i}].name"), &m.name)?;
+                outputs.push(ModelOutput {
+                    name: m.name.clone(),
+                    monitor: i,
+                    unit: monitor_unit(&m.kind).into(),
+                    description: String::new(),
+                });
+            }
+        }
+        Some(list) => {
+            for (k, o) in list.iter().enumerate() {
+                let loc = format!("fmu.outputs[{k}]");
+                check_name(format!("{loc}.name"), &o.name)?;
+                let monitor_name = o.monitor.as_deref().unwrap_or(&o.name);
+                let monitor = monitors.iter().position(|m| m.name == monitor_name).ok_or_else(|| {
+                    CaseError::new(
+                        format!("{loc}.{}", if o.monitor.is_some() { "monitor" } else { "name" }),
+                        format!("no monitor named '{monitor_name}' in monitors"),
+                    )
+                })?;
+                outputs.push(ModelOutput {
+                    name: o.name.clone(),
+                    monitor,
+                    unit: o.unit.clone().unwrap_or_else(|| monitor_unit(&monitors[monitor].kind).into()),
+                    description: o.description.clone().unwrap_or_default(),
+                });
+            }
+        }
+    }
+    Ok((inputs, outputs))
 }

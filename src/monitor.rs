@@ -1,5 +1,6 @@
 //! Monitors: named scalar time histories, evaluated on the committed state.
 
+use loam_fem::domain::PointQuantity;
 use loam_fem::model::Model;
 
 /// What a monitor measures.
@@ -30,6 +31,17 @@ pub enum MonitorKind {
     Reaction {
         /// Global node ids.
         nodes: Vec<usize>,
+        /// Component index.
+        component: Option<usize>,
+    },
+    /// A vector quantity of a material point.
+    MaterialPoint {
+        /// Index of the domain holding it.
+        domain: usize,
+        /// Material point id.
+        id: usize,
+        /// Quantity.
+        quantity: PointQuantity,
         /// Component index.
         component: Option<usize>,
     },
@@ -74,6 +86,12 @@ impl Monitor {
                 match component {
                     Some(c) => sum[*c],
                     None => sum.iter().map(|v| v * v).sum::<f64>().sqrt(),
+                }
+            }
+            MonitorKind::MaterialPoint { domain, id, quantity, component } => {
+                match model.domains[*domain].point_quantity(*id, *quantity) {
+                    Some(v) => pick(&v, dim, 0, *component),
+                    None => f64::NAN, // the point left the grid and was erased
                 }
             }
             MonitorKind::KineticEnergy => model.kinetic_energy(),

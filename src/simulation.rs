@@ -6,10 +6,11 @@
 
 use std::path::Path;
 
+use loam_fem::amplitude::Amplitude;
 use loam_fem::model::{Model, PhaseTimings, StepError};
 
 use crate::case::{Case, CaseError};
-use crate::model_builder::build_model;
+use crate::model_builder::{build_model, InputSlot, ModelInput, ModelOutput};
 use crate::monitor::Monitor;
 
 /// Why a run stopped early.
@@ -26,6 +27,27 @@ pub struct RunError {
     pub cuts: u32,
     /// The last failure.
     pub source: StepError,
+}
+
+/// A rejected [`Simulation::set_input`].
+#[derive(Debug, Clone, thiserror::Error, PartialEq)]
+pub enum InputError {
+    /// No input of that name in `fmu.inputs`.
+    #[error("no input named '{name}' (the case's fmu.inputs declare: {declared})")]
+    Unknown {
+        /// The name asked for.
+        name: String,
+        /// The declared input names, comma-separated.
+        declared: String,
+    },
+    /// NaN or infinite value.
+    #[error("input '{name}' must be finite, got {value}")]
+    NotFinite {
+        /// Input name.
+        name: String,
+        /// The value.
+        value: f64,
+    },
 }
 
 /// Counters of a run.
@@ -64,6 +86,12 @@ pub struct Simulation {
     pub step: usize,
     /// Counters.
     pub stats: RunStats,
+    /// Named inputs (`fmu.inputs`) in declaration order.
+    pub inputs: Vec<ModelInput>,
+    /// Value of each input while set (`None`: the target's own amplitude applies).
+    pub input_values: Vec<Option<f64>>,
+    /// Named outputs (`fmu.outputs`, or every monitor) in declaration order.
+    pub outputs: Vec<ModelOutput>,
 }
 
 impl Simulation {
@@ -75,7 +103,76 @@ impl Simulation {
     /// Checks and builds a parsed case.
     pub fn new(case: Case) -> Result<Self, CaseError> {
         let built = build_model(&case)?;
-        Ok(Self { case, model: built.model, monitors: built.monitors, step: 0, stats: RunStats::default() })
+        Ok(Self {
+            case,
+            model: built.model,
+            monitors: built.monitors,
+            step: 0,
+            stats: RunStats::default(),
+            input_values: vec![None; built.inputs.len()],
+            inputs: built.inputs,
+            outputs: built.outputs,
+        })
+    }
+
+    /// Rebuilds the model from the stored case: time 0, inputs unset, counters cleared.
+    pub fn reset(&mut self) -> Result<(), CaseError> {
+        *self = Self::new(self.case.clone())?;
+        Ok(())
+    }
+
+    /// Names of the inputs (`fmu.inputs`), in declaration order.
+    pub fn input_names(&self) -> Vec<&str> {
+        self.inputs.iter().map(|i| i.name.as_str()).collect()
+    }
+
+    /// Sets input `name` to `value`: from the next step on, `value` replaces the amplitude
+    /// factor of the input's target (load, boundary condition or gravity) and holds until
+    /// the next call. Rejects unknown names and NaN or infinite values, leaving the state
+    /// unchanged.
+    pub fn set_input(&mut self, name: &str, value: f64) -> Result<(), InputError> {
+        let k = self
+            .inputs
+            .iter()
+            .position(|i| i.name == name)
+            .ok_or_else(|| InputError::Unknown { name: name.to_string(), declared: self.input_names().join(", ") })?;
+        self.set_input_at(k, value)
+    }
+
+    /// [`Simulation::set_input`] by position in [`Simulation::input_names`].
+    ///
+    /// # Panics
+    /// If `k` is out of range.
+    pub fn set_input_at(&mut self, k: usize, value: f64) -> Result<(), InputError> {
+        if !value.is_finite() {
+            return Err(InputError::NotFinite { name: self.inputs[k].name.clone(), value });
+        }
+        let amplitude = Amplitude::Constant(value);
+        match self.inputs[k].slot {
+            InputSlot::Load(i) => self.model.loads[i].amplitude = amplitude,
+            InputSlot::Constraint(i) => self.model.constraints[i].amplitude = amplitude,
+            InputSlot::Gravity => self.model.gravity.1 = amplitude,
+        }
+        self.input_values[k] = Some(value);
+        Ok(())
+    }
+
+    /// Current value of input `k`: the value last set, or else its target's amplitude at
+    /// the committed time.
+    pub fn input_value_at(&self, k: usize) -> f64 {
+        self.input_values[k].unwrap_or_else(|| {
+            let t = self.time();
+            match self.inputs[k].slot {
+                InputSlot::Load(i) => self.model.loads[i].amplitude.at(t),
+                InputSlot::Constraint(i) => self.model.constraints[i].amplitude.at(t),
+                InputSlot::Gravity => self.model.gravity.1.at(t),
+            }
+        })
+    }
+
+    /// Values of the outputs at the committed state, in declaration order.
+    pub fn output_values(&self) -> Vec<f64> {
+        self.outputs.iter().map(|o| self.monitors[o.monitor].evaluate(&self.model)).collect()
     }
 
     /// Time of the committed state.

@@ -1,0 +1,195 @@
+//! Named inputs of the library API (issue 6): an input that replaces the amplitude of a
+//! load, a boundary condition or gravity gives exactly the run of a case whose amplitude
+//! table holds the same values; bad names and values are rejected with their JSON path.
+
+use loam::case::Case;
+use loam::fem::amplitude::Amplitude;
+use loam::simulation::{InputError, Simulation};
+use serde_json::{json, Value};
+
+/// A small dynamic cantilever (7 m × 1 m, 14 × 2 quad4, Neo-Hookean) with a named tip
+/// load, a named support and gravity, Newmark, Δt = 0.01 s, 0.2 s.
+fn base() -> Value {
+    json!({
+        "description": "small dynamic cantilever for the input tests",
+        "materials": { "beam": { "law": "neo_hookean", "density": 1000.0, "young_modulus": 9.0e7, "poisson_ratio": 0.0 } },
+        "domains": [ { "name": "beam", "mesh": { "rectangle": { "origin": [0.0, 0.0], "size": [7.0, 1.0], "cells": [14, 2], "element": "quad4" } }, "material": "beam" } ],
+        "regions": { "clamp": { "x": 0.0 }, "tip": { "nearest": [7.0, 0.5] } },
+        "boundary_conditions": [
+            { "name": "support", "region": "clamp", "displacement": [0.0, 1.0], "amplitude": 0.0 }
+        ],
+        "loads": [ { "name": "tip_load", "type": "nodal_force", "region": "tip", "force": [0.0, -1.0e5], "amplitude": 0.0 } ],
+        "gravity": { "acceleration": [0.0, -9.81], "amplitude": 0.0 },
+        "analysis": { "type": "dynamic", "time_step": 0.01, "end_time": 0.2 },
+        "solver": { "residual_relative_tolerance": 1e-10, "residual_absolute_tolerance": 1e-8 },
+        "monitors": [
+            { "name": "tip_uy", "type": "displacement", "point": [7.0, 0.5], "component": "y" },
+            { "name": "clamp_ry", "type": "reaction", "region": "clamp", "component": "y" }
+        ]
+    })
+}
+
+fn sim(v: &Value) -> Simulation {
+    Simulation::new(Case::parse(&v.to_string()).expect("case parses")).expect("case builds")
+}
+
+/// The ramp an input follows: 0 at t = 0, 1 at t = 0.1, then back to 0.5 at t = 0.2.
+fn ramp(t: f64) -> f64 {
+    Amplitude::Table(vec![[0.0, 0.0], [0.1, 1.0], [0.2, 0.5]]).at(t)
+}
+
+/// The time the next [`Simulation::step`] ends at, computed as the step computes it (so
+/// that the ramp is evaluated at the very time the amplitude table is).
+fn next_time(s: &Simulation) -> f64 {
+    let target = (s.time() + s.case.analysis.time_step).min(s.end_time());
+    s.time() + (target - s.time())
+}
+
+/// Runs `with_input` setting `input` to the ramp at the end of each step before the step,
+/// and `with_table` (same case, the target's amplitude a table of the ramp); returns the
+/// largest difference of any monitor at any step.
+fn compare(with_input: &Value, with_table: &Value, input: &str) -> f64 {
+    let (mut a, mut b) = (sim(with_input), sim(with_table));
+    let mut max_diff: f64 = 0.0;
+    let mut moved: f64 = 0.0;
+    while !b.finished() {
+        a.set_input(input, ramp(next_time(&a))).expect("finite input");
+        a.step().expect("step converges");
+        b.step().expect("step converges");
+        for (x, y) in a.monitor_values().iter().zip(b.monitor_values()) {
+            max_diff = max_diff.max((x - y).abs());
+            moved = moved.max(y.abs());
+        }
+    }
+    assert!(moved > 1e-6, "the ramp should move the beam (largest monitor {moved:e})");
+    max_diff
+}
+
+fn with_fmu_input(mut v: Value, drives: Value) -> Value {
+    v["fmu"] = json!({ "inputs": [ { "name": "u", "drives": drives, "unit": "1", "start": 0.0 } ] });
+    v
+}
+
+fn table() -> Value {
+    json!([[0.0, 0.0], [0.1, 1.0], [0.2, 0.5]])
+}
+
+#[test]
+fn load_input_ramp_equals_amplitude_table() {
+    let a = with_fmu_input(base(), json!({ "load": "tip_load" }));
+    let mut b = base();
+    b["loads"][0]["amplitude"] = table();
+    let d = compare(&a, &b, "u");
+    println!("load input vs amplitude table: max |difference| = {d:e} (tolerance 1e-12)");
+    assert!(d <= 1e-12);
+}
+
+#[test]
+fn gravity_input_ramp_equals_amplitude_table() {
+    let a = with_fmu_input(base(), json!("gravity"));
+    let mut b = base();
+    b["gravity"]["amplitude"] = table();
+    let d = compare(&a, &b, "u");
+    println!("gravity input vs amplitude table: max |difference| = {d:e} (tolerance 1e-12)");
+    assert!(d <= 1e-12);
+}
+
+#[test]
+fn boundary_condition_input_ramp_equals_amplitude_table() {
+    // the clamp's y displacement follows the input (m): the whole beam is shaken
+    let a = with_fmu_input(base(), json!({ "boundary_condition": "support" }));
+    let mut b = base();
+    b["boundary_conditions"][0]["amplitude"] = json!([[0.0, 0.0], [0.1, 0.01], [0.2, 0.005]]);
+    let (mut sa, mut sb) = (sim(&a), sim(&b));
+    let mut max_diff: f64 = 0.0;
+    while !sb.finished() {
+        sa.set_input("u", 0.01 * ramp(next_time(&sa))).expect("finite input");
+        sa.step().expect("step converges");
+        sb.step().expect("step converges");
+        for (x, y) in sa.monitor_values().iter().zip(sb.monitor_values()) {
+            max_diff = max_diff.max((x - y).abs() / (1.0 + y.abs()));
+        }
+    }
+    println!("boundary-condition input vs amplitude table: max relative difference = {max_diff:e} (tolerance 1e-12)");
+    assert!(max_diff <= 1e-12);
+}
+
+#[test]
+fn held_input_over_sub_steps_equals_constant_amplitude() {
+    // advance_to over several case steps holds the input (zero-order hold)
+    let a = with_fmu_input(base(), json!({ "load": "tip_load" }));
+    let mut b = base();
+    b["loads"][0]["amplitude"] = json!(0.7);
+    let (mut sa, mut sb) = (sim(&a), sim(&b));
+    sa.set_input("u", 0.7).unwrap();
+    sa.advance_to(0.05).unwrap();
+    sb.advance_to(0.05).unwrap();
+    assert_eq!(sa.step, 5);
+    assert_eq!(sa.monitor_values(), sb.monitor_values());
+}
+
+#[test]
+fn reset_reproduces_the_first_run() {
+    let a = with_fmu_input(base(), json!({ "load": "tip_load" }));
+    let mut s = sim(&a);
+    let run = |s: &mut Simulation| {
+        s.set_input("u", 1.0).unwrap();
+        s.advance_to(0.05).unwrap();
+        s.monitor_values()
+    };
+    let first = run(&mut s);
+    s.reset().unwrap();
+    assert_eq!(s.time(), 0.0);
+    assert_eq!(s.input_values, vec![None]);
+    assert_eq!(run(&mut s), first);
+}
+
+#[test]
+fn bad_input_values_and_names_are_rejected() {
+    let mut s = sim(&with_fmu_input(base(), json!({ "load": "tip_load" })));
+    assert_eq!(s.input_names(), vec!["u"]);
+    assert!(matches!(s.set_input("u", f64::NAN), Err(InputError::NotFinite { .. })));
+    assert!(matches!(s.set_input("u", f64::INFINITY), Err(InputError::NotFinite { .. })));
+    assert_eq!(s.input_values, vec![None], "a rejected value leaves the input unset");
+    let e = s.set_input("v", 1.0).unwrap_err();
+    assert_eq!(e.to_string(), "no input named 'v' (the case's fmu.inputs declare: u)");
+}
+
+fn build_error(v: &Value) -> String {
+    match Case::parse(&v.to_string()) {
+        Err(e) => e.to_string(),
+        Ok(case) => Simulation::new(case).err().expect("case must be rejected").to_string(),
+    }
+}
+
+#[test]
+fn fmu_section_errors_name_their_json_path() {
+    let mut v = with_fmu_input(base(), json!({ "load": "nope" }));
+    assert_eq!(build_error(&v), "fmu.inputs[0].drives.load: no load named 'nope' in loads");
+    v["fmu"]["inputs"][0]["drives"] = json!({ "boundary_condition": "nope" });
+    assert_eq!(
+        build_error(&v),
+        "fmu.inputs[0].drives.boundary_condition: no boundary condition named 'nope' in boundary_conditions"
+    );
+    v["fmu"]["inputs"][0]["drives"] = json!("gravity");
+    v["fmu"]["inputs"][0]["colour"] = json!("red");
+    assert!(build_error(&v).starts_with("fmu.inputs[0].colour: unknown field `colour`"), "{}", build_error(&v));
+    let mut v = with_fmu_input(base(), json!("gravity"));
+    v["fmu"]["outputs"] = json!([{ "name": "u" }]);
+    assert_eq!(build_error(&v), "fmu.outputs[0].name: duplicate FMU variable name 'u'");
+    v["fmu"]["outputs"] = json!([{ "name": "f", "monitor": "missing" }]);
+    assert_eq!(build_error(&v), "fmu.outputs[0].monitor: no monitor named 'missing' in monitors");
+    v["fmu"]["outputs"] = json!([{ "name": "time", "monitor": "tip_uy" }]);
+    assert!(build_error(&v).starts_with("fmu.outputs[0].name: must be non-empty, not 'time'"));
+    let mut v = base();
+    v["loads"] = json!([v["loads"][0], v["loads"][0]]);
+    assert_eq!(build_error(&v), "loads[1].name: duplicate load name 'tip_load'");
+}
+
+#[test]
+fn outputs_default_to_every_monitor_with_si_units() {
+    let s = sim(&base());
+    let names: Vec<_> = s.outputs.iter().map(|o| (o.name.as_str(), o.unit.as_str())).collect();
+    assert_eq!(names, vec![("tip_uy", "m"), ("clamp_ry", "N")]);
+    assert!(s.inputs.is_empty());
+}
