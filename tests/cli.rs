@@ -158,3 +158,27 @@ fn bad_input_exits_2_naming_the_json_path() {
     );
     expect_bad("no case file", check_file(Path::new("/nonexistent/case.json")), &["cannot read"]);
 }
+
+/// A step that still fails after all cuts stops the run with exit 1, a message naming the
+/// step, time and cause, and everything converged so far written (monitors and VTK).
+#[test]
+fn failing_step_keeps_converged_results() {
+    let text = std::fs::read_to_string(root().join("cases/cantilever_fem.json")).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    json["gravity"]["amplitude"] = serde_json::json!([[0, 0], [1, 1], [2, 2000]]);
+    json["analysis"] = serde_json::json!({"type": "static", "time_step": 0.5, "end_time": 2.0, "max_step_cuts": 2});
+    json["solver"]["max_iterations"] = serde_json::json!(8);
+    let dir = temp_dir("failing");
+    let path = dir.join("case.json");
+    std::fs::write(&path, json.to_string()).unwrap();
+    let out = loam().arg("run").arg(&path).arg("--quiet").arg("--out").arg(dir.join("out")).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    println!("exit {:?}: {stderr}", out.status.code());
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr.contains("stopped at step 3") && stderr.contains("after 2 cuts") && stderr.contains("t = 1.000000e0"));
+    let csv = std::fs::read_to_string(dir.join("out/monitors.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 3, "header, t = 0, 0.5 and 1");
+    assert!(dir.join("out/beam_000002.vtu").exists());
+    let tip = last_monitor(&dir.join("out/monitors.csv"), "tip_uy");
+    assert!((tip + 0.39256).abs() / 0.39256 < 0.03, "the converged state at t = 1 is the benchmark's");
+}
