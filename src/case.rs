@@ -109,6 +109,9 @@ pub struct DomainSpec {
     /// Where the material points are (MPM domains).
     #[serde(default)]
     pub material_points: Option<BodySpec>,
+    /// Initial velocity of the domain's nodes (FEM) or material points (MPM).
+    #[serde(default)]
+    pub initial_velocity: Option<InitialVelocity>,
     /// Material name (a key of `materials`).
     pub material: String,
     /// `consistent` (default) or `lumped` mass matrix.
@@ -128,6 +131,38 @@ pub enum DomainKind {
     Fem,
     /// Implicit material point method on a background grid.
     Mpm,
+}
+
+/// An initial velocity field.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum InitialVelocity {
+    /// The same velocity everywhere (m/s), one entry per component.
+    Uniform(Vec<f64>),
+    /// A mode shape `v(x) = amplitude · sin(wavenumber · x)`.
+    Sine {
+        /// Velocity amplitude (m/s), one entry per component.
+        amplitude: Vec<f64>,
+        /// Wave vector (rad/m), one entry per coordinate.
+        wavenumber: Vec<f64>,
+    },
+}
+
+impl InitialVelocity {
+    /// Velocity at `x` (first `dim` components).
+    pub fn at(&self, x: &[f64; 3], dim: usize) -> [f64; 3] {
+        let mut v = [0.0; 3];
+        match self {
+            InitialVelocity::Uniform(u) => v[..dim].copy_from_slice(&u[..dim]),
+            InitialVelocity::Sine { amplitude, wavenumber } => {
+                let phase: f64 = (0..dim).map(|d| wavenumber[d] * x[d]).sum();
+                for d in 0..dim {
+                    v[d] = amplitude[d] * phase.sin();
+                }
+            }
+        }
+        v
+    }
 }
 
 /// A structured MPM background grid.

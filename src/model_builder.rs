@@ -19,8 +19,8 @@ use loam_mpm::material_points::{self, MaterialPoints};
 use loam_mpm::mpm_domain::MpmDomain;
 
 use crate::case::{
-    AnalysisType, BodySpec, Case, CaseError, Component, DomainKind, InputTarget, LoadSpec, MassMatrix, MeshSpec,
-    MonitorSpec, RegionSpec,
+    AnalysisType, BodySpec, Case, CaseError, Component, DomainKind, InitialVelocity, InputTarget, LoadSpec, MassMatrix,
+    MeshSpec, MonitorSpec, RegionSpec,
 };
 use crate::monitor::{Monitor, MonitorKind};
 
@@ -450,7 +450,22 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     let mut model = Model::new(dim, coords, scheme, case.solver);
     for (k, ((d, body), (mesh, id))) in case.domains.iter().zip(bodies).zip(meshes.into_iter().zip(ids)).enumerate() {
         let law = laws[d.material.as_str()].clone();
-        if let Some((grid, points)) = body {
+        if let Some(v0) = &d.initial_velocity {
+            let loc = format!("domains[{k}].initial_velocity");
+            match v0 {
+                InitialVelocity::Uniform(u) => check_len(&format!("{loc}.uniform"), u, dim)?,
+                InitialVelocity::Sine { amplitude, wavenumber } => {
+                    check_len(&format!("{loc}.sine.amplitude"), amplitude, dim)?;
+                    check_len(&format!("{loc}.sine.wavenumber"), wavenumber, dim)?;
+                }
+            }
+        }
+        if let Some((grid, mut points)) = body {
+            if let Some(v0) = &d.initial_velocity {
+                for (x, v) in points.position.iter().zip(points.velocity.iter_mut()) {
+                    *v = v0.at(x, dim);
+                }
+            }
             model.domains.push(Box::new(MpmDomain::new(
                 &d.name,
                 grid,
@@ -461,6 +476,13 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
                 points,
             )));
             continue;
+        }
+        if let Some(v0) = &d.initial_velocity {
+            for &g in &id {
+                let v = v0.at(&model.coords[g], dim);
+                model.committed.v[g * dim..(g + 1) * dim].copy_from_slice(&v[..dim]);
+            }
+            model.state.v.clone_from(&model.committed.v);
         }
         let domain = FemDomain::new(
             &d.name,

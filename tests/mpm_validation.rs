@@ -93,3 +93,68 @@ fn plate_axisym_mpm_quads_and_triangles() {
         report("support reaction [N]", last(&sim, &h, "support_reaction"), 101.84 * std::f64::consts::PI * 100.0, 1e-9);
     }
 }
+
+/// Benchmark 3: axial vibration of a bar in its first mode. Period 2π/ω₁ = 10 s and the
+/// velocity amplitude v₀ sin(πx_p/2L) at the free-end material point within 1 % over five
+/// periods; total energy drift below 1 %.
+#[test]
+fn vibrating_bar_period_amplitude_energy() {
+    let (sim, h) = run(case("vibrating_bar_mpm.json"));
+    let col = |n: &str| sim.monitor_names().iter().position(|m| *m == n).unwrap();
+    let (kv, ke, ks) = (col("end_vx"), col("kinetic_energy"), col("strain_energy"));
+    let mut crossings = Vec::new();
+    for w in h.windows(2) {
+        let (a, b) = (w[0].1[kv], w[1].1[kv]);
+        if a > 0.0 && b <= 0.0 {
+            crossings.push(w[0].0 + (w[1].0 - w[0].0) * a / (a - b));
+        }
+    }
+    assert!(crossings.len() >= 5, "five periods: {crossings:?}");
+    let period = (crossings.last().unwrap() - crossings[0]) / (crossings.len() - 1) as f64;
+    let (l, e, rho, v0) = (25.0f64, 100.0f64, 1.0f64, 0.1);
+    let omega = std::f64::consts::PI / (2.0 * l) * (e / rho).sqrt();
+    report("bar period [s]", period, 2.0 * std::f64::consts::PI / omega, 0.01);
+    // the monitored point is the outer Gauss column of the last body cell
+    let x_p = 24.5 + 0.5 / 3f64.sqrt();
+    let amplitude_exact = v0 * (std::f64::consts::PI * x_p / (2.0 * l)).sin();
+    let last_period: Vec<f64> = h.iter().filter(|r| r.0 > h.last().unwrap().0 - 10.0).map(|r| r.1[kv].abs()).collect();
+    report(
+        "bar velocity amplitude in the 5th period [m/s]",
+        last_period.iter().fold(0.0, |a: f64, &b| a.max(b)),
+        amplitude_exact,
+        0.01,
+    );
+    let energy: Vec<f64> = h.iter().map(|r| r.1[ke] + r.1[ks]).collect();
+    let drift = energy.iter().map(|e| (e - energy[0]).abs()).fold(0.0, f64::max) / energy[0];
+    println!(
+        "bar total energy: initial {:.6e} J (exact ρ v₀² L/4 = {:.6e}), largest drift {:.3} % (tolerance 1 %)",
+        energy[0],
+        rho * v0 * v0 * l / 4.0,
+        drift * 100.0
+    );
+    assert!(drift < 0.01);
+}
+
+/// Benchmark 4: two elastic disks collide on one grid (Sulsky et al. 1994). The total
+/// energy stays within 5 % of the initial kinetic energy through the collision, kinetic
+/// energy is largely turned into strain energy at the peak, and the disks rebound.
+#[test]
+fn disk_collision_energy_and_rebound() {
+    let (sim, h) = run(case("disk_collision_mpm.json"));
+    let col = |n: &str| sim.monitor_names().iter().position(|m| *m == n).unwrap();
+    let (ke, ks, kv) = (col("kinetic_energy"), col("strain_energy"), col("centre_a_vx"));
+    let e0 = h[0].1[ke];
+    let worst = h.iter().map(|r| (r.1[ke] + r.1[ks] - e0).abs() / e0).fold(0.0, f64::max);
+    let min_kinetic = h.iter().map(|r| r.1[ke]).fold(f64::MAX, f64::min);
+    println!(
+        "disks: initial energy {e0:.4} J (exact 2 · ½ m |v|² = {:.4} J), largest total-energy error {:.2} % (tolerance 5 %), smallest kinetic energy {:.1} % of initial",
+        2.0 * 0.5 * 1000.0 * std::f64::consts::PI * 0.04 * 0.02,
+        worst * 100.0,
+        100.0 * min_kinetic / e0
+    );
+    assert!(worst < 0.05);
+    assert!(min_kinetic < 0.2 * e0, "the collision stores most of the energy as strain energy");
+    let vx_end = h.last().unwrap().1[kv];
+    println!("disk A centre velocity: initial +0.1 m/s, final {vx_end:.4} m/s (rebound)");
+    assert!(vx_end < -0.05);
+}

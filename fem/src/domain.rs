@@ -80,6 +80,49 @@ pub struct DomainOutput {
     pub cell_fields: Vec<Field>,
 }
 
+/// Point-to-grid projection of one step, summed over the particle domains:
+/// `m_I = Σ_p N_I m_p`, `(m v)_I = Σ_p N_I m_p v_p`, `(m a)_I = Σ_p N_I m_p a_p`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Projection {
+    /// Components per node.
+    pub dim: usize,
+    /// Whether the node is a grid node (reset to its reference position every step).
+    pub reset: Vec<bool>,
+    /// Nodal mass.
+    pub mass: Vec<f64>,
+    /// Nodal momentum (per DOF).
+    pub momentum: Vec<f64>,
+    /// Nodal mass-weighted acceleration (per DOF).
+    pub inertia: Vec<f64>,
+}
+
+impl Projection {
+    /// Empty projection for `num_nodes` nodes.
+    pub fn new(num_nodes: usize, dim: usize) -> Self {
+        Self {
+            dim,
+            reset: vec![false; num_nodes],
+            mass: vec![0.0; num_nodes],
+            momentum: vec![0.0; num_nodes * dim],
+            inertia: vec![0.0; num_nodes * dim],
+        }
+    }
+
+    /// Grid reset: for every marked node `u = 0`, `v = (m v)/m`, `a = (m a)/m` (0 where no
+    /// mass was projected).
+    pub fn apply(&self, committed: &mut NodalState) {
+        for (n, _) in self.reset.iter().enumerate().filter(|(_, r)| **r) {
+            for i in 0..self.dim {
+                let dof = n * self.dim + i;
+                let m = self.mass[n];
+                committed.u[dof] = 0.0;
+                committed.v[dof] = if m > 0.0 { self.momentum[dof] / m } else { 0.0 };
+                committed.a[dof] = if m > 0.0 { self.inertia[dof] / m } else { 0.0 };
+            }
+        }
+    }
+}
+
 /// Vector quantities of tracked points.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PointQuantity {
@@ -102,10 +145,11 @@ pub trait Domain: Send + Sync {
     fn formulation(&self) -> Formulation;
 
     /// Initialisation phase of a step, before any assembly: particle domains locate their
-    /// points, reset their grid nodes in `committed` (displacement 0, velocity and
-    /// acceleration projected from the points) and return `true` if their element blocks
-    /// changed (which rebuilds the sparsity pattern). Mesh domains do nothing.
-    fn begin_step(&mut self, _committed: &mut NodalState) -> bool {
+    /// points, mark their grid nodes for reset and add their points' mass, momentum and
+    /// mass-weighted acceleration to `projection` (summed over all domains sharing a grid),
+    /// and return `true` if their element blocks changed (which rebuilds the sparsity
+    /// pattern). Mesh domains do nothing.
+    fn begin_step(&mut self, _projection: &mut Projection) -> bool {
         false
     }
 

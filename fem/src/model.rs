@@ -14,7 +14,7 @@ use serde::Deserialize;
 use crate::amplitude::Amplitude;
 use crate::assembly::{AssemblyPattern, BlockLayout};
 use crate::dofs::{DofMap, CONSTRAINED};
-use crate::domain::{AssemblyInput, Domain, DomainError, NodalState};
+use crate::domain::{AssemblyInput, Domain, DomainError, NodalState, Projection};
 use crate::linear_solver::{LinearSolver, LinearSolverError, LinearSolverKind, SolverTimings};
 use crate::scheme::TimeScheme;
 
@@ -340,9 +340,11 @@ impl Model {
         // initialisation phase of particle domains (locate, project); a changed set of
         // element blocks invalidates the sparsity pattern
         let mut topology_changed = false;
+        let mut projection = Projection::new(self.coords.len(), self.dim);
         for d in self.domains.iter_mut() {
-            topology_changed |= d.begin_step(&mut self.committed);
+            topology_changed |= d.begin_step(&mut projection);
         }
+        projection.apply(&mut self.committed);
         if topology_changed {
             self.invalidate_pattern();
         }

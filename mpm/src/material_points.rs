@@ -107,12 +107,18 @@ fn gauss_legendre(k: usize) -> Option<(Vec<f64>, Vec<f64>)> {
 /// Positions (local) and weights of `n` points per cell of `element`: Gauss positions
 /// (k×k or k×k×k for quads and hexes; 1, 3 for triangles; 1, 4 for tetrahedra).
 pub fn points_per_cell(element: ElementType, n: usize) -> Result<Vec<GaussPoint>, String> {
-    let bad = || format!("{n} points per cell is not available for {} (use {})", element.name(), match element {
-        ElementType::Quad4 => "1, 4, 9 or 16",
-        ElementType::Hex8 => "1, 8, 27 or 64",
-        ElementType::Tri3 => "1 or 3",
-        ElementType::Tet4 => "1 or 4",
-    });
+    let bad = || {
+        format!(
+            "{n} points per cell is not available for {} (use {})",
+            element.name(),
+            match element {
+                ElementType::Quad4 => "1, 4, 9 or 16",
+                ElementType::Hex8 => "1, 8, 27 or 64",
+                ElementType::Tri3 => "1 or 3",
+                ElementType::Tet4 => "1 or 4",
+            }
+        )
+    };
     match element {
         ElementType::Quad4 | ElementType::Hex8 => {
             let dim = element.dim();

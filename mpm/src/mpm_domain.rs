@@ -3,10 +3,12 @@
 use std::sync::Arc;
 
 use loam_fem::assembly::BlockLayout;
-use loam_fem::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NodalState, PointQuantity};
+use loam_fem::domain::{
+    AssemblyInput, Domain, DomainError, DomainOutput, Field, NodalState, PointQuantity, Projection,
+};
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
-use loam_fem::kernel::{KernelContext, PointGeometry, PointOutput, point_geometry, solid_element};
+use loam_fem::kernel::{point_geometry, solid_element, KernelContext, PointGeometry, PointOutput};
 use loam_laws::ConstitutiveLaw;
 use nalgebra::Matrix3;
 use rayon::prelude::*;
@@ -99,12 +101,11 @@ impl Domain for MpmDomain {
     }
 
     /// Initialisation phase: locate (erasing points outside the grid), sort by cell,
-    /// compute shape functions at the points, reset the grid nodes and project
-    /// `m_I = Σ N_I m_p`, `v_I = Σ N_I m_p v_p / m_I`, `a_I = Σ N_I m_p a_p / m_I`.
-    fn begin_step(&mut self, committed: &mut NodalState) -> bool {
+    /// compute shape functions at the points, mark the grid nodes for reset and project
+    /// `m_I = Σ N_I m_p`, `(m v)_I = Σ N_I m_p v_p`, `(m a)_I = Σ N_I m_p a_p`.
+    fn begin_step(&mut self, projection: &mut Projection) -> bool {
         let grid = &self.grid;
-        let located: Vec<Option<(usize, [f64; 3])>> =
-            self.points.position.par_iter().map(|x| grid.locate(x)).collect();
+        let located: Vec<Option<(usize, [f64; 3])>> = self.points.position.par_iter().map(|x| grid.locate(x)).collect();
         let mut order: Vec<usize> = (0..located.len()).filter(|&p| located[p].is_some()).collect();
         self.erased += located.len() - order.len();
         order.sort_by_key(|&p| (located[p].unwrap().0, self.points.id[p]));
@@ -150,31 +151,22 @@ impl Domain for MpmDomain {
         self.cell_ptr = ptr;
         self.trial_state.clone_from(&self.points.state);
         self.trial_out = vec![PointOutput::default(); self.points.len()];
-        // grid reset and projection
+        // grid reset and projection (summed with other domains on the same grid)
         let dim = self.dim();
         let nn = element.num_nodes();
-        let mut mass = vec![0.0; self.node_ids.len()];
-        let mut momentum = vec![[0.0; 3]; self.node_ids.len()];
-        let mut inertia = vec![[0.0; 3]; self.node_ids.len()];
+        for &g in &self.node_ids {
+            projection.reset[g] = true;
+        }
         for (p, &cell) in self.cell_of_point.iter().enumerate() {
             let m = self.points.mass[p];
             for (a, &node) in grid.mesh.cell(cell).iter().enumerate().take(nn) {
                 let w = self.geometry[p].shape[a] * m;
-                mass[node] += w;
+                let g = self.node_ids[node];
+                projection.mass[g] += w;
                 for i in 0..dim {
-                    momentum[node][i] += w * self.points.velocity[p][i];
-                    inertia[node][i] += w * self.points.acceleration[p][i];
+                    projection.momentum[g * dim + i] += w * self.points.velocity[p][i];
+                    projection.inertia[g * dim + i] += w * self.points.acceleration[p][i];
                 }
-            }
-        }
-        for (local, &g) in self.node_ids.iter().enumerate() {
-            for i in 0..dim {
-                let dof = g * dim + i;
-                committed.u[dof] = 0.0;
-                let (v, a) =
-                    if mass[local] > 0.0 { (momentum[local][i] / mass[local], inertia[local][i] / mass[local]) } else { (0.0, 0.0) };
-                committed.v[dof] = v;
-                committed.a[dof] = a;
             }
         }
         changed
@@ -189,13 +181,23 @@ impl Domain for MpmDomain {
 
     /// Updated-Lagrangian phase: the material points of each active cell are the kernel's
     /// integration points (weight `V_p^n`, `F0 = F_p^n`); lumped mass `M_I = Σ_p N_I m_p`.
-    fn assemble(&mut self, input: &AssemblyInput<'_>, matrices: &mut [f64], vectors: &mut [f64]) -> Result<(), DomainError> {
+    fn assemble(
+        &mut self,
+        input: &AssemblyInput<'_>,
+        matrices: &mut [f64],
+        vectors: &mut [f64],
+    ) -> Result<(), DomainError> {
         let element = self.grid.mesh.element;
         let nn = element.num_nodes();
         let dim = self.dim();
         let nd = nn * dim;
         let sl = self.law.state_len();
-        let ctx = KernelContext { element, formulation: self.formulation, law: self.law.as_ref(), time_step: input.time_step };
+        let ctx = KernelContext {
+            element,
+            formulation: self.formulation,
+            law: self.law.as_ref(),
+            time_step: input.time_step,
+        };
         // per-cell mutable views of the trial arrays
         let mut states: Vec<&mut [f64]> = Vec::with_capacity(self.active_cells.len());
         let mut outs: Vec<&mut [PointOutput]> = Vec::with_capacity(self.active_cells.len());
@@ -239,7 +241,11 @@ impl Domain for MpmDomain {
                     fv,
                     input.with_tangent.then_some(&mut *km),
                 )
-                .map_err(|err| DomainError { domain: name.clone(), element: cells[k], message: err.to_string() })?;
+                .map_err(|err| DomainError {
+                    domain: name.clone(),
+                    element: cells[k],
+                    message: err.to_string(),
+                })?;
                 let mut lumped = [0.0; MAX_NODES];
                 for p in range {
                     for (a, m) in lumped.iter_mut().enumerate().take(nn) {
@@ -328,7 +334,12 @@ impl Domain for MpmDomain {
     }
 
     fn boundary_facets(&self) -> Vec<Vec<usize>> {
-        self.grid.mesh.boundary_facets().into_iter().map(|f| f.into_iter().map(|a| self.node_ids[a]).collect()).collect()
+        self.grid
+            .mesh
+            .boundary_facets()
+            .into_iter()
+            .map(|f| f.into_iter().map(|a| self.node_ids[a]).collect())
+            .collect()
     }
 
     fn nearest_point(&self, x: &[f64]) -> Option<(usize, f64)> {
@@ -355,7 +366,8 @@ impl Domain for MpmDomain {
         let pts = &self.points;
         let n = pts.len();
         let vec3 = |v: &[[f64; 3]]| v.iter().flatten().copied().collect::<Vec<f64>>();
-        let tensor = |v: &[Matrix3<f64>]| v.iter().flat_map(|m| m.transpose().iter().copied().collect::<Vec<_>>()).collect();
+        let tensor =
+            |v: &[Matrix3<f64>]| v.iter().flat_map(|m| m.transpose().iter().copied().collect::<Vec<_>>()).collect();
         let names = self.law.state_variables();
         let sl = self.law.state_len();
         let mut states = vec![vec![0.0; n]; names.len()];
@@ -374,7 +386,11 @@ impl Domain for MpmDomain {
             Field { name: "volume".into(), components: 1, values: pts.volume.clone() },
             Field { name: "cauchy_stress".into(), components: 9, values: tensor(&pts.cauchy) },
             Field { name: "deformation_gradient".into(), components: 9, values: tensor(&pts.deformation_gradient) },
-            Field { name: "von_mises_stress".into(), components: 1, values: pts.cauchy.iter().map(loam_fem::von_mises).collect() },
+            Field {
+                name: "von_mises_stress".into(),
+                components: 1,
+                values: pts.cauchy.iter().map(loam_fem::von_mises).collect(),
+            },
             Field { name: "id".into(), components: 1, values: pts.id.iter().map(|&i| i as f64).collect() },
         ];
         for (k, name) in names.iter().enumerate() {
