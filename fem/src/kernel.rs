@@ -22,8 +22,8 @@
 //! with the hoop term `F33 = 1 + u_r/R` added for axisymmetry and `F33` condensed out by
 //! `P̃33 = 0` for plane stress.
 
-use loam_laws::{idx, ConstitutiveLaw, Kinematics, LawError, Tangent};
-use nalgebra::{Matrix3, SMatrix};
+use loam_laws::{idx, ConstitutiveLaw, Kinematics, LawError, StressResponse, Tangent};
+use nalgebra::Matrix3;
 
 use crate::element::{ElementType, MAX_NODES};
 use crate::formulation::Formulation;
@@ -142,11 +142,11 @@ pub struct PointResponse {
     pub deformation_gradient: Matrix3<f64>,
     /// Pulled-back first Piola–Kirchhoff stress `P̃`.
     pub stress: Matrix3<f64>,
-    /// Pulled-back tangent `Ã`, restricted to the active components and condensed for
-    /// plane stress: entry `(c, d)` refers to `ACTIVE[c]`, `ACTIVE[d]`.
-    pub tangent: SMatrix<f64, 9, 9>,
-    /// Number of active components (4 plane, 5 axisymmetric, 9 in 3D).
-    pub active: usize,
+    /// Pulled-back tangent `Ã` (9×9, flattened index [`idx`]). Only the formulation's
+    /// active components ([`active_components`]: the in-plane ones in 2D, with the hoop
+    /// component for axisymmetry) enter the element; for plane stress those entries have
+    /// `F33` condensed out: `Ã_cd − Ã_c,33 Ã_33,d / Ã_33,33`.
+    pub tangent: Tangent,
     /// Cauchy stress `σ = P Fᵀ / J`.
     pub cauchy: Matrix3<f64>,
 }
@@ -155,7 +155,9 @@ pub struct PointResponse {
 const ACTIVE_2D: [usize; 5] = [idx(0, 0), idx(0, 1), idx(1, 0), idx(1, 1), idx(2, 2)];
 const ACTIVE_3D: [usize; 9] = [0, 1, 2, 3, 4, 5, 6, 7, 8];
 
-fn active_components(formulation: Formulation) -> &'static [usize] {
+/// Flattened components of `F` that vary with the nodal unknowns: 4 in plane strain and
+/// plane stress, 5 in axisymmetry (with `F33`), 9 in 3D.
+pub fn active_components(formulation: Formulation) -> &'static [usize] {
     match formulation {
         Formulation::PlaneStrain | Formulation::PlaneStress => &ACTIVE_2D[..4],
         Formulation::Axisymmetric => &ACTIVE_2D,
@@ -163,13 +165,13 @@ fn active_components(formulation: Formulation) -> &'static [usize] {
     }
 }
 
-/// `P̃ = J0⁻¹ P F0ᵀ` and `Ã_iJkM = J0⁻¹ A_iKkL F0_JK F0_ML` (see the module doc).
-fn pull_back(f0: &Matrix3<f64>, p: &Matrix3<f64>, a: &Tangent) -> (Matrix3<f64>, Tangent) {
+/// `P̃ = J0⁻¹ P F0ᵀ` and `Ã_iJkM = J0⁻¹ A_iKkL F0_JK F0_ML` (see the module doc), in place.
+fn pull_back(f0: &Matrix3<f64>, p: &mut Matrix3<f64>, a: &mut Tangent) {
     if *f0 == Matrix3::identity() {
-        return (*p, *a);
+        return;
     }
     let inv_j0 = 1.0 / f0.determinant();
-    let p_t = p * f0.transpose() * inv_j0;
+    *p = *p * f0.transpose() * inv_j0;
     // right-multiply the second index pair: A F0 over (L→M) then over (K→J)
     let mut tmp = Tangent::zeros();
     for r in 0..9 {
@@ -183,7 +185,6 @@ fn pull_back(f0: &Matrix3<f64>, p: &Matrix3<f64>, a: &Tangent) -> (Matrix3<f64>,
             }
         }
     }
-    let mut out = Tangent::zeros();
     for i in 0..3 {
         for j in 0..3 {
             for c in 0..9 {
@@ -191,15 +192,14 @@ fn pull_back(f0: &Matrix3<f64>, p: &Matrix3<f64>, a: &Tangent) -> (Matrix3<f64>,
                 for kk in 0..3 {
                     v += tmp[(idx(i, kk), c)] * f0[(j, kk)];
                 }
-                out[(idx(i, j), c)] = v * inv_j0;
+                a[(idx(i, j), c)] = v * inv_j0;
             }
         }
     }
-    (p_t, out)
 }
 
 /// Evaluates the law at one point for nodal displacements `disp` (from the step reference
-/// configuration) and returns the pulled-back stress and active tangent.
+/// configuration) and returns the pulled-back stress and tangent.
 pub fn evaluate_point(
     ctx: &KernelContext<'_>,
     geometry: &PointGeometry,
@@ -225,32 +225,32 @@ pub fn evaluate_point(
         previous_deformation_gradient: *state.f_prev,
         time_step: ctx.time_step,
     };
-    let active = active_components(ctx.formulation);
     if ctx.formulation == Formulation::PlaneStress {
         // local Newton on ΔF33 such that P̃33 = 0
+        let active = active_components(ctx.formulation);
         delta_f[(2, 2)] = state.f_prev[(2, 2)] / state.f0[(2, 2)];
         let c33 = idx(2, 2);
         for it in 0..30 {
             kin.deformation_gradient = delta_f * state.f0;
-            let r = ctx.law.update(&kin, state.committed, state.trial)?;
-            let (p, a) = pull_back(state.f0, &r.first_piola, &r.tangent);
+            let StressResponse { first_piola, tangent: mut a } = ctx.law.update(&kin, state.committed, state.trial)?;
+            let mut p = first_piola;
+            pull_back(state.f0, &mut p, &mut a);
             let scale = p.amax().max(1e-300);
             if p[(2, 2)].abs() <= 1e-12 * scale || it == 29 {
-                let mut t = SMatrix::<f64, 9, 9>::zeros();
-                for (c, &ic) in active.iter().enumerate() {
-                    for (d, &id) in active.iter().enumerate() {
-                        t[(c, d)] = a[(ic, id)] - a[(ic, c33)] * a[(c33, id)] / a[(c33, c33)];
-                    }
-                }
                 if p[(2, 2)].abs() > 1e-8 * scale {
                     return Err(LawError::ReturnMappingFailed { iterations: it, residual: p[(2, 2)] });
                 }
-                let cauchy = cauchy_stress(&r.first_piola, &kin.deformation_gradient);
+                // condensation in place: reads only the 33 row and column, writes the others
+                for &ic in active {
+                    for &id in active {
+                        a[(ic, id)] -= a[(ic, c33)] * a[(c33, id)] / a[(c33, c33)];
+                    }
+                }
+                let cauchy = cauchy_stress(&first_piola, &kin.deformation_gradient);
                 return Ok(PointResponse {
                     deformation_gradient: kin.deformation_gradient,
                     stress: p,
-                    tangent: t,
-                    active: 4,
+                    tangent: a,
                     cauchy,
                 });
             }
@@ -261,24 +261,12 @@ pub fn evaluate_point(
         }
         unreachable!("plane-stress loop returns by its last iteration");
     }
-    let r = ctx.law.update(&kin, state.committed, state.trial)?;
-    let (p, a) = pull_back(state.f0, &r.first_piola, &r.tangent);
-    let mut t = SMatrix::<f64, 9, 9>::zeros();
-    for (c, &ic) in active.iter().enumerate() {
-        for (d, &id) in active.iter().enumerate() {
-            t[(c, d)] = a[(ic, id)];
-        }
-    }
-    let cauchy = cauchy_stress(&r.first_piola, &kin.deformation_gradient);
-    Ok(PointResponse {
-        deformation_gradient: kin.deformation_gradient,
-        stress: p,
-        tangent: t,
-        active: active.len(),
-        cauchy,
-    })
+    let StressResponse { first_piola, tangent: mut a } = ctx.law.update(&kin, state.committed, state.trial)?;
+    let mut p = first_piola;
+    pull_back(state.f0, &mut p, &mut a);
+    let cauchy = cauchy_stress(&first_piola, &kin.deformation_gradient);
+    Ok(PointResponse { deformation_gradient: kin.deformation_gradient, stress: p, tangent: a, cauchy })
 }
-
 /// Cauchy stress `σ = P Fᵀ / det F`.
 pub fn cauchy_stress(first_piola: &Matrix3<f64>, f: &Matrix3<f64>) -> Matrix3<f64> {
     first_piola * f.transpose() / f.determinant()
@@ -334,12 +322,129 @@ fn gradient_operator(
     active.len()
 }
 
+/// Internal force and tangent of one element whose active components of `F` are the
+/// `D × D` block (plane strain, plane stress, 3D) and which has `NN` nodes. There
+/// `B_(ai),(kL) = δ_ik ∂N_a/∂X̃_L`, so per point
+///
+/// `f_ai += w P̃_iJ ∂N_a/∂X̃_J`,  `K_ai,bk += Σ_L (w Σ_J ∂N_a/∂X̃_J Ã_iJkL) ∂N_b/∂X̃_L`:
+///
+/// the same products, summed in the same order, as `w Bᵀ P̃` and `w Bᵀ Ã B` in
+/// [`element_general`] with the zeros of `B` skipped (2× fewer operations in 2D, 3× in 3D),
+/// with sizes known at compile time and `K` accumulated on the stack
+/// (`k[a][i][b][k]` is the row-major layout of the output).
+fn element_tensor<const D: usize, const NN: usize>(
+    ctx: &KernelContext<'_>,
+    disp: &[[f64; 3]],
+    geometry: &[PointGeometry],
+    f0: &[Matrix3<f64>],
+    f_prev: &[Matrix3<f64>],
+    committed: &[f64],
+    trial: &mut [f64],
+    point_out: &mut [PointOutput],
+    f_int: &mut [f64],
+    stiffness: Option<&mut [f64]>,
+) -> Result<(), KernelError> {
+    let stride = ctx.law.state_len();
+    let mut f = [[0.0; D]; NN];
+    let mut k = [[[[0.0; D]; NN]; D]; NN];
+    for (p, g) in geometry.iter().enumerate() {
+        let state = PointState {
+            f0: &f0[p],
+            f_prev: &f_prev[p],
+            committed: &committed[p * stride..(p + 1) * stride],
+            trial: &mut trial[p * stride..(p + 1) * stride],
+        };
+        let r = evaluate_point(ctx, g, disp, state).map_err(|source| KernelError::Law { point: p, source })?;
+        point_out[p] = PointOutput { deformation_gradient: r.deformation_gradient, cauchy: r.cauchy, stress: r.stress };
+        let w = g.weight;
+        for a in 0..NN {
+            let ga = &g.gradient[a];
+            for i in 0..D {
+                let mut v = 0.0;
+                for j in 0..D {
+                    v += r.stress[(i, j)] * ga[j];
+                }
+                f[a][i] += w * v;
+            }
+        }
+        if stiffness.is_none() {
+            continue;
+        }
+        // bt[a][i][k][l] = w Σ_J ∂N_a/∂X̃_J Ã_iJkL (the rows of w Bᵀ Ã)
+        let mut bt = [[[[0.0; D]; D]; D]; NN];
+        for a in 0..NN {
+            let ga = &g.gradient[a];
+            for i in 0..D {
+                for kk in 0..D {
+                    for l in 0..D {
+                        let mut v = 0.0;
+                        for j in 0..D {
+                            v += ga[j] * r.tangent[(idx(i, j), idx(kk, l))];
+                        }
+                        bt[a][i][kk][l] = w * v;
+                    }
+                }
+            }
+        }
+        for a in 0..NN {
+            for i in 0..D {
+                for b in 0..NN {
+                    let gb = &g.gradient[b];
+                    for kk in 0..D {
+                        let mut v = 0.0;
+                        for l in 0..D {
+                            v += bt[a][i][kk][l] * gb[l];
+                        }
+                        k[a][i][b][kk] += v;
+                    }
+                }
+            }
+        }
+    }
+    for (dst, src) in f_int.chunks_exact_mut(D).zip(&f) {
+        dst.copy_from_slice(src);
+    }
+    if let Some(out) = stiffness {
+        for (dst, src) in out.chunks_exact_mut(D).zip(k.iter().flatten().flatten()) {
+            dst.copy_from_slice(src);
+        }
+    }
+    Ok(())
+}
+
 /// Internal force vector `f_int` (length `nn·dim`) and, if asked, the consistent tangent
 /// `stiffness` (row-major, `(nn·dim)²`) of one element over its integration points.
 ///
 /// `f0`, `f_prev`, `geometry`, `point_out` hold one entry per point; `committed` and `trial` hold the
 /// points' histories back to back with stride `law.state_len()`. Outputs are overwritten.
 pub fn solid_element(
+    ctx: &KernelContext<'_>,
+    disp: &[[f64; 3]],
+    geometry: &[PointGeometry],
+    f0: &[Matrix3<f64>],
+    f_prev: &[Matrix3<f64>],
+    committed: &[f64],
+    trial: &mut [f64],
+    point_out: &mut [PointOutput],
+    f_int: &mut [f64],
+    stiffness: Option<&mut [f64]>,
+) -> Result<(), KernelError> {
+    use ElementType::*;
+    use Formulation::*;
+    let run = match (ctx.formulation, ctx.element) {
+        (PlaneStrain | PlaneStress, Quad4) => element_tensor::<2, 4>,
+        (PlaneStrain | PlaneStress, Tri3) => element_tensor::<2, 3>,
+        (ThreeD, Tet4) => element_tensor::<3, 4>,
+        (ThreeD, Hex8) => element_tensor::<3, 8>,
+        _ => element_general,
+    };
+    run(ctx, disp, geometry, f0, f_prev, committed, trial, point_out, f_int, stiffness)
+}
+
+/// [`solid_element`] through the general operator `B` of [`gradient_operator`]:
+/// `f = Σ_p w Bᵀ P̃`, `K = Σ_p w Bᵀ Ã B` (axisymmetry, where the hoop row `N_a / R` breaks the
+/// tensor structure that [`element_tensor`] uses).
+fn element_general(
     ctx: &KernelContext<'_>,
     disp: &[[f64; 3]],
     geometry: &[PointGeometry],
@@ -359,6 +464,7 @@ pub fn solid_element(
     }
     let mut b = [[0.0; 9]; MAX_DOFS];
     let mut bt_a = [[0.0; 9]; MAX_DOFS];
+    let active = active_components(ctx.formulation);
     for (p, g) in geometry.iter().enumerate() {
         let state = PointState {
             f0: &f0[p],
@@ -369,7 +475,6 @@ pub fn solid_element(
         let r = evaluate_point(ctx, g, disp, state).map_err(|source| KernelError::Law { point: p, source })?;
         point_out[p] = PointOutput { deformation_gradient: r.deformation_gradient, cauchy: r.cauchy, stress: r.stress };
         let nc = gradient_operator(ctx.formulation, ctx.element, g, &mut b);
-        let active = active_components(ctx.formulation);
         let w = g.weight;
         for r_ in 0..ndof {
             let mut v = 0.0;
@@ -379,12 +484,11 @@ pub fn solid_element(
             f_int[r_] += w * v;
         }
         if let Some(k) = stiffness.as_deref_mut() {
-            let nca = r.active;
             for r_ in 0..ndof {
-                for d in 0..nca {
+                for d in 0..nc {
                     let mut v = 0.0;
-                    for c in 0..nca {
-                        v += b[r_][c] * r.tangent[(c, d)];
+                    for c in 0..nc {
+                        v += b[r_][c] * r.tangent[(active[c], active[d])];
                     }
                     bt_a[r_][d] = w * v;
                 }
@@ -393,7 +497,7 @@ pub fn solid_element(
                 let row = &mut k[r_ * ndof..(r_ + 1) * ndof];
                 for s in 0..ndof {
                     let mut v = 0.0;
-                    for d in 0..nca {
+                    for d in 0..nc {
                         v += bt_a[r_][d] * b[s][d];
                     }
                     row[s] += v;
@@ -491,6 +595,43 @@ mod tests {
                 "{element:?} {formulation:?}: element tangent vs central FD, relative error {err:.2e} (tolerance 1e-6)"
             );
             assert!(err < 1e-6, "{element:?} {formulation:?}: {err}");
+        }
+    }
+
+    /// The tensor-structured kernel (`element_tensor`) reproduces the general `Bᵀ Ã B`
+    /// kernel exactly (same products, same order; only multiplications by zero skipped).
+    #[test]
+    fn tensor_kernel_equals_general_kernel_bit_for_bit() {
+        let law = NeoHookean::new(1000.0, 1.0e6, 0.3);
+        let cases = [
+            (ElementType::Tri3, Formulation::PlaneStrain),
+            (ElementType::Quad4, Formulation::PlaneStrain),
+            (ElementType::Quad4, Formulation::PlaneStress),
+            (ElementType::Tet4, Formulation::ThreeD),
+            (ElementType::Hex8, Formulation::ThreeD),
+        ];
+        for (element, formulation) in cases {
+            let coords = element_coords(element);
+            let (nn, dim) = (element.num_nodes(), element.dim());
+            let nd = nn * dim;
+            let geometry: Vec<PointGeometry> = element
+                .gauss_points()
+                .iter()
+                .map(|g| point_geometry(element, formulation, 1.0, &coords, &g.xi, g.weight).unwrap())
+                .collect();
+            let np = geometry.len();
+            let f0s = vec![Matrix3::new(1.05, 0.03, 0.0, -0.02, 0.97, 0.0, 0.0, 0.0, 1.0); np];
+            let ctx = KernelContext { element, formulation, law: &law, time_step: 0.0 };
+            let disp: Vec<[f64; 3]> =
+                (0..nn).map(|a| [0.03 * (a as f64).sin(), -0.02 * (a as f64).cos(), 0.01 * a as f64]).collect();
+            let mut out = vec![PointOutput::default(); np];
+            let (mut f1, mut k1) = (vec![0.0; nd], vec![0.0; nd * nd]);
+            let (mut f2, mut k2) = (vec![0.0; nd], vec![0.0; nd * nd]);
+            solid_element(&ctx, &disp, &geometry, &f0s, &f0s, &[], &mut [], &mut out, &mut f1, Some(&mut k1)).unwrap();
+            element_general(&ctx, &disp, &geometry, &f0s, &f0s, &[], &mut [], &mut out, &mut f2, Some(&mut k2))
+                .unwrap();
+            assert_eq!(f1, f2, "{element:?} {formulation:?}: internal force");
+            assert_eq!(k1, k2, "{element:?} {formulation:?}: tangent");
         }
     }
 }

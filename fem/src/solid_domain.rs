@@ -214,6 +214,8 @@ impl Domain for FemDomain {
                     message: err.to_string(),
                 })?;
                 let me = &mass[e * nn * nn..(e + 1) * nn * nn];
+                // the mass block enters the tangent only in dynamics (c_M = 0 in statics)
+                let mass_tangent = input.with_tangent && input.mass_coefficient != 0.0;
                 for a in 0..nn {
                     for b in 0..nn {
                         let m = me[a * nn + b];
@@ -227,7 +229,7 @@ impl Domain for FemDomain {
                                 r += m * acc[gb + i];
                             }
                             fv[a * dim + i] += r;
-                            if input.with_tangent {
+                            if mass_tangent {
                                 km[(a * dim + i) * nd + b * dim + i] += input.mass_coefficient * m;
                             }
                         }
