@@ -192,6 +192,17 @@ impl AssemblyPattern {
         }
     }
 
+    /// Whether `|a_ij − a_ji| ≤ tolerance · max |a_ij|` for every pair: [`Self::asymmetry`]
+    /// `≤ tolerance`, but stopping at the first offending pair and visiting each pair once.
+    pub fn is_symmetric(&self, values: &[f64], tolerance: f64) -> bool {
+        let amax = values.par_iter().with_min_len(4096).fold(|| 0.0f64, |m, v| m.max(v.abs())).reduce(|| 0.0, f64::max);
+        let limit = tolerance * amax;
+        !(0..values.len()).into_par_iter().with_min_len(4096).any(|k| {
+            let t = self.transpose[k];
+            t > k && (values[k] - values[t]).abs() > limit
+        })
+    }
+
     /// A faer view of the matrix with `values`.
     pub fn matrix<'a>(&'a self, values: &'a [f64]) -> SparseColMatRef<'a, usize, f64> {
         SparseColMatRef::new(self.symbolic.as_ref(), values)
@@ -222,5 +233,9 @@ mod tests {
         pattern.gather_vector(&[1.0, 2.0, 3.0, 4.0], &mut r);
         assert_eq!(r, vec![1.0, 5.0, 4.0]);
         assert_eq!(pattern.asymmetry(&values), 0.0);
+        assert!(pattern.is_symmetric(&values, 0.0));
+        values[pattern.transpose[1]] += 1e-6;
+        assert!(!pattern.is_symmetric(&values, 1e-9));
+        assert!(pattern.is_symmetric(&values, 1e-6));
     }
 }

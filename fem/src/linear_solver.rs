@@ -9,9 +9,10 @@
 
 use std::time::Instant;
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
-use faer::{MatMut, Side};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky};
+use faer::sparse::linalg::lu::{factorize_symbolic_lu, NumericLu, SymbolicLu};
+use faer::{Conj, MatMut, Side};
 use serde::Deserialize;
 
 use crate::assembly::AssemblyPattern;
@@ -52,12 +53,48 @@ pub struct SolverTimings {
     pub solve: f64,
 }
 
+/// Symbolic Cholesky factorisation with the numeric factor and the workspace kept between
+/// refactorisations (faer's low-level API: no allocation or zeroing of the factor per
+/// Newton iteration).
+struct CholeskyState {
+    symbolic: SymbolicCholesky<usize>,
+    values: Vec<f64>,
+    scratch: MemBuffer,
+}
+
+/// Symbolic LU factorisation with the numeric factor and the workspace kept.
+struct LuState {
+    symbolic: SymbolicLu<usize>,
+    numeric: NumericLu<usize, f64>,
+    scratch: MemBuffer,
+}
+
+impl std::fmt::Debug for CholeskyState {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CholeskyState").field("len_val", &self.values.len()).finish_non_exhaustive()
+    }
+}
+
+impl std::fmt::Debug for LuState {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LuState").finish_non_exhaustive()
+    }
+}
+
+fn factorisation_error(e: impl std::fmt::Debug) -> LinearSolverError {
+    LinearSolverError::Factorisation(format!("{e:?}"))
+}
+
+fn buffer(req: StackReq) -> Result<MemBuffer, LinearSolverError> {
+    MemBuffer::try_new(req).map_err(|_| LinearSolverError::Factorisation("out of memory".into()))
+}
+
 /// A direct solver bound to one sparsity pattern.
 #[derive(Debug)]
 pub struct LinearSolver {
     kind: LinearSolverKind,
-    lu: Option<SymbolicLu<usize>>,
-    llt: Option<SymbolicLlt<usize>>,
+    lu: Option<LuState>,
+    llt: Option<CholeskyState>,
     /// Set once Cholesky failed on this pattern (indefinite tangent): use LU from then on.
     llt_failed: bool,
     /// Accumulated timings.
@@ -89,27 +126,49 @@ impl LinearSolver {
             return Ok(());
         }
         let a = pattern.matrix(values);
+        let par = faer::get_global_parallelism();
         let use_llt = match self.kind {
             LinearSolverKind::Cholesky => true,
             LinearSolverKind::Lu => false,
-            LinearSolverKind::Auto => !self.llt_failed && pattern.asymmetry(values) < 1e-10,
+            LinearSolverKind::Auto => !self.llt_failed && pattern.is_symmetric(values, 1e-10),
         };
         if use_llt {
             if self.llt.is_none() {
                 let t = Instant::now();
-                self.llt = Some(
-                    SymbolicLlt::try_new(a.symbolic(), Side::Lower)
-                        .map_err(|e| LinearSolverError::Factorisation(format!("{e:?}")))?,
-                );
+                let symbolic =
+                    factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), Default::default())
+                        .map_err(factorisation_error)?;
+                let scratch = buffer(StackReq::any_of(&[
+                    symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+                    symbolic.solve_in_place_scratch::<f64>(1, par),
+                ]))?;
+                let values = vec![0.0; symbolic.len_val()];
+                self.llt = Some(CholeskyState { symbolic, values, scratch });
                 self.timings.symbolic += t.elapsed().as_secs_f64();
             }
             let t = Instant::now();
-            let sym = self.llt.clone().expect("symbolic Cholesky present");
-            match Llt::try_new_with_symbolic(sym, a, Side::Lower) {
-                Ok(llt) => {
+            let st = self.llt.as_mut().expect("symbolic Cholesky present");
+            let stack = MemStack::new(&mut st.scratch);
+            let factor = st.symbolic.factorize_numeric_llt::<f64>(
+                &mut st.values,
+                a,
+                Side::Lower,
+                Default::default(),
+                par,
+                stack,
+                Default::default(),
+            );
+            match factor {
+                Ok(_) => {
                     self.timings.factorisation += t.elapsed().as_secs_f64();
                     let t = Instant::now();
-                    llt.solve_in_place(MatMut::from_column_major_slice_mut(rhs, n, 1));
+                    let llt = LltRef::new(&st.symbolic, &st.values);
+                    llt.solve_in_place_with_conj(
+                        Conj::No,
+                        MatMut::from_column_major_slice_mut(rhs, n, 1),
+                        par,
+                        MemStack::new(&mut st.scratch),
+                    );
                     self.timings.solve += t.elapsed().as_secs_f64();
                     return check_finite(rhs);
                 }
@@ -121,23 +180,34 @@ impl LinearSolver {
                 Err(_) => {
                     self.timings.factorisation += t.elapsed().as_secs_f64();
                     self.llt_failed = true;
+                    self.llt = None;
                 }
             }
         }
         if self.lu.is_none() {
             let t = Instant::now();
-            self.lu = Some(
-                SymbolicLu::try_new(a.symbolic()).map_err(|e| LinearSolverError::Factorisation(format!("{e:?}")))?,
-            );
+            let symbolic = factorize_symbolic_lu(a.symbolic(), Default::default()).map_err(factorisation_error)?;
+            let scratch = buffer(StackReq::any_of(&[
+                symbolic.factorize_numeric_lu_scratch::<f64>(par, Default::default()),
+                symbolic.solve_in_place_scratch::<f64>(1, par),
+            ]))?;
+            self.lu = Some(LuState { symbolic, numeric: NumericLu::new(), scratch });
             self.timings.symbolic += t.elapsed().as_secs_f64();
         }
         let t = Instant::now();
-        let sym = self.lu.clone().expect("symbolic LU present");
-        let lu = Lu::try_new_with_symbolic(sym, a)
+        let st = self.lu.as_mut().expect("symbolic LU present");
+        let lu = st
+            .symbolic
+            .factorize_numeric_lu::<f64>(&mut st.numeric, a, par, MemStack::new(&mut st.scratch), Default::default())
             .map_err(|e| LinearSolverError::Factorisation(format!("LU failed: {e}")))?;
         self.timings.factorisation += t.elapsed().as_secs_f64();
         let t = Instant::now();
-        lu.solve_in_place(MatMut::from_column_major_slice_mut(rhs, n, 1));
+        lu.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(rhs, n, 1),
+            par,
+            MemStack::new(&mut st.scratch),
+        );
         self.timings.solve += t.elapsed().as_secs_f64();
         check_finite(rhs)
     }
