@@ -18,6 +18,17 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Package a case as an FMI 3.0 co-simulation FMU (inputs and outputs from its fmu section).
+    Fmu {
+        /// The case file (JSON).
+        case: PathBuf,
+        /// The FMU to write (default <case name>.fmu).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// The loam-fmu shared library (default: next to the loam executable).
+        #[arg(long)]
+        library: Option<PathBuf>,
+    },
     /// Run a case file and write VTK results and monitors.csv.
     Run {
         /// The case file (JSON).
@@ -112,6 +123,29 @@ fn main() -> ExitCode {
                 }
                 Err(e) => {
                     eprintln!("error: writing results to {}: {e}", out.display());
+                    ExitCode::from(1)
+                }
+            }
+        }
+        Command::Fmu { case, output, library } => {
+            use loam::fmu_package::{default_library_path, package, PackageError};
+            let output = output.unwrap_or_else(|| {
+                PathBuf::from(format!("{}.fmu", case.file_stem().unwrap_or_default().to_string_lossy()))
+            });
+            match package(&case, &output, &library.unwrap_or_else(default_library_path)) {
+                Ok(s) => {
+                    println!(
+                        "loam: wrote {} (FMI 3.0 co-simulation, model identifier {}; inputs: {}; outputs: {})",
+                        output.display(),
+                        s.model_identifier,
+                        if s.inputs.is_empty() { "none".into() } else { s.inputs.join(", ") },
+                        s.outputs.join(", ")
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(PackageError::Case(e)) => bad_input(&e),
+                Err(e) => {
+                    eprintln!("error: {e}");
                     ExitCode::from(1)
                 }
             }

@@ -102,7 +102,11 @@ impl Simulation {
 
     /// Checks and builds a parsed case.
     pub fn new(case: Case) -> Result<Self, CaseError> {
-        let built = build_model(&case)?;
+        let mut built = build_model(&case)?;
+        built
+            .model
+            .initialise_acceleration()
+            .map_err(|e| CaseError::new("analysis", format!("cannot compute the initial acceleration: {e}")))?;
         Ok(Self {
             case,
             model: built.model,
@@ -243,11 +247,20 @@ impl Simulation {
     }
 
     /// Advances to time `t` with the case's step size (the last step shortened to land on
-    /// `t`).
+    /// `t`). Steps end where [`Simulation::step`]'s do (`time + Δt`, cut at the end time)
+    /// whenever `t` lies on that grid within 1e-9 Δt, so that a driver stepping by
+    /// multiples of Δt (an FMU's communication steps) reproduces a CLI run exactly.
     pub fn advance_to(&mut self, t: f64) -> Result<(), RunError> {
-        let eps = 1e-9 * self.case.analysis.time_step;
+        let dt = self.case.analysis.time_step;
+        let eps = 1e-9 * dt;
         while self.time() < t - eps {
-            let target = (self.time() + self.case.analysis.time_step).min(t);
+            let mut target = self.time() + dt;
+            if self.time() < self.end_time() - eps {
+                target = target.min(self.end_time());
+            }
+            if target > t + eps {
+                target = t;
+            }
             self.advance_step_to(target)?;
         }
         Ok(())
