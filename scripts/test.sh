@@ -22,3 +22,7 @@ fi
 echo "== Python: VTK output read by meshio"
 cargo build --release --quiet
 .venv/bin/python scripts/check_vtk.py
+
+echo "== Python: FMI 3.0 FMUs run by fmpy (loam fmu, tests/fmu)"
+cargo build --release --quiet -p loam -p loam-fmu
+.venv/bin/python tests/fmu/test_fmu.py
