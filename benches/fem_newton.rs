@@ -100,9 +100,19 @@ fn run(nominal: usize, repeat: usize, pools: &[rayon::ThreadPool; 2]) -> Row {
     );
     let asm1 = best_assembly(&pools[0], &mut sim, repeat);
     let asm2 = best_assembly(&pools[1], &mut sim, repeat);
+    let t = Instant::now();
     let report = pools[1].install(|| sim.model.solve_step(1.0)).expect("Newton step converges");
+    let step = t.elapsed().as_secs_f64();
     let solver = sim.model.solver_timings();
     let iterations = report.iterations.max(1);
+    let phases = report.timings.assembly + report.timings.factorisation + report.timings.solve;
+    eprintln!(
+        "  Newton step (2 threads): {step:.3} s, of which assembly {:.3}, factorisation incl. symbolic {:.3}, solve {:.3}, other {:.3}",
+        report.timings.assembly,
+        report.timings.factorisation,
+        report.timings.solve,
+        step - phases
+    );
     eprintln!(
         "  Newton: {} iterations, residuals {:?}",
         report.iterations,

@@ -261,12 +261,18 @@ pub fn evaluate_point(
         }
         unreachable!("plane-stress loop returns by its last iteration");
     }
-    let StressResponse { first_piola, tangent: mut a } = ctx.law.update(&kin, state.committed, state.trial)?;
-    let mut p = first_piola;
-    pull_back(state.f0, &mut p, &mut a);
-    let cauchy = cauchy_stress(&first_piola, &kin.deformation_gradient);
-    Ok(PointResponse { deformation_gradient: kin.deformation_gradient, stress: p, tangent: a, cauchy })
+    // matched in place: `?` would first move the 9×9 tangent out of the `Result`
+    let mut response = ctx.law.update(&kin, state.committed, state.trial);
+    let r = match response {
+        Ok(ref mut r) => r,
+        Err(e) => return Err(e),
+    };
+    let mut p = r.first_piola;
+    pull_back(state.f0, &mut p, &mut r.tangent);
+    let cauchy = cauchy_stress(&r.first_piola, &kin.deformation_gradient);
+    Ok(PointResponse { deformation_gradient: kin.deformation_gradient, stress: p, tangent: r.tangent, cauchy })
 }
+
 /// Cauchy stress `σ = P Fᵀ / det F`.
 pub fn cauchy_stress(first_piola: &Matrix3<f64>, f: &Matrix3<f64>) -> Matrix3<f64> {
     first_piola * f.transpose() / f.determinant()
