@@ -177,6 +177,10 @@ pub struct GridSpec {
     pub cells: Vec<usize>,
     /// `quad4` or `tri3` (2D), `hex8` (3D).
     pub element: ElementType,
+    /// Counter-clockwise rotation of the grid about `origin` in degrees (2D; default 0):
+    /// inclined grid boundaries, e.g. for slip on a slope.
+    #[serde(default)]
+    pub rotation: f64,
 }
 
 /// Where an MPM body's material points are.
@@ -291,10 +295,23 @@ pub struct BoundaryConditionSpec {
     /// Region name.
     pub region: String,
     /// One entry per component: a value in m, or `null` for a free component.
+    #[serde(default)]
     pub displacement: Vec<Option<f64>>,
+    /// Instead of `displacement`: frictionless slip (no motion along the boundary normal).
+    #[serde(default)]
+    pub slip: Option<SlipSpec>,
     /// Time function scaling the values (default constant 1).
     #[serde(default)]
     pub amplitude: Amplitude,
+}
+
+/// A frictionless slip boundary.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlipSpec {
+    /// Boundary normal; by default the mean normal of the boundary edges/faces in the region.
+    #[serde(default)]
+    pub normal: Option<Vec<f64>>,
 }
 
 /// A load on a region.

@@ -12,6 +12,7 @@ use loam_fem::loads::{facet_forces, SurfaceLoad};
 use loam_fem::mesh::Mesh;
 use loam_fem::model::{Constraint, Load, Model};
 use loam_fem::scheme::TimeScheme;
+use loam_fem::slip::Slip;
 use loam_fem::solid_domain::FemDomain;
 use loam_laws::ConstitutiveLaw;
 use loam_mpm::grid::StructuredGrid;
@@ -222,7 +223,10 @@ fn build_discretisation(
             if case.formulation == Formulation::Axisymmetric && origin[0] < -1e-12 {
                 return Err(CaseError::new(format!("{loc}.grid.origin"), "axisymmetric grids need r = x ≥ 0"));
             }
-            let grid = StructuredGrid::new(origin, size, cells, g.element);
+            if g.rotation != 0.0 && dim != 2 {
+                return Err(CaseError::new(format!("{loc}.grid.rotation"), "only 2D grids can be rotated"));
+            }
+            let grid = StructuredGrid::rotated(origin, size, cells, g.element, g.rotation.to_radians());
             let body_loc = format!("{loc}.material_points");
             let body = d
                 .material_points
@@ -276,6 +280,32 @@ fn build_discretisation(
             Ok((grid.mesh.clone(), Some((grid, points))))
         }
     }
+}
+
+/// Area-weighted mean outward normal of the boundary facets of all domains whose nodes all
+/// lie in `nodes`.
+fn mean_boundary_normal(model: &Model, nodes: &[usize]) -> Option<[f64; 3]> {
+    let set: std::collections::HashSet<usize> = nodes.iter().copied().collect();
+    let mut sum = [0.0; 3];
+    let mut found = false;
+    for f in model.domains.iter().flat_map(|d| d.boundary_facets()) {
+        if !f.iter().all(|n| set.contains(n)) {
+            continue;
+        }
+        found = true;
+        let x: Vec<[f64; 3]> = f.iter().map(|&n| model.coords[n]).collect();
+        let n = match x.len() {
+            2 => [x[1][1] - x[0][1], x[0][0] - x[1][0], 0.0],
+            _ => {
+                let (a, b) = ([0, 1, 2].map(|d| x[1][d] - x[0][d]), [0, 1, 2].map(|d| x[2][d] - x[0][d]));
+                [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+            }
+        };
+        for d in 0..3 {
+            sum[d] += n[d];
+        }
+    }
+    found.then_some(sum)
 }
 
 /// Even–odd rule.
@@ -516,6 +546,39 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     let mut constraint_of_bc = Vec::with_capacity(case.boundary_conditions.len());
     for (k, bc) in case.boundary_conditions.iter().enumerate() {
         let nodes = region(format!("boundary_conditions[{k}].region"), &bc.region)?;
+        if let Some(slip) = &bc.slip {
+            if !bc.displacement.is_empty() {
+                return Err(CaseError::new(
+                    format!("boundary_conditions[{k}]"),
+                    "give either displacement or slip, not both",
+                ));
+            }
+            let normal = match &slip.normal {
+                Some(n) => {
+                    check_len(&format!("boundary_conditions[{k}].slip.normal"), n, dim)?;
+                    let mut v = [0.0; 3];
+                    v[..dim].copy_from_slice(n);
+                    v
+                }
+                None => mean_boundary_normal(&model, nodes).ok_or_else(|| {
+                    CaseError::new(
+                        format!("boundary_conditions[{k}].region"),
+                        format!("region '{}' contains no boundary edge or face to take a slip normal from", bc.region),
+                    )
+                })?,
+            };
+            if normal[..dim].iter().map(|v| v * v).sum::<f64>() <= 0.0 {
+                return Err(CaseError::new(format!("boundary_conditions[{k}].slip.normal"), "must not be zero"));
+            }
+            model.slips.extend(nodes.iter().map(|&node| Slip { node, normal }));
+            constraint_of_bc.push(model.constraints.len());
+            model.constraints.push(Constraint {
+                dofs: Vec::new(),
+                values: Vec::new(),
+                amplitude: bc.amplitude.clone(),
+            });
+            continue;
+        }
         check_len(&format!("boundary_conditions[{k}].displacement"), &bc.displacement, dim)?;
         bc.amplitude.check().map_err(|m| CaseError::new(format!("boundary_conditions[{k}].amplitude"), m))?;
         let mut c = Constraint { dofs: Vec::new(), values: Vec::new(), amplitude: bc.amplitude.clone() };

@@ -86,6 +86,9 @@ pub struct Simulation {
     pub step: usize,
     /// Counters.
     pub stats: RunStats,
+    /// Whether the consistent initial acceleration has been computed (at the first step,
+    /// so that inputs set before it, e.g. in FMI initialisation mode, are taken into account).
+    initialised: bool,
     /// Named inputs (`fmu.inputs`) in declaration order.
     pub inputs: Vec<ModelInput>,
     /// Value of each input while set (`None`: the target's own amplitude applies).
@@ -102,17 +105,14 @@ impl Simulation {
 
     /// Checks and builds a parsed case.
     pub fn new(case: Case) -> Result<Self, CaseError> {
-        let mut built = build_model(&case)?;
-        built
-            .model
-            .initialise_acceleration()
-            .map_err(|e| CaseError::new("analysis", format!("cannot compute the initial acceleration: {e}")))?;
+        let built = build_model(&case)?;
         Ok(Self {
             case,
             model: built.model,
             monitors: built.monitors,
             step: 0,
             stats: RunStats::default(),
+            initialised: false,
             input_values: vec![None; built.inputs.len()],
             inputs: built.inputs,
             outputs: built.outputs,
@@ -217,6 +217,16 @@ impl Simulation {
 
     /// Advances to `target` (> current time) in one step, cutting it on failure.
     pub fn advance_step_to(&mut self, target: f64) -> Result<StepSummary, RunError> {
+        if !self.initialised {
+            self.model.initialise_acceleration().map_err(|source| RunError {
+                step: self.step + 1,
+                time: self.time(),
+                time_step: 0.0,
+                cuts: 0,
+                source,
+            })?;
+            self.initialised = true;
+        }
         let mut dt = target - self.time();
         let mut cuts = 0u32;
         let mut summary = StepSummary::default();

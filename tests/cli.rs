@@ -175,7 +175,9 @@ fn failing_step_keeps_converged_results() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     println!("exit {:?}: {stderr}", out.status.code());
     assert_eq!(out.status.code(), Some(1));
-    assert!(stderr.contains("stopped at step 3") && stderr.contains("after 2 cuts") && stderr.contains("t = 1.000000e0"));
+    assert!(
+        stderr.contains("stopped at step 3") && stderr.contains("after 2 cuts") && stderr.contains("t = 1.000000e0")
+    );
     let csv = std::fs::read_to_string(dir.join("out/monitors.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 3, "header, t = 0, 0.5 and 1");
     assert!(dir.join("out/beam_000002.vtu").exists());

@@ -249,20 +249,20 @@ fn two_domains_sharing_nodes_equal_one_domain() {
     let mut split = single.clone();
     let mut left = split.domains[0].clone();
     left.name = "left".into();
-    left.mesh = loam::case::MeshSpec::Rectangle {
+    left.mesh = Some(loam::case::MeshSpec::Rectangle {
         origin: [0.0, 0.0],
         size: [3.5, 1.0],
         cells: [28, 8],
         element: ElementType::Quad4,
-    };
+    });
     let mut right = left.clone();
     right.name = "right".into();
-    right.mesh = loam::case::MeshSpec::Rectangle {
+    right.mesh = Some(loam::case::MeshSpec::Rectangle {
         origin: [3.5, 0.0],
         size: [3.5, 1.0],
         cells: [28, 8],
         element: ElementType::Quad4,
-    };
+    });
     split.domains = vec![left, right];
     let (s1, h1) = run_to_end(single);
     let (s2, h2) = run_to_end(split);

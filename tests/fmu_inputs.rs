@@ -70,8 +70,18 @@ fn with_fmu_input(mut v: Value, drives: Value) -> Value {
     v
 }
 
+/// The ramp as an amplitude table, as the input run sees it: the value set before the
+/// first step (the ramp at t = 0.01) also holds at t = 0, where it sets the consistent
+/// initial acceleration (zero-order hold of the first input value).
 fn table() -> Value {
-    json!([[0.0, 0.0], [0.1, 1.0], [0.2, 0.5]])
+    // one row per step end, at the very times the steps compute (t ← t + Δt)
+    let mut t = 0.0f64;
+    let mut rows = vec![[0.0, ramp(0.01)]];
+    while t < 0.2 - 1e-12 {
+        t = (t + 0.01f64).min(0.2);
+        rows.push([t, ramp(t)]);
+    }
+    json!(rows)
 }
 
 #[test]

@@ -42,6 +42,9 @@ pub struct AssemblyInput<'a> {
     pub time_step: f64,
     /// Whether to compute element matrices (else only vectors).
     pub with_tangent: bool,
+    /// Whether the matrices include the stiffness `K_t` (else only `c_M M`: used for the
+    /// consistent initial acceleration `M a₀ = f_ext − f_int`).
+    pub stiffness: bool,
 }
 
 /// Failure while a domain assembles.
@@ -191,6 +194,11 @@ pub trait Domain: Send + Sync {
 
     /// Out-of-plane thickness (plane problems; 1 otherwise).
     fn thickness(&self) -> f64;
+
+    /// Receives the consistent initial acceleration `a₀` (full DOF vector) computed by
+    /// [`crate::model::Model::initialise_acceleration`]; particle domains interpolate it to
+    /// their points. Mesh domains need nothing (the model holds nodal accelerations).
+    fn accept_initial_acceleration(&mut self, _a: &[f64]) {}
 
     /// Geometry and fields for output at the committed state.
     fn output(&self, committed: &NodalState) -> DomainOutput;

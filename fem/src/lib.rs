@@ -22,6 +22,7 @@ pub mod loads;
 pub mod mesh;
 pub mod model;
 pub mod scheme;
+pub mod slip;
 pub mod solid_domain;
 
 /// Von Mises equivalent stress `√(3/2 s:s)`, `s` the deviator of `σ`.

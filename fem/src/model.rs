@@ -17,6 +17,7 @@ use crate::dofs::{DofMap, CONSTRAINED};
 use crate::domain::{AssemblyInput, Domain, DomainError, NodalState, Projection};
 use crate::linear_solver::{LinearSolver, LinearSolverError, LinearSolverKind, SolverTimings};
 use crate::scheme::TimeScheme;
+use crate::slip::{Slip, SlipRotations};
 
 /// Which norms decide convergence.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
@@ -149,6 +150,8 @@ struct Workspace {
     values: Vec<f64>,
     residual: Vec<f64>,
     rhs: Vec<f64>,
+    delta: Vec<f64>,
+    slip: SlipRotations,
     solver: LinearSolver,
 }
 
@@ -168,6 +171,7 @@ impl Workspace {
             mats = rest_m;
             vecs = rest_v;
         }
+        self.slip.rotate_blocks(&mut self.matrices, &mut self.vectors);
         Ok(())
     }
 }
@@ -193,6 +197,8 @@ pub struct Model {
     pub constraints: Vec<Constraint>,
     /// External nodal forces.
     pub loads: Vec<Load>,
+    /// Frictionless slip conditions (local rotation of the nodal DOFs).
+    pub slips: Vec<Slip>,
     /// Gravity (m/s²) and its time function.
     pub gravity: ([f64; 3], Amplitude),
     /// Time scheme.
@@ -224,6 +230,7 @@ impl Model {
             domains: Vec::new(),
             constraints: Vec::new(),
             loads: Vec::new(),
+            slips: Vec::new(),
             gravity: ([0.0; 3], Amplitude::default()),
             scheme,
             settings,
@@ -282,6 +289,12 @@ impl Model {
         for (c, t) in constrained.iter_mut().zip(&touched) {
             *c |= !t;
         }
+        let dirichlet = constrained.clone();
+        let dim = self.dim;
+        let slip = SlipRotations::new(dim, &self.slips, &layout, |n| (0..dim).any(|i| dirichlet[n * dim + i]));
+        for d in slip.normal_dofs() {
+            constrained[d] = true;
+        }
         let dofs = DofMap::new(self.dim, &constrained);
         let pattern = AssemblyPattern::new(&dofs, &layout);
         let n_eq = dofs.num_equations();
@@ -291,6 +304,8 @@ impl Model {
             values: vec![0.0; pattern.nnz()],
             residual: vec![0.0; self.num_dofs()],
             rhs: vec![0.0; n_eq],
+            delta: vec![0.0; self.num_dofs()],
+            slip,
             solver: LinearSolver::new(self.settings.linear_solver),
             dofs,
             pattern,
@@ -303,6 +318,71 @@ impl Model {
     /// solves) since the pattern was built.
     pub fn solver_timings(&self) -> SolverTimings {
         self.workspace.as_ref().map_or_else(SolverTimings::default, |w| w.solver.timings)
+    }
+
+    /// Consistent initial acceleration for a dynamic analysis: solves
+    /// `M a₀ = f_ext(t) + f_body − f_int(u)` at the committed state (prescribed DOFs keep
+    /// `a = 0`) and hands `a₀` to the domains. Without it, a load applied suddenly at
+    /// `t = 0` loses `Δt/2 · a₀` of velocity in the first step. No-op for static schemes.
+    pub fn initialise_acceleration(&mut self) -> Result<(), StepError> {
+        if self.scheme.coefficients().is_none() {
+            return Ok(());
+        }
+        let mut projection = Projection::new(self.coords.len(), self.dim);
+        let mut changed = false;
+        for d in self.domains.iter_mut() {
+            changed |= d.begin_step(&mut projection);
+        }
+        projection.apply(&mut self.committed);
+        if changed {
+            self.invalidate_pattern();
+        }
+        self.prepare();
+        self.state.clone_from(&self.committed);
+        let n = self.num_dofs();
+        let mut f_ext = vec![0.0; n];
+        for l in &self.loads {
+            let f = l.amplitude.at(self.time);
+            for &(d, v) in &l.forces {
+                f_ext[d] += v * f;
+            }
+        }
+        let mut ws = self.workspace.take().expect("prepared");
+        ws.slip.to_local(&mut f_ext);
+        let gf = self.gravity.1.at(self.time);
+        let input = AssemblyInput {
+            state: &self.state,
+            committed: &self.committed,
+            inertial_acceleration: None,
+            mass_coefficient: 1.0,
+            gravity: self.gravity.0.map(|g| g * gf),
+            time_step: 0.0,
+            with_tangent: true,
+            stiffness: false,
+        };
+        let result = (|| {
+            ws.assemble_domains(&mut self.domains, &input)?;
+            ws.pattern.gather_vector(&ws.vectors, &mut ws.residual);
+            ws.pattern.gather_matrix(&ws.matrices, &mut ws.values);
+            for (g, &e) in ws.dofs.equations().iter().enumerate() {
+                if e != CONSTRAINED {
+                    ws.rhs[e] = f_ext[g] - ws.residual[g];
+                }
+            }
+            ws.solver.solve(&ws.pattern, &ws.values, &mut ws.rhs)?;
+            for (g, &e) in ws.dofs.equations().iter().enumerate() {
+                ws.delta[g] = if e != CONSTRAINED { ws.rhs[e] } else { 0.0 };
+            }
+            ws.slip.to_global(&mut ws.delta);
+            Ok::<(), StepError>(())
+        })();
+        self.committed.a.copy_from_slice(&ws.delta);
+        self.state.a.copy_from_slice(&ws.delta);
+        for d in self.domains.iter_mut() {
+            d.accept_initial_acceleration(&ws.delta);
+        }
+        self.workspace = Some(ws);
+        result
     }
 
     /// Assembles once at the current iterate, as the first Newton iteration of a static
@@ -320,6 +400,7 @@ impl Model {
             gravity: self.gravity.0.map(|g| g * gf),
             time_step: 0.0,
             with_tangent: true,
+            stiffness: true,
         };
         let ws = self.workspace.as_mut().expect("prepared");
         let t = Instant::now();
@@ -369,6 +450,9 @@ impl Model {
                 f_ext[d] += v * f;
             }
         }
+        if let Some(ws) = &self.workspace {
+            ws.slip.to_local(&mut f_ext);
+        }
         let gf = self.gravity.1.at(t_new);
         let gravity = self.gravity.0.map(|g| g * gf);
         let mut inertial = vec![0.0; n];
@@ -392,6 +476,7 @@ impl Model {
                     gravity,
                     time_step: dt,
                     with_tangent: true,
+                    stiffness: true,
                 };
                 ws.assemble_domains(&mut self.domains, &input)?;
                 ws.pattern.gather_vector(&ws.vectors, &mut ws.residual);
@@ -431,6 +516,7 @@ impl Model {
                     for (g, &e) in ws.dofs.equations().iter().enumerate() {
                         self.reactions[g] = if e == CONSTRAINED { ws.residual[g] } else { 0.0 };
                     }
+                    ws.slip.to_global(&mut self.reactions);
                     for d in self.domains.iter_mut() {
                         d.commit(&input);
                     }
@@ -449,10 +535,12 @@ impl Model {
                     - before.symbolic;
                 report.timings.solve += ws.solver.timings.solve - before.solve;
                 for (g, &e) in ws.dofs.equations().iter().enumerate() {
-                    if e != CONSTRAINED {
-                        self.state.u[g] += ws.rhs[e];
-                        du_step[g] += ws.rhs[e];
-                    }
+                    ws.delta[g] = if e != CONSTRAINED { ws.rhs[e] } else { 0.0 };
+                }
+                ws.slip.to_global(&mut ws.delta);
+                for ((u, du), d) in self.state.u.iter_mut().zip(du_step.iter_mut()).zip(&ws.delta) {
+                    *u += d;
+                    *du += d;
                 }
                 last_du = norm(&ws.rhs);
                 self.update_kinematics(dt);

@@ -206,7 +206,14 @@ impl Domain for FemDomain {
                     trial,
                     out,
                     fv,
-                    input.with_tangent.then_some(&mut *km),
+                    if input.with_tangent && input.stiffness {
+                        Some(&mut *km)
+                    } else {
+                        if input.with_tangent {
+                            km.fill(0.0);
+                        }
+                        None
+                    },
                 )
                 .map_err(|err| DomainError {
                     domain: name.clone(),

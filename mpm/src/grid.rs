@@ -15,6 +15,8 @@ pub struct StructuredGrid {
     origin: [f64; 3],
     spacing: [f64; 3],
     cells: [usize; 3],
+    /// `(cos θ, sin θ)` of the grid's rotation about `origin` (2D).
+    rotation: (f64, f64),
 }
 
 impl StructuredGrid {
@@ -26,7 +28,21 @@ impl StructuredGrid {
         };
         let cells = if element.dim() == 2 { [cells[0], cells[1], 1] } else { cells };
         let spacing = [size[0] / cells[0] as f64, size[1] / cells[1] as f64, size[2] / cells[2] as f64];
-        Self { mesh, origin, spacing, cells }
+        Self { mesh, origin, spacing, cells, rotation: (1.0, 0.0) }
+    }
+
+    /// A 2D grid as [`StructuredGrid::new`], rotated counter-clockwise by `angle` (radians)
+    /// about `origin`: its cell edges, and so its boundaries, are inclined.
+    pub fn rotated(origin: [f64; 3], size: [f64; 3], cells: [usize; 3], element: ElementType, angle: f64) -> Self {
+        let mut g = Self::new(origin, size, cells, element);
+        let (c, s) = (angle.cos(), angle.sin());
+        for x in &mut g.mesh.coords {
+            let (dx, dy) = (x[0] - origin[0], x[1] - origin[1]);
+            x[0] = origin[0] + c * dx - s * dy;
+            x[1] = origin[1] + s * dx + c * dy;
+        }
+        g.rotation = (c, s);
+        g
     }
 
     /// Cell size along each axis.
@@ -38,9 +54,12 @@ impl StructuredGrid {
     pub fn locate(&self, x: &[f64; 3]) -> Option<(usize, [f64; 3])> {
         let element = self.mesh.element;
         let dim = element.dim();
+        let (c, s) = self.rotation;
+        let (dx, dy) = (x[0] - self.origin[0], x[1] - self.origin[1]);
+        let lattice_x = [self.origin[0] + c * dx + s * dy, self.origin[1] - s * dx + c * dy, x[2]];
         let mut ijk = [0usize; 3];
         for d in 0..dim {
-            let s = (x[d] - self.origin[d]) / self.spacing[d];
+            let s = (lattice_x[d] - self.origin[d]) / self.spacing[d];
             if !(s >= -1e-9 && s <= self.cells[d] as f64 * (1.0 + 1e-12) + 1e-9) {
                 return None;
             }
@@ -80,6 +99,11 @@ mod tests {
             assert!(g.locate(&[2.5, 0.5, 0.0]).is_none());
             assert!(g.locate(&[2.0, 1.0, 0.0]).is_some(), "upper corner belongs to the grid");
         }
+        let r = StructuredGrid::rotated([1.0, 0.0, 0.0], [2.0, 1.0, 0.0], [4, 2, 1], ElementType::Quad4, 0.5);
+        let x = [1.0 + 1.25 * 0.5f64.cos() - 0.75 * 0.5f64.sin(), 1.25 * 0.5f64.sin() + 0.75 * 0.5f64.cos(), 0.0];
+        let (cell, xi) = r.locate(&x).unwrap();
+        assert_eq!(cell, 4 + 2);
+        assert!(xi[0].abs() < 1e-12 && xi[1].abs() < 1e-12, "{xi:?}");
         let g = StructuredGrid::new([0.0; 3], [1.0, 1.0, 1.0], [2, 2, 2], ElementType::Hex8);
         let (cell, xi) = g.locate(&[0.75, 0.25, 0.6]).unwrap();
         assert_eq!(cell, 4 + 1);

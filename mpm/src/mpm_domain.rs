@@ -239,7 +239,14 @@ impl Domain for MpmDomain {
                     trial,
                     out,
                     fv,
-                    input.with_tangent.then_some(&mut *km),
+                    if input.with_tangent && input.stiffness {
+                        Some(&mut *km)
+                    } else {
+                        if input.with_tangent {
+                            km.fill(0.0);
+                        }
+                        None
+                    },
                 )
                 .map_err(|err| DomainError {
                     domain: name.clone(),
@@ -321,6 +328,21 @@ impl Domain for MpmDomain {
                 *vol = v0 * f.determinant();
             });
         self.points.state.copy_from_slice(&self.trial_state);
+    }
+
+    fn accept_initial_acceleration(&mut self, a: &[f64]) {
+        let element = self.grid.mesh.element;
+        let dim = self.dim();
+        for (p, &cell) in self.cell_of_point.iter().enumerate() {
+            let mut acc = [0.0; 3];
+            for (k, &node) in self.grid.mesh.cell(cell).iter().enumerate().take(element.num_nodes()) {
+                let g = self.node_ids[node] * dim;
+                for i in 0..dim {
+                    acc[i] += self.geometry[p].shape[k] * a[g + i];
+                }
+            }
+            self.points.acceleration[p] = acc;
+        }
     }
 
     fn kinetic_energy(&self, _v: &[f64]) -> f64 {

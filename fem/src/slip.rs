@@ -1,0 +1,158 @@
+//! Frictionless slip boundaries of any inclination by local rotation of nodal DOFs.
+//!
+//! A slip node with unit normal `n` gets a local basis `Q = [n, t₁, t₂]` (columns in global
+//! components). Element blocks that touch it are rotated before the gather,
+//! `K̃ = Qᵀ K Q` on its rows and columns and `r̃ = Qᵀ r` (the standard treatment of skew
+//! supports, e.g. Zienkiewicz & Taylor, *The Finite Element Method*, Vol. 1, §9.13), its
+//! normal DOF becomes a constraint (`ũ_n = 0`: no motion across the boundary) and its
+//! tangential DOFs stay free. Solutions are rotated back, `δu = Q δũ`. A node that also has
+//! a Dirichlet condition keeps only the Dirichlet condition.
+
+use std::collections::HashMap;
+
+use crate::assembly::BlockLayout;
+
+/// A slip condition: node and outward (or inward) unit normal of the boundary.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Slip {
+    /// Global node id.
+    pub node: usize,
+    /// Boundary normal (normalised when the rotations are built).
+    pub normal: [f64; 3],
+}
+
+/// Local basis `Q` (columns `q[.][k]`, axis 0 the normal) for a normal in `dim` dimensions.
+pub fn local_basis(normal: [f64; 3], dim: usize) -> [[f64; 3]; 3] {
+    let len = normal[..dim].iter().map(|v| v * v).sum::<f64>().sqrt();
+    let n = normal.map(|v| v / len);
+    let mut q = [[0.0; 3]; 3];
+    if dim == 2 {
+        let t = [-n[1], n[0]];
+        for i in 0..2 {
+            q[i][0] = n[i];
+            q[i][1] = t[i];
+        }
+        return q;
+    }
+    // t1 ⟂ n from the axis least aligned with n, t2 = n × t1
+    let a = if n[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
+    let d = a[0] * n[0] + a[1] * n[1] + a[2] * n[2];
+    let mut t1 = [a[0] - d * n[0], a[1] - d * n[1], a[2] - d * n[2]];
+    let l = (t1[0] * t1[0] + t1[1] * t1[1] + t1[2] * t1[2]).sqrt();
+    t1 = t1.map(|v| v / l);
+    let t2 = [n[1] * t1[2] - n[2] * t1[1], n[2] * t1[0] - n[0] * t1[2], n[0] * t1[1] - n[1] * t1[0]];
+    for i in 0..3 {
+        q[i] = [n[i], t1[i], t2[i]];
+    }
+    q
+}
+
+/// The rotations of one sparsity pattern.
+#[derive(Debug, Clone, Default)]
+pub struct SlipRotations {
+    dim: usize,
+    basis: HashMap<usize, [[f64; 3]; 3]>,
+    /// (matrix offset, vector offset, block DOFs, local node, global node) per occurrence.
+    occurrences: Vec<(usize, usize, usize, usize, usize)>,
+}
+
+impl SlipRotations {
+    /// Rotations for `slips` on the blocks of `layout`, skipping nodes for which
+    /// `has_dirichlet` holds.
+    pub fn new(dim: usize, slips: &[Slip], layout: &BlockLayout, has_dirichlet: impl Fn(usize) -> bool) -> Self {
+        let basis: HashMap<usize, [[f64; 3]; 3]> =
+            slips.iter().filter(|s| !has_dirichlet(s.node)).map(|s| (s.node, local_basis(s.normal, dim))).collect();
+        let mut occurrences = Vec::new();
+        if !basis.is_empty() {
+            for b in 0..layout.num_blocks() {
+                let dofs = &layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]];
+                for (a, chunk) in dofs.chunks(dim).enumerate() {
+                    let node = chunk[0] / dim;
+                    if basis.contains_key(&node) {
+                        occurrences.push((layout.matrix_offset[b], layout.dof_ptr[b], dofs.len(), a, node));
+                    }
+                }
+            }
+        }
+        Self { dim, basis, occurrences }
+    }
+
+    /// Global DOFs that become constraints: the normal DOF of every slip node.
+    pub fn normal_dofs(&self) -> impl Iterator<Item = usize> + '_ {
+        self.basis.keys().map(|&n| n * self.dim)
+    }
+
+    /// Rotates element matrices and vectors to the local frames of slip nodes.
+    pub fn rotate_blocks(&self, matrices: &mut [f64], vectors: &mut [f64]) {
+        let dim = self.dim;
+        for &(mo, vo, nd, a, node) in &self.occurrences {
+            let q = &self.basis[&node];
+            let k = &mut matrices[mo..mo + nd * nd];
+            for c in 0..nd {
+                let mut col = [0.0; 3];
+                for l in 0..dim {
+                    col[l] = (0..dim).map(|i| q[i][l] * k[(a * dim + i) * nd + c]).sum();
+                }
+                for l in 0..dim {
+                    k[(a * dim + l) * nd + c] = col[l];
+                }
+            }
+            for r in 0..nd {
+                let row = &mut k[r * nd..(r + 1) * nd];
+                let mut v = [0.0; 3];
+                for l in 0..dim {
+                    v[l] = (0..dim).map(|i| row[a * dim + i] * q[i][l]).sum();
+                }
+                row[a * dim..a * dim + dim].copy_from_slice(&v[..dim]);
+            }
+            let f = &mut vectors[vo + a * dim..vo + a * dim + dim];
+            let mut v = [0.0; 3];
+            for l in 0..dim {
+                v[l] = (0..dim).map(|i| q[i][l] * f[i]).sum();
+            }
+            f.copy_from_slice(&v[..dim]);
+        }
+    }
+
+    /// `v ← Qᵀ v` on the slip nodes of a full DOF vector (global to local).
+    pub fn to_local(&self, full: &mut [f64]) {
+        self.transform(full, true);
+    }
+
+    /// `v ← Q v` on the slip nodes of a full DOF vector (local to global).
+    pub fn to_global(&self, full: &mut [f64]) {
+        self.transform(full, false);
+    }
+
+    fn transform(&self, full: &mut [f64], transpose: bool) {
+        let dim = self.dim;
+        for (&node, q) in &self.basis {
+            let x = &mut full[node * dim..node * dim + dim];
+            let mut y = [0.0; 3];
+            for l in 0..dim {
+                y[l] = (0..dim).map(|i| if transpose { q[i][l] * x[i] } else { q[l][i] * x[i] }).sum();
+            }
+            x.copy_from_slice(&y[..dim]);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bases_are_orthonormal_with_the_normal_first() {
+        for (n, dim) in [([0.6, 0.8, 0.0], 2), ([1.0, 2.0, -2.0], 3), ([1.0, 0.0, 0.0], 3)] {
+            let q = local_basis(n, dim);
+            for a in 0..dim {
+                for b in 0..dim {
+                    let d: f64 = (0..dim).map(|i| q[i][a] * q[i][b]).sum();
+                    assert!((d - if a == b { 1.0 } else { 0.0 }).abs() < 1e-14);
+                }
+            }
+            let len = n[..dim].iter().map(|v| v * v).sum::<f64>().sqrt();
+            assert!((0..dim).all(|i| (q[i][0] - n[i] / len).abs() < 1e-14));
+        }
+    }
+}
