@@ -32,7 +32,7 @@ impl Amplitude {
                 for w in rows.windows(2) {
                     if t <= w[1][0] {
                         let s = (t - w[0][0]) / (w[1][0] - w[0][0]);
-                        return w[0][1] + s * (w[1][1] - w[0][1]);
+                        return (1.0 - s) * w[0][1] + s * w[1][1]; // exact at the table times
                     }
                 }
                 rows.last().map(|r| r[1]).unwrap_or(0.0)
