@@ -3,9 +3,11 @@
 //! (axisymmetric), a 3D hex8 cantilever, and two domains sharing interface nodes.
 //! Each test prints measured vs reference and asserts its tolerance.
 
-use std::path::Path;
+mod common;
+
 use std::sync::Arc;
 
+use common::{case, frequency, monitor, report, run as run_to_end};
 use loam::case::Case;
 use loam::simulation::Simulation;
 use loam_fem::element::ElementType;
@@ -16,34 +18,6 @@ use loam_fem::scheme::TimeScheme;
 use loam_fem::solid_domain::FemDomain;
 use loam_laws::neo_hookean::NeoHookean;
 use nalgebra::Matrix3;
-
-fn case(name: &str) -> Case {
-    Case::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("cases").join(name)).expect("bundled case loads")
-}
-
-fn run_to_end(case: Case) -> (Simulation, Vec<(f64, Vec<f64>)>) {
-    let mut sim = Simulation::new(case).expect("case builds");
-    let mut history = vec![(0.0, sim.monitor_values())];
-    while !sim.finished() {
-        sim.step().expect("step converges");
-        history.push((sim.time(), sim.monitor_values()));
-    }
-    (sim, history)
-}
-
-fn monitor(sim: &Simulation, name: &str) -> usize {
-    sim.monitor_names().iter().position(|n| *n == name).expect("monitor exists")
-}
-
-fn report(what: &str, measured: f64, reference: f64, tolerance: f64) {
-    let err = (measured - reference).abs() / reference.abs();
-    println!(
-        "{what}: measured {measured:.6}, reference {reference:.6}, error {:.3} % (tolerance {:.1} %)",
-        err * 100.0,
-        tolerance * 100.0
-    );
-    assert!(err <= tolerance, "{what}: error {err} above {tolerance}");
-}
 
 /// Benchmark 1, static: Euler–Bernoulli q L⁴/(8 E I) = −0.39256 m, tolerance 3 %.
 #[test]
@@ -61,17 +35,7 @@ fn cantilever_static_tip_deflection() {
 fn cantilever_dynamic_natural_frequency() {
     let (sim, h) = run_to_end(case("cantilever_fem_dynamic.json"));
     let k = monitor(&sim, "tip_uy");
-    let mean = h.iter().map(|r| r.1[k]).sum::<f64>() / h.len() as f64;
-    // downward crossings of the mean, linearly interpolated
-    let mut crossings = Vec::new();
-    for w in h.windows(2) {
-        let (a, b) = (w[0].1[k] - mean, w[1].1[k] - mean);
-        if a > 0.0 && b <= 0.0 {
-            crossings.push(w[0].0 + (w[1].0 - w[0].0) * a / (a - b));
-        }
-    }
-    assert!(crossings.len() >= 3, "need at least two periods, got crossings {crossings:?}");
-    let frequency = (crossings.len() - 1) as f64 / (crossings.last().unwrap() - crossings[0]);
+    let frequency = frequency(&h.iter().map(|r| (r.0, r.1[k])).collect::<Vec<_>>());
     report("benchmark 1 first natural frequency [Hz]", frequency, 0.9889, 0.03);
 }
 

@@ -3,52 +3,10 @@
 //! plate, on quadrilateral and triangular grids. Each test prints measured vs reference and
 //! asserts its tolerance.
 
-use std::path::Path;
+mod common;
 
+use common::{case, frequency, last, report, run};
 use loam::case::Case;
-use loam::simulation::Simulation;
-
-fn case(name: &str) -> Case {
-    Case::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("cases").join(name)).expect("bundled case loads")
-}
-
-fn run(case: Case) -> (Simulation, Vec<(f64, Vec<f64>)>) {
-    let mut sim = Simulation::new(case).expect("case builds");
-    let mut history = vec![(0.0, sim.monitor_values())];
-    while !sim.finished() {
-        sim.step().expect("step converges");
-        history.push((sim.time(), sim.monitor_values()));
-    }
-    (sim, history)
-}
-
-fn last(sim: &Simulation, h: &[(f64, Vec<f64>)], name: &str) -> f64 {
-    h.last().unwrap().1[sim.monitor_names().iter().position(|n| *n == name).unwrap()]
-}
-
-fn report(what: &str, measured: f64, reference: f64, tolerance: f64) {
-    let err = (measured - reference).abs() / reference.abs();
-    println!(
-        "{what}: measured {measured:.6}, reference {reference:.6}, error {:.3} % (tolerance {:.1} %)",
-        err * 100.0,
-        tolerance * 100.0
-    );
-    assert!(err <= tolerance, "{what}: error {err} above {tolerance}");
-}
-
-/// Frequency from downward crossings of the mean of a history.
-fn frequency(h: &[(f64, f64)]) -> f64 {
-    let mean = h.iter().map(|r| r.1).sum::<f64>() / h.len() as f64;
-    let mut crossings = Vec::new();
-    for w in h.windows(2) {
-        let (a, b) = (w[0].1 - mean, w[1].1 - mean);
-        if a > 0.0 && b <= 0.0 {
-            crossings.push(w[0].0 + (w[1].0 - w[0].0) * a / (a - b));
-        }
-    }
-    assert!(crossings.len() >= 3, "need two periods, got {crossings:?}");
-    (crossings.len() - 1) as f64 / (crossings.last().unwrap() - crossings[0])
-}
 
 /// Benchmark 1 with MPM, static: tip deflection within 5 % of −0.39256 m; printed beside
 /// the FEM result on the same discretisation (material points at the FEM Gauss points
