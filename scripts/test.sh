@@ -6,11 +6,12 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-echo "== Rust: cargo test (workspace, test profile opt-level 2)"
+# one (release) build serves the tests, the CLI and the FMU library
+echo "== Rust: cargo test --release (workspace)"
 if [ "${LOAM_LONG:-0}" = "1" ]; then
-  cargo test --workspace -- --include-ignored
+  cargo test --release --workspace -- --include-ignored
 else
-  cargo test --workspace
+  cargo test --release --workspace
 fi
 
 echo "== Python: virtual environment for meshio/fmpy checks (.venv)"
