@@ -70,7 +70,7 @@ fn main() -> ExitCode {
         Command::Check { case } => match Simulation::from_file(&case) {
             Ok(sim) => {
                 println!(
-                    "{}: ok — {} nodes, {} domains, {} equations-to-be, {} steps, monitors: {}",
+                    "{}: ok — {} nodes, {} domains, {} DOFs, {} steps, monitors: {}",
                     case.display(),
                     sim.model.coords.len(),
                     sim.model.domains.len(),
