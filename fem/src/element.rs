@@ -218,6 +218,7 @@ impl ElementType {
         let mut xi = self.centroid_local();
         let mut n = [0.0; MAX_NODES];
         let mut dn = [[0.0; 3]; MAX_NODES];
+        let mut last = f64::INFINITY;
         for _ in 0..30 {
             self.shape_functions(&xi, &mut n);
             self.shape_gradients(&xi, &mut dn);
@@ -244,9 +245,12 @@ impl ElementType {
                 xi[d] += step[d];
                 norm = norm.max(step[d].abs());
             }
-            if norm < 1e-13 {
+            // converged, or at the round-off floor (small cells far from the origin: the
+            // steps stop shrinking at |x|·ε / h)
+            if norm < 1e-13 || (norm < 1e-9 && norm >= last) {
                 return Some(xi);
             }
+            last = norm;
         }
         None
     }

@@ -10,8 +10,9 @@
 use std::time::Instant;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky};
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky};
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, NumericLu, SymbolicLu};
+use faer::sparse::linalg::SupernodalThreshold;
 use faer::{Conj, MatMut, Side};
 use serde::Deserialize;
 
@@ -135,9 +136,12 @@ impl LinearSolver {
         if use_llt {
             if self.llt.is_none() {
                 let t = Instant::now();
-                let symbolic =
-                    factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), Default::default())
-                        .map_err(factorisation_error)?;
+                let params = CholeskySymbolicParams {
+                    supernodal_flop_ratio_threshold: cholesky_threshold(),
+                    ..Default::default()
+                };
+                let symbolic = factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), params)
+                    .map_err(factorisation_error)?;
                 let scratch = buffer(StackReq::any_of(&[
                     symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
                     symbolic.solve_in_place_scratch::<f64>(1, par),
@@ -210,6 +214,18 @@ impl LinearSolver {
         );
         self.timings.solve += t.elapsed().as_secs_f64();
         check_finite(rhs)
+    }
+}
+
+/// Supernodal Cholesky unless `LOAM_CHOLESKY=simplicial` (or `auto`: faer's flop-ratio
+/// heuristic). faer's heuristic picks the simplicial factorisation for these 2D FEM/MPM
+/// matrices, which was 1.4–2.3× slower than the supernodal one from about 1 000
+/// equations on (docs/performance.md).
+fn cholesky_threshold() -> SupernodalThreshold {
+    match std::env::var("LOAM_CHOLESKY").as_deref() {
+        Ok("simplicial") => SupernodalThreshold::FORCE_SIMPLICIAL,
+        Ok("auto") => SupernodalThreshold::AUTO,
+        _ => SupernodalThreshold::FORCE_SUPERNODAL,
     }
 }
 

@@ -110,22 +110,35 @@ pub enum StepError {
 /// Wall-clock seconds per phase.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct PhaseTimings {
-    /// Building sparsity patterns (and domains' per-step preparation).
+    /// Domains' per-step preparation (initialisation phase of particle domains: point
+    /// search, sort, shape functions, projection to the grid, grid reset).
+    pub search: f64,
+    /// Building sparsity patterns, DOF maps and gather lists (when they changed).
     pub pattern: f64,
     /// Element kernels and gather of matrix and residual.
     pub assembly: f64,
     /// Symbolic and numeric factorisation.
     pub factorisation: f64,
+    /// Of `factorisation`: symbolic analyses (when the pattern changed).
+    pub symbolic: f64,
     /// Triangular solves.
     pub solve: f64,
+    /// Domains' commit of the converged step (convective phase of particle domains).
+    pub commit: f64,
+    /// Steps in which the sparsity pattern was rebuilt.
+    pub pattern_builds: usize,
 }
 
 impl std::ops::AddAssign for PhaseTimings {
     fn add_assign(&mut self, o: Self) {
+        self.search += o.search;
         self.pattern += o.pattern;
         self.assembly += o.assembly;
         self.factorisation += o.factorisation;
+        self.symbolic += o.symbolic;
         self.solve += o.solve;
+        self.commit += o.commit;
+        self.pattern_builds += o.pattern_builds;
     }
 }
 
@@ -429,6 +442,11 @@ impl Model {
         if topology_changed {
             self.invalidate_pattern();
         }
+        report.timings.search += t0.elapsed().as_secs_f64();
+        let t0 = Instant::now();
+        if self.workspace.is_none() {
+            report.timings.pattern_builds += 1;
+        }
         self.prepare();
         report.timings.pattern += t0.elapsed().as_secs_f64();
         let t_new = self.time + dt;
@@ -517,9 +535,11 @@ impl Model {
                         self.reactions[g] = if e == CONSTRAINED { ws.residual[g] } else { 0.0 };
                     }
                     ws.slip.to_global(&mut self.reactions);
+                    let t = Instant::now();
                     for d in self.domains.iter_mut() {
                         d.commit(&input);
                     }
+                    report.timings.commit += t.elapsed().as_secs_f64();
                     return Ok(());
                 }
                 if it == settings.max_iterations {
@@ -533,6 +553,7 @@ impl Model {
                 report.timings.factorisation += ws.solver.timings.factorisation - before.factorisation
                     + ws.solver.timings.symbolic
                     - before.symbolic;
+                report.timings.symbolic += ws.solver.timings.symbolic - before.symbolic;
                 report.timings.solve += ws.solver.timings.solve - before.solve;
                 for (g, &e) in ws.dofs.equations().iter().enumerate() {
                     ws.delta[g] = if e != CONSTRAINED { ws.rhs[e] } else { 0.0 };

@@ -4,7 +4,7 @@
 //! interface nodes; point location uses the lattice arithmetic for the cell and the
 //! element's inverse map for the local coordinates.
 
-use loam_fem::element::ElementType;
+use loam_fem::element::{ElementType, MAX_NODES};
 use loam_fem::mesh::Mesh;
 
 /// A structured background grid.
@@ -50,6 +50,28 @@ impl StructuredGrid {
         self.spacing
     }
 
+    /// Node coordinates of `cell` (the first `num_nodes` entries), without allocating.
+    pub fn cell_coords(&self, cell: usize) -> [[f64; 3]; MAX_NODES] {
+        let mut coords = [[0.0; 3]; MAX_NODES];
+        for (c, &a) in coords.iter_mut().zip(self.mesh.cell(cell)) {
+            *c = self.mesh.coords[a];
+        }
+        coords
+    }
+
+    /// Cells sharing a node with any cell of `cells` (`cells` included), ascending: the
+    /// set grown by one ring. `cells` must be ascending.
+    pub fn dilate(&self, cells: &[usize]) -> Vec<usize> {
+        let mesh = &self.mesh;
+        let mut node_mark = vec![false; mesh.coords.len()];
+        for &c in cells {
+            for &a in mesh.cell(c) {
+                node_mark[a] = true;
+            }
+        }
+        (0..mesh.num_cells()).filter(|&c| mesh.cell(c).iter().any(|&a| node_mark[a])).collect()
+    }
+
     /// Cell containing `x` and the local coordinates of `x` in it, or `None` outside.
     pub fn locate(&self, x: &[f64; 3]) -> Option<(usize, [f64; 3])> {
         let element = self.mesh.element;
@@ -70,9 +92,10 @@ impl StructuredGrid {
             ElementType::Tri3 => &[2 * lattice, 2 * lattice + 1],
             _ => &[lattice],
         };
+        let nn = element.num_nodes();
         for &cell in candidates {
-            let coords: Vec<[f64; 3]> = self.mesh.cell(cell).iter().map(|&a| self.mesh.coords[a]).collect();
-            if let Some(xi) = element.inverse_map(&coords, x) {
+            let coords = self.cell_coords(cell);
+            if let Some(xi) = element.inverse_map(&coords[..nn], x) {
                 if element.contains_local(&xi, 1e-9) {
                     return Some((cell, xi));
                 }

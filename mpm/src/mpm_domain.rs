@@ -34,6 +34,28 @@ pub struct MpmDomain {
     trial_state: Vec<f64>,
     trial_out: Vec<PointOutput>,
     erased: usize,
+    /// Cells declared as element blocks (ascending): the active cells grown by
+    /// `pattern_rings` rings when the pattern was last built. The sparsity pattern and the
+    /// symbolic factorisation are kept while the active cells stay inside this set.
+    pattern_cells: Vec<usize>,
+    /// Whether each grid cell is in `pattern_cells`.
+    in_pattern: Vec<bool>,
+    /// For each block of `pattern_cells`: its index in `active_cells`, or `EMPTY`.
+    block_active: Vec<usize>,
+    /// For each block: bit `a` set if it carries the unit diagonal of its node `a`, which no
+    /// active cell touches (an identity equation, `δu = 0`).
+    block_orphans: Vec<u8>,
+    /// Rings of cells around the active ones in the pattern (0: the pattern is the active
+    /// set and is rebuilt whenever it changes).
+    pattern_rings: usize,
+}
+
+const EMPTY: usize = usize::MAX;
+
+/// Rings of inactive cells kept in the sparsity pattern around the active ones (default 1;
+/// `LOAM_MPM_PATTERN_RINGS=0` rebuilds the pattern at every change of the active set).
+fn pattern_rings() -> usize {
+    std::env::var("LOAM_MPM_PATTERN_RINGS").ok().and_then(|v| v.parse().ok()).unwrap_or(1)
 }
 
 impl MpmDomain {
@@ -69,6 +91,11 @@ impl MpmDomain {
             trial_state: Vec::new(),
             trial_out: Vec::new(),
             erased: 0,
+            pattern_cells: Vec::new(),
+            in_pattern: Vec::new(),
+            block_active: Vec::new(),
+            block_orphans: Vec::new(),
+            pattern_rings: pattern_rings(),
         }
     }
 
@@ -105,12 +132,43 @@ impl Domain for MpmDomain {
     /// `m_I = Σ N_I m_p`, `(m v)_I = Σ N_I m_p v_p`, `(m a)_I = Σ N_I m_p a_p`.
     fn begin_step(&mut self, projection: &mut Projection) -> bool {
         let grid = &self.grid;
-        let located: Vec<Option<(usize, [f64; 3])>> = self.points.position.par_iter().map(|x| grid.locate(x)).collect();
-        let mut order: Vec<usize> = (0..located.len()).filter(|&p| located[p].is_some()).collect();
-        self.erased += located.len() - order.len();
-        order.sort_by_key(|&p| (located[p].unwrap().0, self.points.id[p]));
+        let n_before = self.points.len();
+        let located: Vec<Option<(usize, [f64; 3])>> =
+            self.points.position.par_iter().with_min_len(1024).map(|x| grid.locate(x)).collect();
+        // counting sort by cell, each cell's points by id: order (cell, id)
+        let num_cells = grid.mesh.num_cells();
+        let mut start = vec![0usize; num_cells + 1];
+        for (c, _) in located.iter().flatten() {
+            start[c + 1] += 1;
+        }
+        for c in 0..num_cells {
+            start[c + 1] += start[c];
+        }
+        let kept = start[num_cells];
+        self.erased += n_before - kept;
+        let mut order = vec![0usize; kept];
+        {
+            let mut fill = start.clone();
+            for (p, l) in located.iter().enumerate() {
+                if let Some((c, _)) = l {
+                    order[fill[*c]] = p;
+                    fill[*c] += 1;
+                }
+            }
+        }
+        let ids = &self.points.id;
+        let mut active = Vec::new();
+        let mut ptr = vec![0];
+        for c in 0..num_cells {
+            let (a, b) = (start[c], start[c + 1]);
+            if b > a {
+                order[a..b].sort_unstable_by_key(|&p| ids[p]);
+                active.push(c);
+                ptr.push(b);
+            }
+        }
         let sl = self.law.state_len();
-        if order.len() != located.len() || order.iter().enumerate().any(|(k, &p)| k != p) {
+        if kept != n_before || order.iter().enumerate().any(|(k, &p)| k != p) {
             self.points.reorder(&order, sl);
         }
         self.index_of_id.iter_mut().for_each(|i| *i = usize::MAX);
@@ -118,42 +176,77 @@ impl Domain for MpmDomain {
             self.index_of_id[id] = k;
         }
         let element = grid.mesh.element;
+        let nn = element.num_nodes();
         let (formulation, thickness) = (self.formulation, self.thickness);
-        let cells_xi: Vec<(usize, [f64; 3])> = order.iter().map(|&p| located[p].unwrap()).collect();
-        self.cell_of_point = cells_xi.iter().map(|c| c.0).collect();
-        self.geometry = cells_xi
+        self.cell_of_point.clear();
+        self.cell_of_point.extend(order.iter().map(|&p| located[p].expect("kept points are located").0));
+        order
             .par_iter()
+            .with_min_len(1024)
             .zip(self.points.volume.par_iter())
-            .map(|((cell, xi), &volume)| {
-                let coords: Vec<[f64; 3]> = grid.mesh.cell(*cell).iter().map(|&a| grid.mesh.coords[a]).collect();
-                let mut g = point_geometry(element, formulation, thickness, &coords, xi, 1.0)
+            .map(|(&p, &volume)| {
+                let (cell, xi) = located[p].expect("kept points are located");
+                let coords = grid.cell_coords(cell);
+                let mut g = point_geometry(element, formulation, thickness, &coords[..nn], &xi, 1.0)
                     .expect("structured grid cells are not inverted");
                 g.weight = volume;
                 g
             })
-            .collect();
-        let mut active = Vec::new();
-        let mut ptr = vec![0];
-        for (k, &c) in self.cell_of_point.iter().enumerate() {
-            if active.last() != Some(&c) {
-                if !active.is_empty() {
-                    ptr.push(k);
-                }
-                active.push(c);
-            }
-        }
-        ptr.push(self.cell_of_point.len());
+            .collect_into_vec(&mut self.geometry);
         if active.is_empty() {
             ptr = vec![0];
         }
-        let changed = active != self.active_cells;
+        // keep the pattern while the active cells stay inside it
+        let changed = if self.pattern_rings == 0 {
+            active != self.active_cells || self.pattern_cells != active
+        } else {
+            self.pattern_cells.is_empty() || active.iter().any(|&c| !self.in_pattern[c])
+        };
+        if changed {
+            let mut cells = active.clone();
+            for _ in 0..self.pattern_rings {
+                cells = grid.dilate(&cells);
+            }
+            self.in_pattern = vec![false; num_cells];
+            for &c in &cells {
+                self.in_pattern[c] = true;
+            }
+            self.pattern_cells = cells;
+        }
         self.active_cells = active;
         self.cell_ptr = ptr;
+        // blocks of the pattern: active index, or the identity rows of nodes no active cell touches
+        let mut live = vec![false; grid.mesh.coords.len()];
+        for &c in &self.active_cells {
+            for &a in grid.mesh.cell(c) {
+                live[a] = true;
+            }
+        }
+        self.block_active.clear();
+        self.block_orphans.clear();
+        let mut next = 0;
+        for &c in &self.pattern_cells {
+            if next < self.active_cells.len() && self.active_cells[next] == c {
+                self.block_active.push(next);
+                self.block_orphans.push(0);
+                next += 1;
+            } else {
+                self.block_active.push(EMPTY);
+                let mut mask = 0u8;
+                for (a, &node) in grid.mesh.cell(c).iter().enumerate() {
+                    if !live[node] {
+                        live[node] = true; // owned by this block
+                        mask |= 1 << a;
+                    }
+                }
+                self.block_orphans.push(mask);
+            }
+        }
+        debug_assert_eq!(next, self.active_cells.len());
         self.trial_state.clone_from(&self.points.state);
-        self.trial_out = vec![PointOutput::default(); self.points.len()];
+        self.trial_out.resize(self.points.len(), PointOutput::default());
         // grid reset and projection (summed with other domains on the same grid)
         let dim = self.dim();
-        let nn = element.num_nodes();
         for &g in &self.node_ids {
             projection.reset[g] = true;
         }
@@ -174,7 +267,7 @@ impl Domain for MpmDomain {
 
     fn blocks(&self, layout: &mut BlockLayout) {
         let dim = self.dim();
-        for &c in &self.active_cells {
+        for &c in &self.pattern_cells {
             layout.push(self.grid.mesh.cell(c).iter().flat_map(|&a| (0..dim).map(move |i| self.node_ids[a] * dim + i)));
         }
     }
@@ -198,27 +291,46 @@ impl Domain for MpmDomain {
             law: self.law.as_ref(),
             time_step: input.time_step,
         };
-        // per-cell mutable views of the trial arrays
-        let mut states: Vec<&mut [f64]> = Vec::with_capacity(self.active_cells.len());
-        let mut outs: Vec<&mut [PointOutput]> = Vec::with_capacity(self.active_cells.len());
+        // per-block mutable views of the trial arrays (none for blocks without points)
+        let mut views: Vec<Option<(&mut [f64], &mut [PointOutput])>> = Vec::with_capacity(self.block_active.len());
         let (mut rest_s, mut rest_o) = (self.trial_state.as_mut_slice(), self.trial_out.as_mut_slice());
-        for k in 0..self.active_cells.len() {
+        for &k in &self.block_active {
+            if k == EMPTY {
+                views.push(None);
+                continue;
+            }
             let np = self.cell_ptr[k + 1] - self.cell_ptr[k];
             let (s, r) = std::mem::take(&mut rest_s).split_at_mut(np * sl);
-            states.push(s);
             rest_s = r;
             let (o, r) = std::mem::take(&mut rest_o).split_at_mut(np);
-            outs.push(o);
             rest_o = r;
+            views.push(Some((s, o)));
         }
         let (grid, node_ids, geometry, points, cell_ptr, cells, name) =
             (&self.grid, &self.node_ids, &self.geometry, &self.points, &self.cell_ptr, &self.active_cells, &self.name);
+        let (block_active, block_orphans) = (&self.block_active, &self.block_orphans);
         matrices
             .par_chunks_mut(nd * nd)
             .zip(vectors.par_chunks_mut(nd))
-            .zip(states.into_par_iter().zip(outs.into_par_iter()))
+            .zip(views.into_par_iter())
             .enumerate()
-            .try_for_each(|(k, ((km, fv), (trial, out)))| {
+            .with_min_len(16)
+            .try_for_each(|(b, ((km, fv), view))| {
+                let Some((trial, out)) = view else {
+                    fv.fill(0.0);
+                    if input.with_tangent {
+                        km.fill(0.0);
+                        for a in 0..nn {
+                            if block_orphans[b] & (1 << a) != 0 {
+                                for i in 0..dim {
+                                    km[(a * dim + i) * nd + a * dim + i] = 1.0;
+                                }
+                            }
+                        }
+                    }
+                    return Ok(());
+                };
+                let k = block_active[b];
                 let cell = grid.mesh.cell(cells[k]);
                 let mut disp = [[0.0; 3]; MAX_NODES];
                 for (a, &local) in cell.iter().enumerate() {

@@ -1,0 +1,146 @@
+#!/usr/bin/env python3
+"""Side-by-side run of the MPM cantilever (benchmark 1, dynamic) in Kratos and in Loam.
+
+For each size (cells through the thickness n; 28 n^2 material points, 4 per cell) it
+generates the Kratos case with benches/kratos/gen_cantilever.py (a copy of
+shared/kratos/gen_cantilever.py), runs Kratos' MpmAnalysis through
+benches/kratos/run_case.py with OMP_NUM_THREADS = 1 and 2 and KRATOS_END_TIME = steps * dt,
+writes the same discretisation as a Loam case (the case JSON of benches/mpm_cantilever.rs)
+and runs `loam run --threads T`, then prints seconds per step of both, the ratio
+Kratos / Loam, Newton iterations per step and the tip deflection (material point nearest
+(L - h/4, H/2)) of both at the end time.
+
+Both per-step times include the first step and exclude set-up (Kratos: the solution loop
+over steps; Loam: wall time of `loam run` minus the time to build the model, which the CLI
+does not report separately, so Loam's figure is slightly pessimistic). Loam writes no VTK.
+
+Usage (from the repository root, after `cargo build --release`):
+
+    python3 -m venv .kratos-venv
+    .kratos-venv/bin/pip install KratosMultiphysics==10.4.4 KratosMPMApplication==10.4.4 \
+        KratosLinearSolversApplication==10.4.4
+    python3 benches/kratos_compare.py --n 4,8,16 --steps 10 --threads 1,2
+
+Not part of the test suite. Kratos at n = 64 (114 688 points) takes about 74 s per step.
+"""
+import argparse
+import csv
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+DT = 0.01
+
+
+def loam_case(n, end):
+    h = 1.0 / n
+    return {
+        "description": "kratos_compare: benchmark 1 with MPM, dynamic, n = %d" % n,
+        "formulation": "plane_strain",
+        "thickness": 1.0,
+        "materials": {"beam": {"law": "neo_hookean", "density": 1000.0, "young_modulus": 9.0e7,
+                               "poisson_ratio": 0.0}},
+        "domains": [{
+            "name": "beam", "type": "mpm", "material": "beam",
+            "grid": {"origin": [0.0, -1.5], "size": [8.0, 3.0], "cells": [8 * n, 3 * n], "element": "quad4"},
+            "material_points": {"cells": {"mesh": {"rectangle": {
+                "origin": [0.0, 0.0], "size": [7.0, 1.0], "cells": [7 * n, n], "element": "quad4"}},
+                "points_per_cell": 4}},
+        }],
+        "regions": {"clamp": {"x": 0.0}},
+        "boundary_conditions": [{"region": "clamp", "displacement": [0.0, 0.0]}],
+        "gravity": {"acceleration": [0.0, -9.81]},
+        "analysis": {"type": "dynamic", "time_step": DT, "end_time": end,
+                     "scheme": {"newmark": {"beta": 0.25, "gamma": 0.5}}},
+        "solver": {"residual_relative_tolerance": 1e-8, "residual_absolute_tolerance": 1e-6},
+        "monitors": [{"name": "tip_uy", "type": "material_point_displacement", "point": [7.0 - 0.25 * h, 0.5],
+                      "component": "y"}],
+        "output": {"vtk": False},
+    }
+
+
+def run_kratos(python, case_dir, threads, end):
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads), KRATOS_END_TIME=repr(end))
+    out = subprocess.run([python, os.path.join(HERE, "kratos", "run_case.py")], cwd=case_dir, env=env,
+                         capture_output=True, text=True)
+    for line in out.stdout.splitlines():
+        if line.startswith("RUN_SUMMARY "):
+            s = json.loads(line[len("RUN_SUMMARY "):])
+            tip = next((k["value"] for k in s["key_results"] if "MP_DISPLACEMENT_Y" in k["label"]), float("nan"))
+            return {"per_step": s["time_per_step_s"], "steps": s["steps"],
+                    "iters": s["nonlinear_iterations_total"] / max(s["steps"], 1), "tip": tip,
+                    "points": s["material_points_initial"]}
+    sys.exit("Kratos failed:\n" + out.stdout[-2000:] + out.stderr[-2000:])
+
+
+def run_loam(loam, case_path, out_dir, threads, steps):
+    t0 = time.perf_counter()
+    out = subprocess.run([loam, "run", case_path, "--out", out_dir, "--threads", str(threads), "--quiet"],
+                         capture_output=True, text=True)
+    wall_total = time.perf_counter() - t0
+    m = re.search(r"(\d+) steps, (\d+) Newton iterations.*wall time ([0-9.]+) s", out.stdout)
+    if out.returncode != 0 or not m:
+        sys.exit("Loam failed:\n" + out.stdout[-2000:] + out.stderr[-2000:])
+    nsteps, iters, wall = int(m.group(1)), int(m.group(2)), float(m.group(3))
+    with open(os.path.join(out_dir, "monitors.csv")) as f:
+        rows = list(csv.DictReader(f))
+    tip = float(rows[-1]["tip_uy"])
+    return {"per_step": wall / nsteps, "steps": nsteps, "iters": iters / nsteps, "tip": tip,
+            "process": wall_total}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--n", default="4,8,16", help="cells through the thickness, comma separated (4 -> 448 points)")
+    ap.add_argument("--steps", type=int, default=10)
+    ap.add_argument("--threads", default="1,2")
+    ap.add_argument("--venv", default=os.path.join(ROOT, ".kratos-venv"))
+    ap.add_argument("--loam", default=os.path.join(ROOT, "target", "release", "loam"))
+    ap.add_argument("--work", default=os.path.join(ROOT, "target", "kratos_compare"))
+    ap.add_argument("--no-kratos", action="store_true", help="run Loam only")
+    ap.add_argument("--kratos-max-n", type=int, default=32, help="skip Kratos above this n (n = 64: 74 s/step)")
+    a = ap.parse_args()
+    python = os.path.join(a.venv, "bin", "python")
+    end = a.steps * DT
+    rows = []
+    for n in [int(v) for v in a.n.split(",")]:
+        case_dir = os.path.join(a.work, "n%d" % n)
+        os.makedirs(case_dir, exist_ok=True)
+        subprocess.run([sys.executable, os.path.join(HERE, "kratos", "gen_cantilever.py"), case_dir, "--n", str(n),
+                        "--ppc", "4", "--mode", "dynamic", "--dt", repr(DT), "--end", repr(end)],
+                       check=True, capture_output=True)
+        case_path = os.path.join(case_dir, "loam.json")
+        with open(case_path, "w") as f:
+            json.dump(loam_case(n, end), f, indent=1)
+        for th in [int(v) for v in a.threads.split(",")]:
+            lo = run_loam(a.loam, case_path, os.path.join(case_dir, "loam_out_%d" % th), th, a.steps)
+            kr = None
+            if not a.no_kratos and n <= a.kratos_max_n:
+                kr = run_kratos(python, case_dir, th, end)
+            rows.append((n, 28 * n * n, th, kr, lo))
+            print("n=%d threads=%d: loam %.5f s/step (%.1f it/step, tip %.6f)%s" % (
+                n, th, lo["per_step"], lo["iters"], lo["tip"],
+                "" if kr is None else "; kratos %.5f s/step (%.1f it/step, tip %.6f)" % (
+                    kr["per_step"], kr["iters"], kr["tip"])), file=sys.stderr, flush=True)
+    print()
+    print("Seconds per step over %d steps (dt = %g s, Newmark); tip deflection at t = %g s." % (a.steps, DT, end))
+    print()
+    print("| points | threads | Kratos s/step | Loam s/step | Kratos / Loam | Kratos it/step | Loam it/step "
+          "| tip uy Kratos (m) | tip uy Loam (m) |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for n, pts, th, kr, lo in rows:
+        if kr is None:
+            print("| %d | %d | — | %.5f | — | — | %.1f | — | %.6f |" % (pts, th, lo["per_step"], lo["iters"], lo["tip"]))
+        else:
+            print("| %d | %d | %.5f | %.5f | %.1f× | %.1f | %.1f | %.6f | %.6f |" % (
+                pts, th, kr["per_step"], lo["per_step"], kr["per_step"] / lo["per_step"], kr["iters"],
+                lo["iters"], kr["tip"], lo["tip"]))
+
+
+if __name__ == "__main__":
+    main()
