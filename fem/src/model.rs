@@ -480,67 +480,82 @@ impl Model {
         let mut ws = self.workspace.take().expect("prepared");
         let result = (|| {
             for it in 0..=settings.max_iterations {
-                let t = Instant::now();
                 if scheme.coefficients().is_some() {
                     for ((m, &a), &an) in inertial.iter_mut().zip(&self.state.a).zip(&self.committed.a) {
                         *m = scheme.inertial_acceleration(a, an);
                     }
                 }
-                let input = AssemblyInput {
-                    state: &self.state,
-                    committed: &self.committed,
-                    inertial_acceleration: scheme.coefficients().map(|_| inertial.as_slice()),
-                    mass_coefficient: scheme.mass_coefficient(dt),
-                    gravity,
-                    time_step: dt,
-                    with_tangent: true,
-                    stiffness: true,
-                };
-                ws.assemble_domains(&mut self.domains, &input)?;
-                ws.pattern.gather_vector(&ws.vectors, &mut ws.residual);
-                for (r, f) in ws.residual.iter_mut().zip(&f_ext) {
-                    *r -= f;
-                }
-                for (g, &e) in ws.dofs.equations().iter().enumerate() {
-                    if e != CONSTRAINED {
-                        ws.rhs[e] = -ws.residual[g];
-                    }
-                }
-                let r_norm = norm(&ws.rhs);
-                report.residuals.push(r_norm);
-                report.timings.assembly += t.elapsed().as_secs_f64();
-                if it == 0 {
-                    r0 = r_norm;
-                }
-                let res_ok = r_norm <= settings.residual_absolute_tolerance
-                    || r_norm <= settings.residual_relative_tolerance * r0;
+                // the displacement criterion is known before assembling: when it holds the
+                // step has most likely converged, so assemble the residual alone first and
+                // the tangent only if the residual says otherwise
                 let du_norm = norm(&du_step);
                 let disp_ok = it > 0
                     && (last_du <= settings.displacement_absolute_tolerance
                         || last_du <= settings.displacement_relative_tolerance * du_norm);
-                let converged = (it == 0 && r_norm <= settings.residual_absolute_tolerance)
-                    || (it > 0
-                        && match settings.convergence_criterion {
-                            ConvergenceCriterion::Residual => res_ok,
-                            ConvergenceCriterion::Displacement => disp_ok,
-                            ConvergenceCriterion::And => res_ok && disp_ok,
-                            ConvergenceCriterion::Or => res_ok || disp_ok,
-                        });
-                if converged || !r_norm.is_finite() {
+                let mut with_tangent = !disp_ok;
+                let mut first_pass = true;
+                loop {
+                    let t = Instant::now();
+                    let input = AssemblyInput {
+                        state: &self.state,
+                        committed: &self.committed,
+                        inertial_acceleration: scheme.coefficients().map(|_| inertial.as_slice()),
+                        mass_coefficient: scheme.mass_coefficient(dt),
+                        gravity,
+                        time_step: dt,
+                        with_tangent,
+                        stiffness: true,
+                    };
+                    ws.assemble_domains(&mut self.domains, &input)?;
+                    ws.pattern.gather_vector(&ws.vectors, &mut ws.residual);
+                    for (r, f) in ws.residual.iter_mut().zip(&f_ext) {
+                        *r -= f;
+                    }
+                    for (g, &e) in ws.dofs.equations().iter().enumerate() {
+                        if e != CONSTRAINED {
+                            ws.rhs[e] = -ws.residual[g];
+                        }
+                    }
+                    let r_norm = norm(&ws.rhs);
+                    report.timings.assembly += t.elapsed().as_secs_f64();
+                    if !first_pass {
+                        break;
+                    }
+                    first_pass = false;
+                    report.residuals.push(r_norm);
+                    if it == 0 {
+                        r0 = r_norm;
+                    }
+                    let res_ok = r_norm <= settings.residual_absolute_tolerance
+                        || r_norm <= settings.residual_relative_tolerance * r0;
+                    let converged = (it == 0 && r_norm <= settings.residual_absolute_tolerance)
+                        || (it > 0
+                            && match settings.convergence_criterion {
+                                ConvergenceCriterion::Residual => res_ok,
+                                ConvergenceCriterion::Displacement => disp_ok,
+                                ConvergenceCriterion::And => res_ok && disp_ok,
+                                ConvergenceCriterion::Or => res_ok || disp_ok,
+                            });
                     if !r_norm.is_finite() {
                         return Err(StepError::NoConvergence { iterations: it, residual: r_norm });
                     }
-                    report.iterations = it;
-                    for (g, &e) in ws.dofs.equations().iter().enumerate() {
-                        self.reactions[g] = if e == CONSTRAINED { ws.residual[g] } else { 0.0 };
+                    if converged {
+                        report.iterations = it;
+                        for (g, &e) in ws.dofs.equations().iter().enumerate() {
+                            self.reactions[g] = if e == CONSTRAINED { ws.residual[g] } else { 0.0 };
+                        }
+                        ws.slip.to_global(&mut self.reactions);
+                        let t = Instant::now();
+                        for d in self.domains.iter_mut() {
+                            d.commit(&input);
+                        }
+                        report.timings.commit += t.elapsed().as_secs_f64();
+                        return Ok(());
                     }
-                    ws.slip.to_global(&mut self.reactions);
-                    let t = Instant::now();
-                    for d in self.domains.iter_mut() {
-                        d.commit(&input);
+                    if with_tangent || it == settings.max_iterations {
+                        break;
                     }
-                    report.timings.commit += t.elapsed().as_secs_f64();
-                    return Ok(());
+                    with_tangent = true;
                 }
                 if it == settings.max_iterations {
                     break;
