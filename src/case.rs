@@ -106,6 +106,10 @@ pub struct DomainSpec {
     /// Structured background grid (MPM domains).
     #[serde(default)]
     pub grid: Option<GridSpec>,
+    /// Instead of `grid`: any mesh as the background grid (e.g. `{"gmsh": "grid.msh"}`;
+    /// tri3, quad4, tet4 or hex8), with a bin-based point search.
+    #[serde(default)]
+    pub grid_mesh: Option<MeshSpec>,
     /// Where the material points are (MPM domains).
     #[serde(default)]
     pub material_points: Option<BodySpec>,

@@ -15,13 +15,13 @@ use loam_fem::scheme::TimeScheme;
 use loam_fem::slip::Slip;
 use loam_fem::solid_domain::FemDomain;
 use loam_laws::ConstitutiveLaw;
-use loam_mpm::grid::StructuredGrid;
+use loam_mpm::grid::Grid;
 use loam_mpm::material_points::{self, MaterialPoints};
 use loam_mpm::mpm_domain::MpmDomain;
 
 use crate::case::{
-    AnalysisType, BodySpec, Case, CaseError, Component, DomainKind, InitialVelocity, InputTarget, LoadSpec, MassMatrix,
-    MeshSpec, MonitorSpec, RegionSpec,
+    AnalysisType, BodySpec, Case, CaseError, Component, DomainKind, GridSpec, InitialVelocity, InputTarget, LoadSpec,
+    MassMatrix, MeshSpec, MonitorSpec, RegionSpec,
 };
 use crate::monitor::{Monitor, MonitorKind};
 
@@ -161,7 +161,7 @@ fn build_discretisation(
     case: &Case,
     k: usize,
     density: f64,
-) -> Result<(Mesh, Option<(StructuredGrid, MaterialPoints)>), CaseError> {
+) -> Result<(Mesh, Option<(Grid, MaterialPoints)>), CaseError> {
     let d = &case.domains[k];
     let loc = format!("domains[{k}]");
     let dim = case.formulation.dim();
@@ -182,6 +182,9 @@ fn build_discretisation(
             if d.grid.is_some() {
                 return Err(misplaced("grid"));
             }
+            if d.grid_mesh.is_some() {
+                return Err(misplaced("grid_mesh"));
+            }
             if d.material_points.is_some() {
                 return Err(misplaced("material_points"));
             }
@@ -193,40 +196,16 @@ fn build_discretisation(
             if d.mesh.is_some() {
                 return Err(misplaced("mesh"));
             }
-            let g =
-                d.grid.as_ref().ok_or_else(|| CaseError::new(format!("{loc}.grid"), "an mpm domain needs a grid"))?;
-            check_len(&format!("{loc}.grid.origin"), &g.origin, dim)?;
-            check_len(&format!("{loc}.grid.size"), &g.size, dim)?;
-            check_len(&format!("{loc}.grid.cells"), &g.cells, dim)?;
-            for (i, v) in g.size.iter().enumerate() {
-                check_positive(&format!("{loc}.grid.size[{i}]"), *v)?;
-            }
-            if g.cells.contains(&0) {
-                return Err(CaseError::new(format!("{loc}.grid.cells"), "needs at least one cell in each direction"));
-            }
-            if g.element.dim() != dim || g.element == ElementType::Tet4 {
-                return Err(CaseError::new(
-                    format!("{loc}.grid.element"),
-                    format!(
-                        "a structured {} grid takes {}",
-                        case.formulation.name(),
-                        if dim == 2 { "quad4 or tri3" } else { "hex8" }
-                    ),
-                ));
-            }
-            let mut origin = [0.0; 3];
-            let mut size = [1.0; 3];
-            let mut cells = [1; 3];
-            origin[..dim].copy_from_slice(&g.origin);
-            size[..dim].copy_from_slice(&g.size);
-            cells[..dim].copy_from_slice(&g.cells);
-            if case.formulation == Formulation::Axisymmetric && origin[0] < -1e-12 {
-                return Err(CaseError::new(format!("{loc}.grid.origin"), "axisymmetric grids need r = x ≥ 0"));
-            }
-            if g.rotation != 0.0 && dim != 2 {
-                return Err(CaseError::new(format!("{loc}.grid.rotation"), "only 2D grids can be rotated"));
-            }
-            let grid = StructuredGrid::rotated(origin, size, cells, g.element, g.rotation.to_radians());
+            let grid = match (&d.grid, &d.grid_mesh) {
+                (Some(_), Some(_)) => {
+                    return Err(CaseError::new(format!("{loc}.grid_mesh"), "give either grid or grid_mesh, not both"));
+                }
+                (None, None) => {
+                    return Err(CaseError::new(format!("{loc}.grid"), "an mpm domain needs a grid (or a grid_mesh)"));
+                }
+                (Some(g), None) => structured_grid(case, &loc, g)?,
+                (None, Some(spec)) => Grid::unstructured(build_mesh(case, &format!("{loc}.grid_mesh"), spec)?),
+            };
             let body_loc = format!("{loc}.material_points");
             let body = d
                 .material_points
@@ -280,6 +259,43 @@ fn build_discretisation(
             Ok((grid.mesh.clone(), Some((grid, points))))
         }
     }
+}
+
+/// The structured grid of `g` (at JSON path `loc`), checked.
+fn structured_grid(case: &Case, loc: &str, g: &GridSpec) -> Result<Grid, CaseError> {
+    let dim = case.formulation.dim();
+    check_len(&format!("{loc}.grid.origin"), &g.origin, dim)?;
+    check_len(&format!("{loc}.grid.size"), &g.size, dim)?;
+    check_len(&format!("{loc}.grid.cells"), &g.cells, dim)?;
+    for (i, v) in g.size.iter().enumerate() {
+        check_positive(&format!("{loc}.grid.size[{i}]"), *v)?;
+    }
+    if g.cells.contains(&0) {
+        return Err(CaseError::new(format!("{loc}.grid.cells"), "needs at least one cell in each direction"));
+    }
+    if g.element.dim() != dim || g.element == ElementType::Tet4 {
+        return Err(CaseError::new(
+            format!("{loc}.grid.element"),
+            format!(
+                "a structured {} grid takes {}",
+                case.formulation.name(),
+                if dim == 2 { "quad4 or tri3" } else { "hex8" }
+            ),
+        ));
+    }
+    let mut origin = [0.0; 3];
+    let mut size = [1.0; 3];
+    let mut cells = [1; 3];
+    origin[..dim].copy_from_slice(&g.origin);
+    size[..dim].copy_from_slice(&g.size);
+    cells[..dim].copy_from_slice(&g.cells);
+    if case.formulation == Formulation::Axisymmetric && origin[0] < -1e-12 {
+        return Err(CaseError::new(format!("{loc}.grid.origin"), "axisymmetric grids need r = x ≥ 0"));
+    }
+    if g.rotation != 0.0 && dim != 2 {
+        return Err(CaseError::new(format!("{loc}.grid.rotation"), "only 2D grids can be rotated"));
+    }
+    Ok(Grid::rotated(origin, size, cells, g.element, g.rotation.to_radians()))
 }
 
 /// Area-weighted mean outward normal of the boundary facets of all domains whose nodes all

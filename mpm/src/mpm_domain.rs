@@ -13,7 +13,7 @@ use loam_laws::ConstitutiveLaw;
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 
-use crate::grid::StructuredGrid;
+use crate::grid::Grid;
 use crate::material_points::MaterialPoints;
 
 /// Material points of one material on a structured background grid.
@@ -21,7 +21,7 @@ pub struct MpmDomain {
     name: String,
     formulation: Formulation,
     thickness: f64,
-    grid: StructuredGrid,
+    grid: Grid,
     node_ids: Vec<usize>,
     law: Arc<dyn ConstitutiveLaw>,
     /// The material points (sorted by cell during a step).
@@ -62,7 +62,7 @@ impl MpmDomain {
     /// A domain with `points` on `grid`, whose local node `a` is global node `node_ids[a]`.
     pub fn new(
         name: &str,
-        grid: StructuredGrid,
+        grid: Grid,
         node_ids: Vec<usize>,
         formulation: Formulation,
         thickness: f64,
@@ -105,7 +105,7 @@ impl MpmDomain {
     }
 
     /// The background grid.
-    pub fn grid(&self) -> &StructuredGrid {
+    pub fn grid(&self) -> &Grid {
         &self.grid
     }
 
