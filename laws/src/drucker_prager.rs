@@ -26,9 +26,9 @@ use serde::Deserialize;
 use crate::dual::{Dual, Real};
 use crate::multiplicative::{
     self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel, PrincipalResponse,
-    CP_INV_LEN, PLASTIC_OUTPUT,
+    PLASTIC_OUTPUT,
 };
-use crate::{ConstitutiveLaw, Kinematics, LawError, StressResponse};
+use crate::LawError;
 
 /// How the Drucker–Prager cone is matched to the Mohr–Coulomb pyramid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -181,53 +181,13 @@ impl PrincipalModel for DruckerPrager {
     }
 }
 
-impl ConstitutiveLaw for DruckerPrager {
-    fn name(&self) -> &'static str {
-        "drucker_prager"
-    }
-
-    fn density(&self) -> f64 {
-        self.density
-    }
-
-    fn state_len(&self) -> usize {
-        CP_INV_LEN + 3
-    }
-
-    fn initialise_state(&self, state: &mut [f64]) {
-        multiplicative::initialise(self, state);
-    }
-
-    fn initialise_state_at_stress(&self, stress: &Matrix3<f64>, state: &mut [f64]) -> Result<(), LawError> {
-        multiplicative::initialise_at_stress(self, stress, state)
-    }
-
-    fn state_variables(&self) -> &'static [&'static str] {
-        &PLASTIC_OUTPUT
-    }
-
-    fn state_output(&self, state: &[f64], out: &mut [f64]) {
-        out[..3].copy_from_slice(&state[CP_INV_LEN..CP_INV_LEN + 3]);
-    }
-
-    fn update(
-        &self,
-        kinematics: &Kinematics,
-        committed: &[f64],
-        trial: &mut [f64],
-    ) -> Result<StressResponse, LawError> {
-        multiplicative::update(self, kinematics, committed, trial)
-    }
-
-    fn elastic_lame(&self) -> (f64, f64) {
-        (self.lambda, self.mu)
-    }
-}
+multiplicative::impl_principal_law!(impl[] DruckerPrager, name: "drucker_prager", outputs: &PLASTIC_OUTPUT, lame: |law| (law.lambda, law.mu));
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::tensor::tangent_relative_error;
+    use crate::{ConstitutiveLaw, Kinematics};
 
     #[test]
     fn tangent_on_cone_and_apex() {

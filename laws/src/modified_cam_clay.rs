@@ -39,8 +39,8 @@
 use nalgebra::{Matrix2, Matrix3};
 
 use crate::dual::{Dual, Real};
-use crate::multiplicative::{self, accumulate_plastic_strain, PrincipalModel, PrincipalResponse, CP_INV_LEN};
-use crate::{ConstitutiveLaw, Kinematics, LawError, StressResponse};
+use crate::multiplicative::{self, accumulate_plastic_strain, PrincipalModel, PrincipalResponse};
+use crate::LawError;
 
 /// Names of the MCC state variables, in slot order.
 pub const MCC_OUTPUT: [&str; 4] = [
@@ -242,58 +242,21 @@ impl PrincipalModel for ModifiedCamClay {
     }
 }
 
-impl ConstitutiveLaw for ModifiedCamClay {
-    fn name(&self) -> &'static str {
-        "modified_cam_clay"
-    }
-
-    fn density(&self) -> f64 {
-        self.density
-    }
-
-    fn state_len(&self) -> usize {
-        CP_INV_LEN + 4
-    }
-
-    fn initialise_state(&self, state: &mut [f64]) {
-        multiplicative::initialise(self, state);
-    }
-
-    /// Starts at rest under `stress`; the preconsolidation pressure stays `p′c` and the
-    /// stress must lie inside `f ≤ 0`. The reference pressure `p_r = p′c/OCR` is unchanged.
-    fn initialise_state_at_stress(&self, stress: &Matrix3<f64>, state: &mut [f64]) -> Result<(), LawError> {
-        multiplicative::initialise_at_stress(self, stress, state)
-    }
-
-    fn state_variables(&self) -> &'static [&'static str] {
-        &MCC_OUTPUT
-    }
-
-    fn state_output(&self, state: &[f64], out: &mut [f64]) {
-        out[..4].copy_from_slice(&state[CP_INV_LEN..CP_INV_LEN + 4]);
-    }
-
-    fn update(
-        &self,
-        kinematics: &Kinematics,
-        committed: &[f64],
-        trial: &mut [f64],
-    ) -> Result<StressResponse, LawError> {
-        multiplicative::update(self, kinematics, committed, trial)
-    }
-
-    /// At the reference state: `K = p_r/κ̂`, `G = μ₀ + α p_r`, `λ = K − 2G/3`.
-    fn elastic_lame(&self) -> (f64, f64) {
-        let pr = self.reference_pressure();
-        let g = self.initial_shear_modulus + self.alpha_shear * pr;
-        (pr / self.swelling_slope - 2.0 * g / 3.0, g)
-    }
-}
+// Starts at rest under a given stress (`initialise_state_at_stress`): the preconsolidation
+// pressure stays `p′c`, the stress must lie inside `f ≤ 0`, the reference pressure
+// `p_r = p′c/OCR` is unchanged. Elastic constants at the reference state: `K = p_r/κ̂`,
+// `G = μ₀ + α p_r`, `λ = K − 2G/3`.
+multiplicative::impl_principal_law!(impl[] ModifiedCamClay, name: "modified_cam_clay", outputs: &MCC_OUTPUT, lame: |law| {
+    let pr = law.reference_pressure();
+    let g = law.initial_shear_modulus + law.alpha_shear * pr;
+    (pr / law.swelling_slope - 2.0 * g / 3.0, g)
+});
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::tensor::tangent_relative_error;
+    use crate::{ConstitutiveLaw, Kinematics};
 
     pub(crate) fn clay(ocr: f64) -> ModifiedCamClay {
         ModifiedCamClay {

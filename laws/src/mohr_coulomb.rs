@@ -34,9 +34,9 @@ use nalgebra::Matrix3;
 use crate::dual::{Dual, Real};
 use crate::multiplicative::{
     self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel, PrincipalResponse,
-    CP_INV_LEN, PLASTIC_OUTPUT,
+    PLASTIC_OUTPUT,
 };
-use crate::{ConstitutiveLaw, Kinematics, LawError, StressResponse};
+use crate::LawError;
 
 /// Mohr–Coulomb strength at a given accumulated plastic deviatoric strain.
 #[derive(Debug, Clone, Copy)]
@@ -299,53 +299,14 @@ impl<S: StrengthEvolution> PrincipalModel for MohrCoulombLaw<S> {
     }
 }
 
-impl<S: StrengthEvolution> ConstitutiveLaw for MohrCoulombLaw<S> {
-    fn name(&self) -> &'static str {
-        S::NAME
-    }
-
-    fn density(&self) -> f64 {
-        self.density
-    }
-
-    fn state_len(&self) -> usize {
-        CP_INV_LEN + 3
-    }
-
-    fn initialise_state(&self, state: &mut [f64]) {
-        multiplicative::initialise(self, state);
-    }
-
-    fn initialise_state_at_stress(&self, stress: &Matrix3<f64>, state: &mut [f64]) -> Result<(), LawError> {
-        multiplicative::initialise_at_stress(self, stress, state)
-    }
-
-    fn state_variables(&self) -> &'static [&'static str] {
-        &PLASTIC_OUTPUT
-    }
-
-    fn state_output(&self, state: &[f64], out: &mut [f64]) {
-        out[..3].copy_from_slice(&state[CP_INV_LEN..CP_INV_LEN + 3]);
-    }
-
-    fn update(
-        &self,
-        kinematics: &Kinematics,
-        committed: &[f64],
-        trial: &mut [f64],
-    ) -> Result<StressResponse, LawError> {
-        multiplicative::update(self, kinematics, committed, trial)
-    }
-
-    fn elastic_lame(&self) -> (f64, f64) {
-        (self.lambda, self.mu)
-    }
-}
+multiplicative::impl_principal_law!(impl[S: StrengthEvolution] MohrCoulombLaw<S>, name: S::NAME, outputs: &PLASTIC_OUTPUT, lame: |law| (law.lambda, law.mu));
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::multiplicative::CP_INV_LEN;
     use crate::tensor::tangent_relative_error;
+    use crate::{ConstitutiveLaw, Kinematics};
 
     fn law() -> MohrCoulomb {
         MohrCoulomb::new(2000.0, 5.0e7, 0.3, 25f64.to_radians(), 5.0e3, 5f64.to_radians())

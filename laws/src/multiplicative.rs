@@ -234,3 +234,61 @@ pub fn hencky_strain<T: crate::dual::Real>(lambda: f64, mu: f64, tau: [T; 3]) ->
 pub fn hencky_matrix(lambda: f64, mu: f64) -> Matrix3<f64> {
     Matrix3::from_element(lambda) + Matrix3::identity() * (2.0 * mu)
 }
+
+/// Implements [`crate::ConstitutiveLaw`] for a [`PrincipalModel`]: every elasto-plastic law
+/// of this crate is the same Simo (1992) frame around its own principal-space return, so the
+/// trait methods only delegate. `name`, `outputs` (the state-variable names, one per internal
+/// variable) and `lame` (`|law| (λ, μ)` at the reference state) are what differs.
+macro_rules! impl_principal_law {
+    (impl[$($generics:tt)*] $ty:ty, name: $name:expr, outputs: $outputs:expr, lame: |$law:ident| $lame:expr) => {
+        impl<$($generics)*> $crate::ConstitutiveLaw for $ty {
+            fn name(&self) -> &'static str {
+                $name
+            }
+
+            fn density(&self) -> f64 {
+                self.density
+            }
+
+            fn state_len(&self) -> usize {
+                $crate::multiplicative::CP_INV_LEN + $crate::multiplicative::PrincipalModel::internal_len(self)
+            }
+
+            fn initialise_state(&self, state: &mut [f64]) {
+                $crate::multiplicative::initialise(self, state);
+            }
+
+            fn initialise_state_at_stress(
+                &self,
+                stress: &nalgebra::Matrix3<f64>,
+                state: &mut [f64],
+            ) -> Result<(), $crate::LawError> {
+                $crate::multiplicative::initialise_at_stress(self, stress, state)
+            }
+
+            fn state_variables(&self) -> &'static [&'static str] {
+                $outputs
+            }
+
+            fn state_output(&self, state: &[f64], out: &mut [f64]) {
+                let (start, n) = ($crate::multiplicative::CP_INV_LEN, $outputs.len());
+                out[..n].copy_from_slice(&state[start..start + n]);
+            }
+
+            fn update(
+                &self,
+                kinematics: &$crate::Kinematics,
+                committed: &[f64],
+                trial: &mut [f64],
+            ) -> Result<$crate::StressResponse, $crate::LawError> {
+                $crate::multiplicative::update(self, kinematics, committed, trial)
+            }
+
+            fn elastic_lame(&self) -> (f64, f64) {
+                let $law = self;
+                $lame
+            }
+        }
+    };
+}
+pub(crate) use impl_principal_law;
