@@ -52,6 +52,14 @@ pub struct NewtonSettings {
     pub convergence_criterion: ConvergenceCriterion,
     /// Direct solver (default `auto`: Cholesky if symmetric, else LU).
     pub linear_solver: LinearSolverKind,
+    /// Backtracking line search (default off): when an iteration raises the residual norm
+    /// above the previous one, the Newton correction is halved, up to
+    /// `line_search_max_cuts` times, until the residual falls (Armijo-type backtracking on
+    /// `‖R‖`, e.g. Wriggers, *Nonlinear Finite Element Methods*, §5.1.3). Cures the
+    /// two-state cycling of non-smooth returns (Mohr–Coulomb edges and apex).
+    pub line_search: bool,
+    /// Halvings tried per iteration by the line search (default 4).
+    pub line_search_max_cuts: u32,
 }
 
 impl Default for NewtonSettings {
@@ -64,6 +72,8 @@ impl Default for NewtonSettings {
             displacement_absolute_tolerance: 1e-12,
             convergence_criterion: ConvergenceCriterion::And,
             linear_solver: LinearSolverKind::Auto,
+            line_search: false,
+            line_search_max_cuts: 4,
         }
     }
 }
@@ -494,6 +504,9 @@ impl Model {
                         || last_du <= settings.displacement_relative_tolerance * du_norm);
                 let mut with_tangent = !disp_ok;
                 let mut first_pass = true;
+                // fraction of the last correction `ws.delta` currently applied
+                let mut step_length = 1.0;
+                let mut backtracks = 0;
                 loop {
                     let t = Instant::now();
                     let input = AssemblyInput {
@@ -521,8 +534,30 @@ impl Model {
                     if !first_pass {
                         break;
                     }
+                    let r_prev = report.residuals.last().copied().unwrap_or(f64::INFINITY);
+                    if settings.line_search
+                        && it > 1
+                        && backtracks < settings.line_search_max_cuts
+                        && !(r_norm < r_prev)
+                    {
+                        // take back half of the applied part of the correction
+                        let shorter = 0.5 * step_length;
+                        let back = step_length - shorter;
+                        for ((u, du), d) in self.state.u.iter_mut().zip(du_step.iter_mut()).zip(&ws.delta) {
+                            *u -= back * d;
+                            *du -= back * d;
+                        }
+                        last_du *= shorter / step_length;
+                        step_length = shorter;
+                        backtracks += 1;
+                        self.update_kinematics(dt);
+                        continue;
+                    }
                     first_pass = false;
                     report.residuals.push(r_norm);
+                    if trace_newton() {
+                        eprintln!("newton t={t_new:.6e} dt={dt:.3e} it={it} |r|={r_norm:.3e} |du|={last_du:.3e} |Du|={du_norm:.3e} backtracks={backtracks}");
+                    }
                     if it == 0 {
                         r0 = r_norm;
                     }
@@ -620,4 +655,10 @@ impl Model {
     pub fn strain_energy(&self) -> f64 {
         self.domains.iter().map(|d| d.strain_energy()).sum()
     }
+}
+
+/// Whether `LOAM_NEWTON_TRACE` asks for every Newton iteration's norms on stderr.
+fn trace_newton() -> bool {
+    static TRACE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *TRACE.get_or_init(|| std::env::var_os("LOAM_NEWTON_TRACE").is_some())
 }
