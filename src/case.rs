@@ -116,6 +116,14 @@ pub struct DomainSpec {
     /// Initial velocity of the domain's nodes (FEM) or material points (MPM).
     #[serde(default)]
     pub initial_velocity: Option<InitialVelocity>,
+    /// Share θ ∈ [0, 1] of the grid (PIC) velocity in the material points' velocity update
+    /// (MPM domains; default 0: the Newmark FLIP-type update). A few per cent damp the
+    /// velocity noise of granular bodies coming to rest.
+    #[serde(default)]
+    pub pic_fraction: f64,
+    /// Initial stress of the material points (MPM domains), e.g. a geostatic `K0` state.
+    #[serde(default)]
+    pub initial_stress: Option<InitialStressSpec>,
     /// Material name (a key of `materials`).
     pub material: String,
     /// `consistent` (default) or `lumped` mass matrix.
@@ -348,6 +356,25 @@ pub enum LoadSpec {
         #[serde(default)]
         amplitude: Amplitude,
     },
+    /// A force (N) on material points, carried with them as the body moves (particle
+    /// Neumann condition): the point nearest to `point`, or every point inside `box`, at the
+    /// start; each adds `N_I(x_p) force` to the grid nodes of its cell at every step.
+    MaterialPointForce {
+        /// MPM domain whose points carry the force (default: any MPM domain).
+        #[serde(default)]
+        domain: Option<String>,
+        /// Location (m); give `point` or `box`.
+        #[serde(default)]
+        point: Option<Vec<f64>>,
+        /// Box (m) whose material points each carry `force`; give `point` or `box`.
+        #[serde(default, rename = "box")]
+        within: Option<PointBox>,
+        /// Force per material point in N, one entry per component.
+        force: Vec<f64>,
+        /// Time function (evaluated at the end of each step).
+        #[serde(default)]
+        amplitude: Amplitude,
+    },
     /// Traction vector (Pa) on the boundary facets of the region.
     Traction {
         /// Optional name, by which an FMU input can drive it.
@@ -370,6 +397,7 @@ impl LoadSpec {
             LoadSpec::NodalForce { name, .. } | LoadSpec::Pressure { name, .. } | LoadSpec::Traction { name, .. } => {
                 name.as_deref()
             }
+            LoadSpec::MaterialPointForce { .. } => None,
         }
     }
 }
@@ -414,10 +442,84 @@ pub struct AnalysisSpec {
     /// How many times a failed step is halved before the run stops (default 4).
     #[serde(default = "default_cuts")]
     pub max_step_cuts: u32,
+    /// Adaptive step control: `time_step` is the first step, later steps grow or shrink
+    /// with the Newton effort (absent: every step is `time_step`, cut only on failure).
+    #[serde(default)]
+    pub adaptive: Option<AdaptiveSpec>,
+    /// End the run before `end_time` once the bodies are at rest.
+    #[serde(default)]
+    pub stop_at_rest: Option<RestSpec>,
 }
 
 fn default_cuts() -> u32 {
     4
+}
+
+/// Initial stress of an MPM body (`domains[k].initial_stress`).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+pub enum InitialStressSpec {
+    /// Geostatic state under the case's gravity (along −y in 2D, −z in 3D): vertical stress
+    /// `σ_v = −ρ g (surface − y)` below the free surface at height `surface`, horizontal
+    /// stresses `K0 σ_v` (tension positive). `K0 = 1 − sin φ` (Jaky) is the usual choice for
+    /// normally consolidated soil.
+    Geostatic {
+        /// Height of the free surface (m).
+        surface: f64,
+        /// Coefficient of lateral earth pressure at rest.
+        k0: f64,
+    },
+}
+
+/// Adaptive step control (`analysis.adaptive`): after a converged step with `k` Newton
+/// iterations the next step is `Δt · clamp(√(target_iterations / k), 1/2, growth)`, limited
+/// to `[min_time_step, max_time_step]`; a failed step is halved down to `min_time_step`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AdaptiveSpec {
+    /// Smallest step in s (a step failing at it stops the run).
+    pub min_time_step: f64,
+    /// Largest step in s.
+    pub max_time_step: f64,
+    /// Newton iterations per step aimed at (default 6).
+    #[serde(default = "default_target_iterations")]
+    pub target_iterations: usize,
+    /// Largest growth factor from one step to the next (default 1.5).
+    #[serde(default = "default_growth")]
+    pub growth: f64,
+}
+
+fn default_target_iterations() -> usize {
+    6
+}
+
+fn default_growth() -> f64 {
+    1.5
+}
+
+/// When a run may end early at rest (`analysis.stop_at_rest`): after `min_time`, once the
+/// total kinetic energy has stayed below `kinetic_energy_ratio` × its peak for `duration`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RestSpec {
+    /// Kinetic energy relative to the run's peak below which the bodies count as at rest
+    /// (default 1e-3).
+    #[serde(default = "default_rest_ratio")]
+    pub kinetic_energy_ratio: f64,
+    /// How long (s) the kinetic energy must stay below the threshold (default 0.05).
+    #[serde(default = "default_rest_duration")]
+    pub duration: f64,
+    /// No early end before this time (s, default 0).
+    #[serde(default)]
+    pub min_time: f64,
+}
+
+fn default_rest_ratio() -> f64 {
+    1e-3
+}
+
+fn default_rest_duration() -> f64 {
+    0.05
 }
 
 /// Output settings.
@@ -428,11 +530,17 @@ pub struct OutputSpec {
     pub interval: usize,
     /// Whether to write VTK files at all (default true).
     pub vtk: bool,
+    /// Instead of `interval`: write VTK whenever the time passes a multiple of this (s);
+    /// the natural choice with adaptive steps.
+    pub time_interval: Option<f64>,
+    /// Also write the MPM background grids (`<domain>_grid.pvd`) with nodal mass,
+    /// displacement increment, velocity, acceleration and active flag (default false).
+    pub grid: bool,
 }
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        Self { interval: 1, vtk: true }
+        Self { interval: 1, vtk: true, time_interval: None, grid: false }
     }
 }
 
@@ -448,6 +556,38 @@ pub enum Component {
     Z,
     /// Euclidean norm.
     Magnitude,
+}
+
+/// A component of a symmetric tensor, or an invariant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TensorComponent {
+    /// σ_xx (σ_rr in axisymmetry).
+    Xx,
+    /// σ_yy (σ_zz in axisymmetry).
+    Yy,
+    /// σ_zz (out of plane; σ_θθ in axisymmetry).
+    Zz,
+    /// σ_xy.
+    Xy,
+    /// σ_yz.
+    Yz,
+    /// σ_xz.
+    Xz,
+    /// Mean stress tr σ / 3 (tension positive).
+    Mean,
+    /// Von Mises stress √(3/2 s:s).
+    VonMises,
+}
+
+/// An axis-aligned box of material points (bounds included).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointBox {
+    /// Lower corner (m), one entry per coordinate.
+    pub min: Vec<f64>,
+    /// Upper corner (m), one entry per coordinate.
+    pub max: Vec<f64>,
 }
 
 /// A named scalar time history.
@@ -508,6 +648,47 @@ pub enum MonitorSpec {
         /// Component.
         component: Component,
     },
+    /// A Cauchy stress component (Pa, tension positive) of the material point nearest to
+    /// `point` at the start, or the mean over the material points inside `box` at the start.
+    MaterialPointStress {
+        /// Column name.
+        name: String,
+        /// Location (m); give `point` or `box`.
+        #[serde(default)]
+        point: Option<Vec<f64>>,
+        /// Box (m) whose material points are averaged; give `point` or `box`.
+        #[serde(default, rename = "box")]
+        within: Option<PointBox>,
+        /// Component.
+        component: TensorComponent,
+    },
+    /// Runout of material points (m) from a wall at `x = wall` towards `+x`: where the free
+    /// surface (top envelope of the points' squares) falls below `threshold` above the
+    /// base line `y = base` (plane problems; Bui et al. 2008 use 2 mm).
+    Runout {
+        /// Column name.
+        name: String,
+        /// x of the wall (m, default 0).
+        #[serde(default)]
+        wall: f64,
+        /// y of the base (m, default 0).
+        #[serde(default)]
+        base: f64,
+        /// Surface height below which the body has ended (m, default 0.002).
+        #[serde(default = "default_runout_threshold")]
+        threshold: f64,
+    },
+    /// Height (m) of the material points' free surface above the base line `y = base` at
+    /// abscissa `x` (plane problems), e.g. the height at a wall.
+    SurfaceHeight {
+        /// Column name.
+        name: String,
+        /// Abscissa (m).
+        x: f64,
+        /// y of the base (m, default 0).
+        #[serde(default)]
+        base: f64,
+    },
     /// Total kinetic energy (J).
     KineticEnergy {
         /// Column name.
@@ -530,10 +711,17 @@ impl MonitorSpec {
             | MonitorSpec::Reaction { name, .. }
             | MonitorSpec::MaterialPointDisplacement { name, .. }
             | MonitorSpec::MaterialPointVelocity { name, .. }
+            | MonitorSpec::MaterialPointStress { name, .. }
+            | MonitorSpec::Runout { name, .. }
+            | MonitorSpec::SurfaceHeight { name, .. }
             | MonitorSpec::KineticEnergy { name }
             | MonitorSpec::StrainEnergy { name } => name,
         }
     }
+}
+
+fn default_runout_threshold() -> f64 {
+    0.002
 }
 
 /// The variables a case exposes as an FMU (FMI 3.0 co-simulation), and the named inputs

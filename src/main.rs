@@ -105,8 +105,9 @@ fn main() -> ExitCode {
                     match end {
                         RunEnd::Finished => {
                             println!(
-                                "loam: finished t = {:.6e} s: {summary}; results in {}",
+                                "loam: finished t = {:.6e} s{}: {summary}; results in {}",
                                 sim.time(),
+                                if sim.at_rest { " (at rest)" } else { "" },
                                 out.display()
                             );
                             ExitCode::SUCCESS

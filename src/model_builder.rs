@@ -5,7 +5,7 @@
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
-use loam_fem::domain::PointQuantity;
+use loam_fem::domain::{PointLoad, PointQuantity, PointTensor};
 use loam_fem::element::ElementType;
 use loam_fem::formulation::Formulation;
 use loam_fem::loads::{facet_forces, SurfaceLoad};
@@ -20,10 +20,11 @@ use loam_mpm::material_points::{self, MaterialPoints};
 use loam_mpm::mpm_domain::MpmDomain;
 
 use crate::case::{
-    AnalysisType, BodySpec, Case, CaseError, Component, DomainKind, GridSpec, InitialVelocity, InputTarget, LoadSpec,
-    MassMatrix, MeshSpec, MonitorSpec, RegionSpec,
+    AnalysisType, BodySpec, Case, CaseError, Component, DomainKind, GridSpec, InitialStressSpec, InitialVelocity,
+    InputTarget, LoadSpec, MassMatrix, MeshSpec, MonitorSpec, PointBox, RegionSpec,
 };
 use crate::monitor::{Monitor, MonitorKind};
+use nalgebra::Matrix3;
 
 /// A model ready to run, with the monitors resolved to nodes and regions.
 pub struct BuiltModel {
@@ -187,6 +188,12 @@ fn build_discretisation(
             }
             if d.material_points.is_some() {
                 return Err(misplaced("material_points"));
+            }
+            if d.initial_stress.is_some() {
+                return Err(misplaced("initial_stress"));
+            }
+            if d.pic_fraction != 0.0 {
+                return Err(misplaced("pic_fraction"));
             }
             let spec =
                 d.mesh.as_ref().ok_or_else(|| CaseError::new(format!("{loc}.mesh"), "an fem domain needs a mesh"))?;
@@ -424,6 +431,57 @@ fn select_region(
     Ok(nodes)
 }
 
+/// Material points (domain index, id) selected at `loc` by `point` (the nearest one) or
+/// `box` (every one inside), in domain `domain` or in any domain; an empty selection is an
+/// error.
+fn select_points(
+    model: &Model,
+    loc: &str,
+    dim: usize,
+    domain: Option<usize>,
+    point: Option<&[f64]>,
+    within: Option<&PointBox>,
+) -> Result<Vec<(usize, usize)>, CaseError> {
+    let candidates = |k: &usize| domain.is_none_or(|d| d == *k);
+    let selected: Vec<(usize, usize)> = match (point, within) {
+        (Some(p), None) => {
+            check_len(&format!("{loc}.point"), p, dim)?;
+            model
+                .domains
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| candidates(k))
+                .filter_map(|(k, d)| d.nearest_point(p).map(|(id, dist)| (k, id, dist)))
+                .min_by(|a, b| a.2.total_cmp(&b.2))
+                .map(|(k, id, _)| vec![(k, id)])
+                .unwrap_or_default()
+        }
+        (None, Some(b)) => {
+            check_len(&format!("{loc}.box.min"), &b.min, dim)?;
+            check_len(&format!("{loc}.box.max"), &b.max, dim)?;
+            model
+                .domains
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| candidates(k))
+                .flat_map(|(k, d)| d.points_in_box(&b.min, &b.max).into_iter().map(move |id| (k, id)))
+                .collect()
+        }
+        _ => return Err(CaseError::new(loc, "give either point or box")),
+    };
+    if selected.is_empty() {
+        let place = match domain {
+            Some(d) => format!("domain '{}'", model.domains[d].name()),
+            None => "the model".into(),
+        };
+        return Err(CaseError::new(
+            format!("{loc}.{}", if point.is_some() { "point" } else { "box" }),
+            format!("selects no material point ({place} has none there)"),
+        ));
+    }
+    Ok(selected)
+}
+
 /// Index of the node nearest to `p` (first `p.len()` coordinates).
 pub fn nearest_node(coords: &[[f64; 3]], p: &[f64]) -> Option<usize> {
     let dist = |c: &[f64; 3]| p.iter().enumerate().map(|(d, v)| (c[d] - v).powi(2)).sum::<f64>();
@@ -441,6 +499,34 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     }
     check_positive("solver.residual_relative_tolerance", case.solver.residual_relative_tolerance)?;
     check_positive("solver.residual_absolute_tolerance", case.solver.residual_absolute_tolerance)?;
+    if let Some(a) = &case.analysis.adaptive {
+        check_positive("analysis.adaptive.min_time_step", a.min_time_step)?;
+        check_positive("analysis.adaptive.max_time_step", a.max_time_step)?;
+        if a.min_time_step > case.analysis.time_step || a.max_time_step < case.analysis.time_step {
+            return Err(CaseError::new(
+                "analysis.adaptive",
+                format!(
+                    "time_step {} must lie in [min_time_step, max_time_step] = [{}, {}]",
+                    case.analysis.time_step, a.min_time_step, a.max_time_step
+                ),
+            ));
+        }
+        if a.target_iterations == 0 {
+            return Err(CaseError::new("analysis.adaptive.target_iterations", "must be at least 1"));
+        }
+        if !(a.growth >= 1.0 && a.growth.is_finite()) {
+            return Err(CaseError::new("analysis.adaptive.growth", format!("must be ≥ 1, got {}", a.growth)));
+        }
+    }
+    if let Some(r) = &case.analysis.stop_at_rest {
+        check_positive("analysis.stop_at_rest.kinetic_energy_ratio", r.kinetic_energy_ratio)?;
+        if !(r.duration >= 0.0 && r.min_time >= 0.0) {
+            return Err(CaseError::new("analysis.stop_at_rest", "duration and min_time must be ≥ 0"));
+        }
+    }
+    if let Some(t) = case.output.time_interval {
+        check_positive("output.time_interval", t)?;
+    }
     if case.solver.max_iterations == 0 {
         return Err(CaseError::new("solver.max_iterations", "must be at least 1"));
     }
@@ -512,15 +598,38 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
                     *v = v0.at(x, dim);
                 }
             }
-            model.domains.push(Box::new(MpmDomain::new(
-                &d.name,
-                grid,
-                id,
-                case.formulation,
-                case.thickness,
-                law,
-                points,
-            )));
+            let density = law.density();
+            let mut domain = MpmDomain::new(&d.name, grid, id, case.formulation, case.thickness, law, points);
+            if !(0.0..=1.0).contains(&d.pic_fraction) {
+                return Err(CaseError::new(
+                    format!("domains[{k}].pic_fraction"),
+                    format!("must lie in [0, 1], got {}", d.pic_fraction),
+                ));
+            }
+            domain.set_pic_fraction(d.pic_fraction);
+            if let Some(InitialStressSpec::Geostatic { surface, k0 }) = d.initial_stress {
+                let loc = format!("domains[{k}].initial_stress.geostatic");
+                if !(k0 >= 0.0 && k0.is_finite()) {
+                    return Err(CaseError::new(format!("{loc}.k0"), format!("must be ≥ 0, got {k0}")));
+                }
+                let g = case.gravity.as_ref().map_or(0.0, |g| g.acceleration.get(dim - 1).copied().unwrap_or(0.0));
+                if g >= 0.0 {
+                    return Err(CaseError::new(
+                        &loc,
+                        "a geostatic stress needs gravity pointing down (negative last component)",
+                    ));
+                }
+                let vertical = dim - 1;
+                domain
+                    .set_initial_stress(|x| {
+                        let sigma_v = density * g * (surface - x[vertical]).max(0.0);
+                        let mut s = Matrix3::from_diagonal_element(k0 * sigma_v);
+                        s[(vertical, vertical)] = sigma_v;
+                        s
+                    })
+                    .map_err(|(p, e)| CaseError::new(&loc, format!("material point {p}: {e}")))?;
+            }
+            model.domains.push(Box::new(domain));
             continue;
         }
         if let Some(v0) = &d.initial_velocity {
@@ -614,10 +723,32 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     let mut load_of_load = Vec::with_capacity(case.loads.len());
     for (k, l) in case.loads.iter().enumerate() {
         let loc = format!("loads[{k}]");
+        if let LoadSpec::MaterialPointForce { domain, point, within, force, amplitude } = l {
+            amplitude.check().map_err(|m| CaseError::new(format!("{loc}.amplitude"), m))?;
+            check_len(&format!("{loc}.force"), force, dim)?;
+            let domain = match domain {
+                Some(name) => Some(model.domains.iter().position(|d| d.name() == name).ok_or_else(|| {
+                    CaseError::new(format!("{loc}.domain"), format!("no domain named '{name}' in domains"))
+                })?),
+                None => None,
+            };
+            let points = select_points(&model, &loc, dim, domain, point.as_deref(), within.as_ref())?;
+            let mut f = [0.0; 3];
+            f[..dim].copy_from_slice(force);
+            let mut domains: Vec<usize> = points.iter().map(|p| p.0).collect();
+            domains.dedup();
+            for d in domains {
+                let ids = points.iter().filter(|p| p.0 == d).map(|p| p.1).collect();
+                model.domains[d].add_point_load(PointLoad { ids, force: f, amplitude: amplitude.clone() });
+            }
+            load_of_load.push(usize::MAX); // not a model load; cannot be named (no FMU input)
+            continue;
+        }
         let (region_name, amplitude) = match l {
             LoadSpec::NodalForce { region, amplitude, .. }
             | LoadSpec::Pressure { region, amplitude, .. }
             | LoadSpec::Traction { region, amplitude, .. } => (region, amplitude),
+            LoadSpec::MaterialPointForce { .. } => unreachable!("handled above"),
         };
         amplitude.check().map_err(|m| CaseError::new(format!("{loc}.amplitude"), m))?;
         let nodes = region(format!("{loc}.region"), region_name)?;
@@ -637,6 +768,7 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
                 t[..dim].copy_from_slice(traction);
                 Some(SurfaceLoad::Traction(t))
             }
+            LoadSpec::MaterialPointForce { .. } => unreachable!("handled above"),
         };
         if let Some(load) = surface {
             let in_region: std::collections::HashSet<usize> = nodes.iter().copied().collect();
@@ -717,6 +849,20 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
                     component: component_index(&format!("{loc}.component"), *component, dim)?,
                 }
             }
+            MonitorSpec::Runout { wall, base, threshold, .. } => {
+                check_surface_monitor(&loc, &model, dim)?;
+                check_positive(&format!("{loc}.threshold"), *threshold)?;
+                MonitorKind::Runout { wall: *wall, base: *base, threshold: *threshold }
+            }
+            MonitorSpec::SurfaceHeight { x, base, .. } => {
+                check_surface_monitor(&loc, &model, dim)?;
+                MonitorKind::SurfaceHeight { x: *x, base: *base }
+            }
+            MonitorSpec::MaterialPointStress { point, within, component, .. } => MonitorKind::MaterialPointTensor {
+                points: select_points(&model, &loc, dim, None, point.as_deref(), within.as_ref())?,
+                quantity: PointTensor::CauchyStress,
+                component: *component,
+            },
             MonitorSpec::KineticEnergy { .. } => MonitorKind::KineticEnergy,
             MonitorSpec::StrainEnergy { .. } => MonitorKind::StrainEnergy,
         };
@@ -726,6 +872,17 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     Ok(BuiltModel { model, monitors, regions, inputs, outputs })
 }
 
+/// Surface monitors need material points in a plane problem.
+fn check_surface_monitor(loc: &str, model: &Model, dim: usize) -> Result<(), CaseError> {
+    if dim != 2 {
+        return Err(CaseError::new(format!("{loc}.type"), "surface monitors need a plane (2D) problem"));
+    }
+    if model.domains.iter().all(|d| d.point_extents().is_empty()) {
+        return Err(CaseError::new(format!("{loc}.type"), "the model has no material points"));
+    }
+    Ok(())
+}
+
 /// SI unit of a monitor's value.
 pub fn monitor_unit(kind: &MonitorKind) -> &'static str {
     match kind {
@@ -733,10 +890,15 @@ pub fn monitor_unit(kind: &MonitorKind) -> &'static str {
         MonitorKind::Velocity { .. } => "m/s",
         MonitorKind::Acceleration { .. } => "m/s2",
         MonitorKind::Reaction { .. } => "N",
+        MonitorKind::Runout { .. } | MonitorKind::SurfaceHeight { .. } => "m",
         MonitorKind::MaterialPoint { quantity, .. } => match quantity {
             PointQuantity::Position | PointQuantity::Displacement => "m",
             PointQuantity::Velocity => "m/s",
             PointQuantity::Acceleration => "m/s2",
+        },
+        MonitorKind::MaterialPointTensor { quantity, .. } => match quantity {
+            PointTensor::CauchyStress => "Pa",
+            PointTensor::DeformationGradient => "1",
         },
         MonitorKind::KineticEnergy | MonitorKind::StrainEnergy => "J",
     }

@@ -1,7 +1,8 @@
 //! Monitors: named scalar time histories, evaluated on the committed state.
 
-use loam_fem::domain::PointQuantity;
+use loam_fem::domain::{PointQuantity, PointTensor};
 use loam_fem::model::Model;
+use loam_mpm::surface::SurfaceProfile;
 
 /// What a monitor measures.
 #[derive(Debug, Clone, PartialEq)]
@@ -44,6 +45,31 @@ pub enum MonitorKind {
         quantity: PointQuantity,
         /// Component index.
         component: Option<usize>,
+    },
+    /// Runout of the material points from a wall ([`SurfaceProfile::runout`]).
+    Runout {
+        /// x of the wall.
+        wall: f64,
+        /// y of the base.
+        base: f64,
+        /// Surface height threshold.
+        threshold: f64,
+    },
+    /// Free-surface height of the material points at `x` ([`SurfaceProfile::height_at`]).
+    SurfaceHeight {
+        /// Abscissa.
+        x: f64,
+        /// y of the base.
+        base: f64,
+    },
+    /// A component of a tensor quantity of material points, averaged over `points`.
+    MaterialPointTensor {
+        /// (domain index, material point id) of each point averaged.
+        points: Vec<(usize, usize)>,
+        /// Quantity.
+        quantity: PointTensor,
+        /// Component or invariant.
+        component: crate::case::TensorComponent,
     },
     /// Total kinetic energy.
     KineticEnergy,
@@ -94,8 +120,56 @@ impl Monitor {
                     None => f64::NAN, // the point left the grid and was erased
                 }
             }
+            MonitorKind::Runout { wall, base, threshold } => {
+                SurfaceProfile::new(&point_extents(model), *base).runout(*wall, *threshold)
+            }
+            MonitorKind::SurfaceHeight { x, base } => SurfaceProfile::new(&point_extents(model), *base).height_at(*x),
+            MonitorKind::MaterialPointTensor { points, quantity, component } => {
+                let (mut sum, mut count) = (0.0, 0);
+                for &(domain, id) in points {
+                    if let Some(t) = model.domains[domain].point_tensor(id, *quantity) {
+                        sum += tensor_component(&t, *component);
+                        count += 1;
+                    }
+                }
+                if count > 0 {
+                    sum / count as f64
+                } else {
+                    f64::NAN // every point left the grid and was erased
+                }
+            }
             MonitorKind::KineticEnergy => model.kinetic_energy(),
             MonitorKind::StrainEnergy => model.strain_energy(),
+        }
+    }
+}
+
+/// Positions and sizes of the material points of every domain.
+pub fn point_extents(model: &Model) -> Vec<([f64; 3], f64)> {
+    model.domains.iter().flat_map(|d| d.point_extents()).collect()
+}
+
+/// A component or invariant of a 3×3 tensor `t` (row-major).
+pub fn tensor_component(t: &[[f64; 3]; 3], c: crate::case::TensorComponent) -> f64 {
+    use crate::case::TensorComponent as C;
+    match c {
+        C::Xx => t[0][0],
+        C::Yy => t[1][1],
+        C::Zz => t[2][2],
+        C::Xy => t[0][1],
+        C::Yz => t[1][2],
+        C::Xz => t[0][2],
+        C::Mean => (t[0][0] + t[1][1] + t[2][2]) / 3.0,
+        C::VonMises => {
+            let m = (t[0][0] + t[1][1] + t[2][2]) / 3.0;
+            let mut s2 = 0.0;
+            for i in 0..3 {
+                for j in 0..3 {
+                    let s = t[i][j] - if i == j { m } else { 0.0 };
+                    s2 += s * s;
+                }
+            }
+            (1.5 * s2).sqrt()
         }
     }
 }

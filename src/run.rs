@@ -23,21 +23,31 @@ pub fn run(sim: &mut Simulation, out_dir: &Path, progress: bool) -> std::io::Res
     let start = Instant::now();
     let mut writer = ResultWriter::create(out_dir, sim)?;
     writer.write_step(sim, true)?;
-    let bar = if progress { ProgressBar::new(sim.total_steps() as u64) } else { ProgressBar::hidden() };
-    bar.set_style(
-        ProgressStyle::with_template("{bar:30} {pos}/{len} steps  {msg}  [{elapsed_precise} < {eta}]")
-            .expect("valid template"),
-    );
+    // fixed steps: progress in steps; adaptive steps: in per mille of the end time
+    let adaptive = sim.case.analysis.adaptive.is_some();
+    let length = if adaptive { 1000 } else { sim.total_steps() as u64 };
+    let bar = if progress { ProgressBar::new(length) } else { ProgressBar::hidden() };
+    let template = if adaptive {
+        "{bar:30} {percent}%  {msg}  [{elapsed_precise} < {eta}]"
+    } else {
+        "{bar:30} {pos}/{len} steps  {msg}  [{elapsed_precise} < {eta}]"
+    };
+    bar.set_style(ProgressStyle::with_template(template).expect("valid template"));
     let end = loop {
         if sim.finished() {
             break RunEnd::Finished;
         }
         match sim.step() {
             Ok(s) => {
-                bar.set_position(sim.step as u64);
+                bar.set_position(if adaptive {
+                    (1000.0 * sim.time() / sim.end_time()) as u64
+                } else {
+                    sim.step as u64
+                });
                 bar.set_message(format!(
-                    "t = {:.4e} s  Newton {}{}  residual {:.2e}",
+                    "t = {:.4e} s  Δt {:.2e}  Newton {}{}  residual {:.2e}",
                     sim.time(),
+                    s.last_time_step,
                     s.iterations,
                     if s.substeps > 1 { format!(" ({} sub-steps)", s.substeps) } else { String::new() },
                     s.residual

@@ -72,6 +72,10 @@ pub struct StepSummary {
     pub substeps: usize,
     /// Final residual norm of the last sub-step.
     pub residual: f64,
+    /// Newton iterations of the last sub-step.
+    pub last_iterations: usize,
+    /// Length of the last sub-step (s).
+    pub last_time_step: f64,
 }
 
 /// A case being run.
@@ -95,6 +99,15 @@ pub struct Simulation {
     pub input_values: Vec<Option<f64>>,
     /// Named outputs (`fmu.outputs`, or every monitor) in declaration order.
     pub outputs: Vec<ModelOutput>,
+    /// Length of the next step taken by [`Simulation::step`] (the case's `time_step`, or
+    /// what adaptive step control made of it).
+    pub time_step: f64,
+    /// Largest total kinetic energy seen (for `analysis.stop_at_rest`).
+    peak_kinetic_energy: f64,
+    /// Since when the kinetic energy has stayed below the rest threshold.
+    rest_since: Option<f64>,
+    /// Whether `analysis.stop_at_rest` has ended the run.
+    pub at_rest: bool,
 }
 
 impl Simulation {
@@ -106,6 +119,7 @@ impl Simulation {
     /// Checks and builds a parsed case.
     pub fn new(case: Case) -> Result<Self, CaseError> {
         let built = build_model(&case)?;
+        let case_time_step = case.analysis.time_step;
         Ok(Self {
             case,
             model: built.model,
@@ -116,6 +130,10 @@ impl Simulation {
             input_values: vec![None; built.inputs.len()],
             inputs: built.inputs,
             outputs: built.outputs,
+            time_step: case_time_step,
+            peak_kinetic_energy: 0.0,
+            rest_since: None,
+            at_rest: false,
         })
     }
 
@@ -189,12 +207,13 @@ impl Simulation {
         self.case.analysis.end_time
     }
 
-    /// Whether the end time has been reached.
+    /// Whether the end time has been reached, or the bodies came to rest
+    /// (`analysis.stop_at_rest`).
     pub fn finished(&self) -> bool {
-        self.time() >= self.end_time() - 1e-9 * self.case.analysis.time_step
+        self.at_rest || self.time() >= self.end_time() - 1e-9 * self.case.analysis.time_step
     }
 
-    /// Number of steps the case takes.
+    /// Number of steps the case takes (with adaptive steps: at the first step's length).
     pub fn total_steps(&self) -> usize {
         (self.end_time() / self.case.analysis.time_step - 1e-9).ceil() as usize
     }
@@ -209,10 +228,36 @@ impl Simulation {
         self.monitors.iter().map(|m| m.evaluate(&self.model)).collect()
     }
 
-    /// One step of the case's Δt (shortened to land on the end time).
+    /// One step of length [`Simulation::time_step`] (shortened to land on the end time);
+    /// then adaptive step control chooses the next length and the rest criterion is checked.
     pub fn step(&mut self) -> Result<StepSummary, RunError> {
-        let target = (self.time() + self.case.analysis.time_step).min(self.end_time());
-        self.advance_step_to(target)
+        let target = (self.time() + self.time_step).min(self.end_time());
+        let shortened = target < self.time() + self.time_step;
+        let summary = self.advance_step_to(target)?;
+        if let Some(adaptive) = self.case.analysis.adaptive {
+            if !(shortened && summary.substeps == 1) {
+                let k = summary.last_iterations.max(1) as f64;
+                let factor = (adaptive.target_iterations as f64 / k).sqrt().clamp(0.5, adaptive.growth);
+                self.time_step =
+                    (summary.last_time_step * factor).clamp(adaptive.min_time_step, adaptive.max_time_step);
+            }
+        }
+        self.check_rest();
+        Ok(summary)
+    }
+
+    /// `analysis.stop_at_rest`: the kinetic energy has stayed below its threshold long enough.
+    fn check_rest(&mut self) {
+        let Some(rest) = self.case.analysis.stop_at_rest else { return };
+        let kinetic = self.model.kinetic_energy();
+        self.peak_kinetic_energy = self.peak_kinetic_energy.max(kinetic);
+        let t = self.time();
+        if t >= rest.min_time && kinetic <= rest.kinetic_energy_ratio * self.peak_kinetic_energy {
+            let since = *self.rest_since.get_or_insert(t);
+            self.at_rest = t - since >= rest.duration;
+        } else {
+            self.rest_since = None;
+        }
     }
 
     /// Advances to `target` (> current time) in one step, cutting it on failure.
@@ -238,12 +283,19 @@ impl Simulation {
                     summary.iterations += report.iterations;
                     summary.substeps += 1;
                     summary.residual = report.residuals.last().copied().unwrap_or(0.0);
+                    summary.last_iterations = report.iterations;
+                    summary.last_time_step = h;
                     self.stats.steps += 1;
                     self.stats.iterations += report.iterations;
                     self.stats.timings += report.timings;
                 }
                 Err(source) => {
-                    if cuts >= self.case.analysis.max_step_cuts {
+                    // fixed steps: at most `max_step_cuts` halvings; adaptive: down to `min_time_step`
+                    let exhausted = match self.case.analysis.adaptive {
+                        Some(a) => h / 2.0 < a.min_time_step * (1.0 - 1e-9),
+                        None => cuts >= self.case.analysis.max_step_cuts,
+                    };
+                    if exhausted {
                         return Err(RunError { step: self.step + 1, time: self.time(), time_step: h, cuts, source });
                     }
                     cuts += 1;

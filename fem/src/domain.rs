@@ -40,6 +40,13 @@ pub struct AssemblyInput<'a> {
     pub gravity: [f64; 3],
     /// Time step Δt.
     pub time_step: f64,
+    /// Newmark γ of the velocity update `v = vₙ + Δt ((1 − γ) aₙ + γ a)` (½ for the
+    /// average-acceleration rule, ½ − α_B for Bossak); particle domains update their points'
+    /// velocities with it.
+    pub gamma: f64,
+    /// Time `t_{n+1}` of the iterate (s): loads a domain carries itself (forces on material
+    /// points) take their amplitude here.
+    pub time: f64,
     /// Whether to compute element matrices (else only vectors).
     pub with_tangent: bool,
     /// Whether the matrices include the stiffness `K_t` (else only `c_M M`: used for the
@@ -139,6 +146,28 @@ pub enum PointQuantity {
     Acceleration,
 }
 
+/// Tensor quantities of tracked points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PointTensor {
+    /// Cauchy stress σ (Pa, tension positive).
+    CauchyStress,
+    /// Deformation gradient F.
+    DeformationGradient,
+}
+
+/// A force carried by tracked points (material points) that move with the body: at every
+/// Newton iteration each point `p` adds `f_I = N_I(x_p) F amplitude(t_{n+1})` to the
+/// external force of the nodes `I` of the cell it lies in (Kratos' particle point load).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointLoad {
+    /// Ids of the tracked points that each carry the force.
+    pub ids: Vec<usize>,
+    /// Force per point (N; axisymmetric: total over the circumference).
+    pub force: [f64; 3],
+    /// Time function.
+    pub amplitude: crate::amplitude::Amplitude,
+}
+
 /// A contributor of element blocks to the global system.
 pub trait Domain: Send + Sync {
     /// The domain's name from the case file.
@@ -162,8 +191,38 @@ pub trait Domain: Send + Sync {
         None
     }
 
+    /// Current position and size of every tracked point (material point): the size is the
+    /// side of the square (2D, per unit thickness or per radian-ring length) or cube (3D)
+    /// of the point's current volume. Mesh domains have none.
+    fn point_extents(&self) -> Vec<([f64; 3], f64)> {
+        Vec::new()
+    }
+
     /// A vector quantity of tracked point `id` (material point), if this domain has it.
     fn point_quantity(&self, _id: usize, _quantity: PointQuantity) -> Option<[f64; 3]> {
+        None
+    }
+
+    /// A tensor quantity (row-major 3×3) of tracked point `id`, if this domain has it.
+    fn point_tensor(&self, _id: usize, _quantity: PointTensor) -> Option<[[f64; 3]; 3]> {
+        None
+    }
+
+    /// Ids of the tracked points whose current position lies in the axis-aligned box
+    /// `[min, max]` (first `min.len()` coordinates, bounds included).
+    fn points_in_box(&self, _min: &[f64], _max: &[f64]) -> Vec<usize> {
+        Vec::new()
+    }
+
+    /// Attaches a force to tracked points (see [`PointLoad`]); `false` if this domain has
+    /// no tracked points to carry it.
+    fn add_point_load(&mut self, _load: PointLoad) -> bool {
+        false
+    }
+
+    /// The background grid for output at the committed state (particle domains; `None`
+    /// for meshes, whose output is already the mesh).
+    fn grid_output(&self, _committed: &NodalState) -> Option<DomainOutput> {
         None
     }
 

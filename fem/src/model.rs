@@ -380,6 +380,8 @@ impl Model {
             mass_coefficient: 1.0,
             gravity: self.gravity.0.map(|g| g * gf),
             time_step: 0.0,
+            gamma: 0.5,
+            time: self.time,
             with_tangent: true,
             stiffness: false,
         };
@@ -422,6 +424,8 @@ impl Model {
             mass_coefficient: 0.0,
             gravity: self.gravity.0.map(|g| g * gf),
             time_step: 0.0,
+            gamma: 0.5,
+            time: self.time,
             with_tangent: true,
             stiffness: true,
         };
@@ -516,6 +520,8 @@ impl Model {
                         mass_coefficient: scheme.mass_coefficient(dt),
                         gravity,
                         time_step: dt,
+                        gamma: scheme.coefficients().map_or(0.5, |c| c.2),
+                        time: t_new,
                         with_tangent,
                         stiffness: true,
                     };
@@ -538,7 +544,7 @@ impl Model {
                     if settings.line_search
                         && it > 1
                         && backtracks < settings.line_search_max_cuts
-                        && !(r_norm < r_prev)
+                        && (r_norm >= r_prev || r_norm.is_nan())
                     {
                         // take back half of the applied part of the correction
                         let shorter = 0.5 * step_length;

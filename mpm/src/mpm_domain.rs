@@ -4,7 +4,8 @@ use std::sync::Arc;
 
 use loam_fem::assembly::BlockLayout;
 use loam_fem::domain::{
-    AssemblyInput, Domain, DomainError, DomainOutput, Field, NodalState, PointQuantity, Projection,
+    AssemblyInput, Domain, DomainError, DomainOutput, Field, NodalState, PointLoad, PointQuantity, PointTensor,
+    Projection,
 };
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
@@ -48,6 +49,10 @@ pub struct MpmDomain {
     /// Rings of cells around the active ones in the pattern (0: the pattern is the active
     /// set and is rebuilt whenever it changes).
     pattern_rings: usize,
+    /// Forces carried by material points (particle Neumann conditions).
+    point_loads: Vec<PointLoad>,
+    /// Share θ of the PIC velocity in the convective phase (0: pure FLIP-type update).
+    pic_fraction: f64,
 }
 
 const EMPTY: usize = usize::MAX;
@@ -96,7 +101,36 @@ impl MpmDomain {
             block_active: Vec::new(),
             block_orphans: Vec::new(),
             pattern_rings: pattern_rings(),
+            point_loads: Vec::new(),
+            pic_fraction: 0.0,
         }
+    }
+
+    /// Blends the particle velocity update: `v_p ← (1 − θ) v_p^FLIP + θ Σ_I N_I v_I^{n+1}`
+    /// (θ = 0: the Newmark update of the points' own velocity; θ = 1: PIC, the grid velocity).
+    /// A small θ damps the particle-velocity noise that the FLIP-type update accumulates in
+    /// granular bodies at rest (Brackbill & Ruppel 1986; Nairn 2015 on FLIP/PIC blending).
+    pub fn set_pic_fraction(&mut self, theta: f64) {
+        self.pic_fraction = theta;
+    }
+
+    /// Starts every material point from the Cauchy stress `stress(x_p)` (at rest, `F = I`):
+    /// the law writes the history that carries it
+    /// ([`ConstitutiveLaw::initialise_state_at_stress`]). Fails with the first point whose
+    /// stress the law cannot hold (e.g. outside the yield surface).
+    pub fn set_initial_stress(
+        &mut self,
+        stress: impl Fn(&[f64; 3]) -> Matrix3<f64>,
+    ) -> Result<(), (usize, loam_laws::LawError)> {
+        let sl = self.law.state_len();
+        for p in 0..self.points.len() {
+            let sigma = stress(&self.points.position[p]);
+            self.law
+                .initialise_state_at_stress(&sigma, &mut self.points.state[p * sl..(p + 1) * sl])
+                .map_err(|e| (p, e))?;
+            self.points.cauchy[p] = sigma;
+        }
+        Ok(())
     }
 
     /// Material points erased so far because they left the grid.
@@ -111,6 +145,36 @@ impl MpmDomain {
 
     fn dim(&self) -> usize {
         self.grid.mesh.element.dim()
+    }
+
+    /// Particle Neumann: every loaded point `p` in cell `c` adds `−N_I(ξ_p) F f(t)` to the
+    /// residual of the block of `c` (`r = f_int − f_ext + M ã`). The point's natural
+    /// coordinates are fixed within a step (the grid moves with the body), so the force
+    /// is a follower of the body without a tangent contribution.
+    fn add_point_loads(&self, time: f64, vectors: &mut [f64]) {
+        let nn = self.grid.mesh.element.num_nodes();
+        let dim = self.dim();
+        let nd = nn * dim;
+        for load in &self.point_loads {
+            let f = load.amplitude.at(time);
+            for &id in &load.ids {
+                let k = self.index_of_id[id];
+                if k == usize::MAX {
+                    continue; // erased
+                }
+                let b = self
+                    .pattern_cells
+                    .binary_search(&self.cell_of_point[k])
+                    .expect("the cell of a material point is in the pattern");
+                let v = &mut vectors[b * nd..(b + 1) * nd];
+                for a in 0..nn {
+                    let n = self.geometry[k].shape[a];
+                    for i in 0..dim {
+                        v[a * dim + i] -= n * load.force[i] * f;
+                    }
+                }
+            }
+        }
     }
 }
 
@@ -385,17 +449,19 @@ impl Domain for MpmDomain {
                     }
                 }
                 Ok(())
-            })
+            })?;
+        self.add_point_loads(input.time, vectors);
+        Ok(())
     }
 
     /// Convective phase: `Δu_p = Σ N_I Δu_I`, `a_p = Σ N_I a_I`,
-    /// `v_p ← v_p + Δt/2 (a_p^n + a_p^{n+1})`, `x_p ← x_p + Δu_p`, `F_p`, `V_p = J_p V_p^0`,
+    /// `v_p ← v_p + Δt ((1 − γ) a_p^n + γ a_p^{n+1})` (γ = ½: trapezoidal), `x_p ← x_p + Δu_p`, `F_p`, `V_p = J_p V_p^0`,
     /// law state and stress committed.
     fn commit(&mut self, input: &AssemblyInput<'_>) {
         let element = self.grid.mesh.element;
         let nn = element.num_nodes();
         let dim = self.dim();
-        let dt = input.time_step;
+        let (dt, gamma, theta) = (input.time_step, input.gamma, self.pic_fraction);
         let dynamic = input.inertial_acceleration.is_some();
         let (grid, node_ids, geometry, cells) = (&self.grid, &self.node_ids, &self.geometry, &self.cell_of_point);
         let pts = &mut self.points;
@@ -416,17 +482,20 @@ impl Domain for MpmDomain {
                 let cell = grid.mesh.cell(cells[p]);
                 let mut du = [0.0; 3];
                 let mut acc = [0.0; 3];
+                let mut v_grid = [0.0; 3];
                 for a_ in 0..nn {
                     let g = node_ids[cell[a_]] * dim;
                     let n = geometry[p].shape[a_];
                     for i in 0..dim {
                         du[i] += n * (input.state.u[g + i] - input.committed.u[g + i]);
                         acc[i] += n * input.state.a[g + i];
+                        v_grid[i] += n * input.state.v[g + i];
                     }
                 }
                 for i in 0..dim {
                     if dynamic {
-                        v[i] += 0.5 * dt * (a[i] + acc[i]);
+                        let flip = v[i] + dt * ((1.0 - gamma) * a[i] + gamma * acc[i]);
+                        v[i] = (1.0 - theta) * flip + theta * v_grid[i];
                         a[i] = acc[i];
                     }
                     x[i] += du[i];
@@ -483,6 +552,47 @@ impl Domain for MpmDomain {
             .map(|p| (self.points.id[p], d2(&self.points.position[p]).sqrt()))
     }
 
+    fn point_extents(&self) -> Vec<([f64; 3], f64)> {
+        let pts = &self.points;
+        (0..pts.len())
+            .map(|p| {
+                let x = pts.position[p];
+                let v = pts.volume[p];
+                let size = match self.formulation {
+                    Formulation::ThreeD => v.cbrt(),
+                    Formulation::Axisymmetric => (v / (2.0 * std::f64::consts::PI * x[0].max(1e-300))).sqrt(),
+                    _ => (v / self.thickness).sqrt(),
+                };
+                (x, size)
+            })
+            .collect()
+    }
+
+    fn point_tensor(&self, id: usize, quantity: PointTensor) -> Option<[[f64; 3]; 3]> {
+        let &k = self.index_of_id.get(id)?;
+        if k == usize::MAX {
+            return None;
+        }
+        let m = match quantity {
+            PointTensor::CauchyStress => &self.points.cauchy[k],
+            PointTensor::DeformationGradient => &self.points.deformation_gradient[k],
+        };
+        Some(std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)])))
+    }
+
+    fn points_in_box(&self, min: &[f64], max: &[f64]) -> Vec<usize> {
+        let inside = |x: &[f64; 3]| (0..min.len()).all(|d| x[d] >= min[d] && x[d] <= max[d]);
+        let mut ids: Vec<usize> =
+            (0..self.points.len()).filter(|&p| inside(&self.points.position[p])).map(|p| self.points.id[p]).collect();
+        ids.sort_unstable();
+        ids
+    }
+
+    fn add_point_load(&mut self, load: PointLoad) -> bool {
+        self.point_loads.push(load);
+        true
+    }
+
     fn point_quantity(&self, id: usize, quantity: PointQuantity) -> Option<[f64; 3]> {
         let &k = self.index_of_id.get(id)?;
         if k == usize::MAX {
@@ -493,6 +603,46 @@ impl Domain for MpmDomain {
             PointQuantity::Displacement => self.points.displacement[k],
             PointQuantity::Velocity => self.points.velocity[k],
             PointQuantity::Acceleration => self.points.acceleration[k],
+        })
+    }
+
+    /// The background grid in its reference position with nodal `mass` (`Σ_p N_I m_p` of
+    /// this domain's points in the last step), `displacement_increment` (`Δu` of the last
+    /// step: the grid is reset at the start of each step), `velocity`, `acceleration` and
+    /// `active` (1 on nodes of cells holding points in the last step, else 0).
+    fn grid_output(&self, committed: &NodalState) -> Option<DomainOutput> {
+        let mesh = &self.grid.mesh;
+        let (dim, nn) = (self.dim(), mesh.element.num_nodes());
+        let nodal = |src: &[f64]| -> Vec<f64> {
+            self.node_ids
+                .iter()
+                .flat_map(|&g| (0..3).map(move |i| if i < dim { src[g * dim + i] } else { 0.0 }))
+                .collect()
+        };
+        let mut mass = vec![0.0; mesh.coords.len()];
+        for (p, &cell) in self.cell_of_point.iter().enumerate() {
+            for (a, &node) in mesh.cell(cell).iter().enumerate().take(nn) {
+                mass[node] += self.geometry[p].shape[a] * self.points.mass[p];
+            }
+        }
+        let mut active = vec![0.0; mesh.coords.len()];
+        for &c in &self.active_cells {
+            for &node in mesh.cell(c) {
+                active[node] = 1.0;
+            }
+        }
+        let point_fields = vec![
+            Field { name: "mass".into(), components: 1, values: mass },
+            Field { name: "displacement_increment".into(), components: 3, values: nodal(&committed.u) },
+            Field { name: "velocity".into(), components: 3, values: nodal(&committed.v) },
+            Field { name: "acceleration".into(), components: 3, values: nodal(&committed.a) },
+            Field { name: "active".into(), components: 1, values: active },
+        ];
+        Some(DomainOutput {
+            points: mesh.coords.clone(),
+            cells: Some((mesh.element, mesh.connectivity.clone())),
+            point_fields,
+            cell_fields: Vec::new(),
         })
     }
 

@@ -13,7 +13,10 @@ pub struct ResultWriter {
     monitors: BufWriter<File>,
     vtk: Option<super::vtk_output::VtkSeries>,
     interval: usize,
+    time_interval: Option<f64>,
     last_vtk_step: Option<usize>,
+    /// Index of the last `time_interval` multiple written.
+    last_vtk_slot: i64,
 }
 
 impl ResultWriter {
@@ -27,7 +30,15 @@ impl ResultWriter {
         }
         writeln!(monitors)?;
         let vtk = if sim.case.output.vtk { Some(super::vtk_output::VtkSeries::new(dir, sim)) } else { None };
-        Ok(Self { dir: dir.to_path_buf(), monitors, vtk, interval: sim.case.output.interval, last_vtk_step: None })
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            monitors,
+            vtk,
+            interval: sim.case.output.interval,
+            time_interval: sim.case.output.time_interval,
+            last_vtk_step: None,
+            last_vtk_slot: 0,
+        })
     }
 
     /// Output directory.
@@ -44,7 +55,17 @@ impl ResultWriter {
         }
         writeln!(self.monitors)?;
         self.monitors.flush()?;
-        let on_interval = self.interval > 0 && sim.step % self.interval == 0;
+        let on_interval = match self.time_interval {
+            Some(dt) => {
+                let slot = (sim.time() / dt * (1.0 + 1e-9)).floor() as i64;
+                let due = slot > self.last_vtk_slot;
+                if due {
+                    self.last_vtk_slot = slot;
+                }
+                due
+            }
+            None => self.interval > 0 && sim.step % self.interval == 0,
+        };
         if (force || on_interval) && self.last_vtk_step != Some(sim.step) {
             if let Some(vtk) = &mut self.vtk {
                 vtk.write(sim)?;
