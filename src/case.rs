@@ -304,17 +304,56 @@ pub struct BoundaryConditionSpec {
     /// Optional name, by which an FMU input can drive it.
     #[serde(default)]
     pub name: Option<String>,
-    /// Region name.
+    /// Region name (not with `penalty`).
+    #[serde(default)]
     pub region: String,
-    /// One entry per component: a value in m, or `null` for a free component.
+    /// One entry per component: a value in m, or `null` for a free component. With
+    /// `penalty`: the wall's displacement (every component a number), scaled by `amplitude`.
     #[serde(default)]
     pub displacement: Vec<Option<f64>>,
     /// Instead of `displacement`: frictionless slip (no motion along the boundary normal).
     #[serde(default)]
     pub slip: Option<SlipSpec>,
+    /// Instead of `region`: a rigid wall anywhere in an MPM grid, enforced by penalty on
+    /// boundary particles (non-conforming Dirichlet condition).
+    #[serde(default)]
+    pub penalty: Option<PenaltySpec>,
     /// Time function scaling the values (default constant 1).
     #[serde(default)]
     pub amplitude: Amplitude,
+}
+
+/// A non-conforming rigid wall on an MPM background grid: in the Dirichlet form (Chandra et
+/// al. 2021) boundary particles along a segment or polyline add `β w N_I N_J` (no-slip) or
+/// `β w N_I N_J n⊗n` (slip) to the grid nodes of the cells they lie in, where those cells
+/// hold material; in the contact form the material points near the wall push against it
+/// while they penetrate (see `loam_mpm::penalty_boundary`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PenaltySpec {
+    /// MPM domain whose background grid carries the wall (default: the only MPM domain);
+    /// the wall acts on every body on that grid.
+    #[serde(default)]
+    pub domain: Option<String>,
+    /// The wall from its first point to its second (m, 2D); the body lies on its left.
+    #[serde(default)]
+    pub segment: Option<[[f64; 2]; 2]>,
+    /// Instead of `segment`: a polyline (m, 2D), the body on its left.
+    #[serde(default)]
+    pub polyline: Option<Vec<[f64; 2]>>,
+    /// Distance between boundary particles along the wall (m), e.g. a quarter of a cell
+    /// (Dirichlet form only).
+    #[serde(default)]
+    pub spacing: Option<f64>,
+    /// Penalty factor β (N/m³; Chandra et al. use 1e13 for E = 200 MPa).
+    pub penalty_factor: f64,
+    /// Frictionless: hold only the normal component (default false: no-slip).
+    #[serde(default)]
+    pub slip: bool,
+    /// Contact form: unilateral, the material points against the wall, for bodies that
+    /// leave the wall or roll on it (default false: the bilateral Dirichlet form).
+    #[serde(default)]
+    pub contact: bool,
 }
 
 /// A frictionless slip boundary.
@@ -536,11 +575,15 @@ pub struct OutputSpec {
     /// Also write the MPM background grids (`<domain>_grid.pvd`) with nodal mass,
     /// displacement increment, velocity, acceleration and active flag (default false).
     pub grid: bool,
+    /// Write VTK at exactly these times (s, increasing; e.g. the instants of a published
+    /// sequence of snapshots): steps are shortened to land on them. With `times`, `interval`
+    /// is not used; `time_interval` may be combined with it.
+    pub times: Vec<f64>,
 }
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        Self { interval: 1, vtk: true, time_interval: None, grid: false }
+        Self { interval: 1, vtk: true, time_interval: None, grid: false, times: Vec::new() }
     }
 }
 
@@ -689,6 +732,16 @@ pub enum MonitorSpec {
         #[serde(default)]
         base: f64,
     },
+    /// Sum of the forces (N) a penalty wall (`boundary_conditions[k].penalty`) exerts on the
+    /// bodies: its reaction, with the opposite sign.
+    WallForce {
+        /// Column name.
+        name: String,
+        /// The wall's boundary-condition `name` (default `penalty_<k>`).
+        wall: String,
+        /// Component.
+        component: Component,
+    },
     /// Total kinetic energy (J).
     KineticEnergy {
         /// Column name.
@@ -714,6 +767,7 @@ impl MonitorSpec {
             | MonitorSpec::MaterialPointStress { name, .. }
             | MonitorSpec::Runout { name, .. }
             | MonitorSpec::SurfaceHeight { name, .. }
+            | MonitorSpec::WallForce { name, .. }
             | MonitorSpec::KineticEnergy { name }
             | MonitorSpec::StrainEnergy { name } => name,
         }

@@ -18,10 +18,11 @@ use loam_laws::ConstitutiveLaw;
 use loam_mpm::grid::Grid;
 use loam_mpm::material_points::{self, MaterialPoints};
 use loam_mpm::mpm_domain::MpmDomain;
+use loam_mpm::penalty_boundary::{BoundaryParticles, PenaltyBoundary, PenaltyKind, PenaltySettings};
 
 use crate::case::{
     AnalysisType, BodySpec, Case, CaseError, Component, DomainKind, GridSpec, InitialStressSpec, InitialVelocity,
-    InputTarget, LoadSpec, MassMatrix, MeshSpec, MonitorSpec, PointBox, RegionSpec,
+    InputTarget, LoadSpec, MassMatrix, MeshSpec, MonitorSpec, PenaltySpec, PointBox, RegionSpec,
 };
 use crate::monitor::{Monitor, MonitorKind};
 use nalgebra::Matrix3;
@@ -527,6 +528,12 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     if let Some(t) = case.output.time_interval {
         check_positive("output.time_interval", t)?;
     }
+    for (k, &t) in case.output.times.iter().enumerate() {
+        check_positive(&format!("output.times[{k}]"), t)?;
+        if k > 0 && t <= case.output.times[k - 1] {
+            return Err(CaseError::new(format!("output.times[{k}]"), "times must increase"));
+        }
+    }
     if case.solver.max_iterations == 0 {
         return Err(CaseError::new("solver.max_iterations", "must be at least 1"));
     }
@@ -580,6 +587,8 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
         }
     }
     let mut model = Model::new(dim, coords, scheme, case.solver);
+    // grid and global node ids of every MPM domain, for penalty walls
+    let mut mpm_grids: BTreeMap<&str, (Grid, Vec<usize>)> = BTreeMap::new();
     for (k, ((d, body), (mesh, id))) in case.domains.iter().zip(bodies).zip(meshes.into_iter().zip(ids)).enumerate() {
         let law = laws[d.material.as_str()].clone();
         if let Some(v0) = &d.initial_velocity {
@@ -599,6 +608,7 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
                 }
             }
             let density = law.density();
+            mpm_grids.insert(&d.name, (grid.clone(), id.clone()));
             let mut domain = MpmDomain::new(&d.name, grid, id, case.formulation, case.thickness, law, points);
             if !(0.0..=1.0).contains(&d.pic_fraction) {
                 return Err(CaseError::new(
@@ -670,6 +680,21 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
 
     let mut constraint_of_bc = Vec::with_capacity(case.boundary_conditions.len());
     for (k, bc) in case.boundary_conditions.iter().enumerate() {
+        if let Some(spec) = &bc.penalty {
+            // after every case domain: the wall reads the nodal masses they project
+            let wall = build_penalty_wall(case, k, spec, &mpm_grids)?;
+            model.domains.push(Box::new(wall));
+            constraint_of_bc.push(model.constraints.len());
+            model.constraints.push(Constraint {
+                dofs: Vec::new(),
+                values: Vec::new(),
+                amplitude: bc.amplitude.clone(),
+            });
+            continue;
+        }
+        if bc.region.is_empty() {
+            return Err(CaseError::new(format!("boundary_conditions[{k}]"), "needs a region (or a penalty wall)"));
+        }
         let nodes = region(format!("boundary_conditions[{k}].region"), &bc.region)?;
         if let Some(slip) = &bc.slip {
             if !bc.displacement.is_empty() {
@@ -863,6 +888,17 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
                 quantity: PointTensor::CauchyStress,
                 component: *component,
             },
+            MonitorSpec::WallForce { wall, component, .. } => MonitorKind::WallForce {
+                domain: model.domains.iter().position(|d| d.wall_force().is_some() && d.name() == wall).ok_or_else(
+                    || {
+                        CaseError::new(
+                            format!("{loc}.wall"),
+                            format!("no penalty wall named '{wall}' in boundary_conditions"),
+                        )
+                    },
+                )?,
+                component: component_index(&format!("{loc}.component"), *component, dim)?,
+            },
             MonitorSpec::KineticEnergy { .. } => MonitorKind::KineticEnergy,
             MonitorSpec::StrainEnergy { .. } => MonitorKind::StrainEnergy,
         };
@@ -870,6 +906,112 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     }
     let (inputs, outputs) = resolve_fmu_variables(case, &constraint_of_bc, &load_of_load, &monitors)?;
     Ok(BuiltModel { model, monitors, regions, inputs, outputs })
+}
+
+/// The penalty wall of `boundary_conditions[k]` (`spec` its `penalty`) on the grid of an
+/// MPM domain; its name is the condition's `name` (default `penalty_<k>`).
+fn build_penalty_wall(
+    case: &Case,
+    k: usize,
+    spec: &PenaltySpec,
+    mpm_grids: &BTreeMap<&str, (Grid, Vec<usize>)>,
+) -> Result<PenaltyBoundary, CaseError> {
+    let bc = &case.boundary_conditions[k];
+    let loc = format!("boundary_conditions[{k}]");
+    let dim = case.formulation.dim();
+    if dim != 2 {
+        return Err(CaseError::new(format!("{loc}.penalty"), "penalty walls are segments or polylines of 2D problems"));
+    }
+    if !bc.region.is_empty() {
+        return Err(CaseError::new(format!("{loc}.region"), "a penalty wall takes no region"));
+    }
+    if bc.slip.is_some() {
+        return Err(CaseError::new(format!("{loc}.slip"), "a penalty wall sets its own \"slip\": true | false"));
+    }
+    let name = bc.name.clone().unwrap_or_else(|| format!("penalty_{k}"));
+    if case.domains.iter().any(|d| d.name == name) {
+        return Err(CaseError::new(format!("{loc}.name"), format!("'{name}' is already a domain name")));
+    }
+    let domain = match &spec.domain {
+        Some(d) => d.as_str(),
+        None if mpm_grids.len() == 1 => mpm_grids.keys().next().copied().expect("one grid"),
+        None => {
+            return Err(CaseError::new(
+                format!("{loc}.penalty.domain"),
+                format!("name the mpm domain whose grid carries the wall ({} mpm domains)", mpm_grids.len()),
+            ));
+        }
+    };
+    let (grid, node_ids) = mpm_grids.get(domain).ok_or_else(|| {
+        CaseError::new(format!("{loc}.penalty.domain"), format!("no mpm domain named '{domain}' in domains"))
+    })?;
+    let vertices: Vec<[f64; 2]> = match (&spec.segment, &spec.polyline) {
+        (Some(s), None) => s.to_vec(),
+        (None, Some(p)) => p.clone(),
+        _ => return Err(CaseError::new(format!("{loc}.penalty"), "give either segment or polyline")),
+    };
+    let key = if spec.segment.is_some() { "segment" } else { "polyline" };
+    if vertices.len() < 2 || vertices.windows(2).any(|w| w[0] == w[1]) {
+        return Err(CaseError::new(
+            format!("{loc}.penalty.{key}"),
+            "needs at least two points, consecutive points distinct",
+        ));
+    }
+    let spacing = match (spec.spacing, spec.contact) {
+        (Some(_), true) => {
+            return Err(CaseError::new(
+                format!("{loc}.penalty.spacing"),
+                "the contact form has no boundary particles (its contact points are the material points)",
+            ));
+        }
+        (None, false) => {
+            return Err(CaseError::new(
+                format!("{loc}.penalty.spacing"),
+                "the Dirichlet form needs the spacing of its boundary particles",
+            ));
+        }
+        (Some(s), false) => {
+            check_positive(&format!("{loc}.penalty.spacing"), s)?;
+            s
+        }
+        (None, true) => 0.0,
+    };
+    check_positive(&format!("{loc}.penalty.penalty_factor"), spec.penalty_factor)?;
+    let mut displacement = [0.0; 3];
+    if !bc.displacement.is_empty() {
+        check_len(&format!("{loc}.displacement"), &bc.displacement, dim)?;
+        for (i, v) in bc.displacement.iter().enumerate() {
+            displacement[i] = v.ok_or_else(|| {
+                CaseError::new(format!("{loc}.displacement[{i}]"), "a penalty wall moves as a whole: give a number")
+            })?;
+        }
+    }
+    bc.amplitude.check().map_err(|m| CaseError::new(format!("{loc}.amplitude"), m))?;
+    let length: f64 = vertices.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum();
+    let samples = BoundaryParticles::on_polyline(&vertices, 1e-3 * length, case.formulation, case.thickness);
+    if !samples.position.iter().any(|x| grid.locate(x).is_some()) {
+        return Err(CaseError::new(
+            format!("{loc}.penalty.{key}"),
+            format!("lies outside the grid of domain '{domain}'"),
+        ));
+    }
+    let settings = PenaltySettings {
+        penalty_factor: spec.penalty_factor,
+        kind: if spec.slip { PenaltyKind::Slip } else { PenaltyKind::NoSlip },
+        contact: spec.contact,
+        displacement,
+        amplitude: bc.amplitude.clone(),
+    };
+    Ok(PenaltyBoundary::new(
+        &name,
+        grid.clone(),
+        node_ids.clone(),
+        case.formulation,
+        case.thickness,
+        vertices,
+        spacing,
+        settings,
+    ))
 }
 
 /// Surface monitors need material points in a plane problem.
@@ -889,7 +1031,7 @@ pub fn monitor_unit(kind: &MonitorKind) -> &'static str {
         MonitorKind::Displacement { .. } => "m",
         MonitorKind::Velocity { .. } => "m/s",
         MonitorKind::Acceleration { .. } => "m/s2",
-        MonitorKind::Reaction { .. } => "N",
+        MonitorKind::Reaction { .. } | MonitorKind::WallForce { .. } => "N",
         MonitorKind::Runout { .. } | MonitorKind::SurfaceHeight { .. } => "m",
         MonitorKind::MaterialPoint { quantity, .. } => match quantity {
             PointQuantity::Position | PointQuantity::Displacement => "m",

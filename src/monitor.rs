@@ -71,6 +71,13 @@ pub enum MonitorKind {
         /// Component or invariant.
         component: crate::case::TensorComponent,
     },
+    /// Sum of the forces a penalty wall exerts on the bodies.
+    WallForce {
+        /// Index of the wall's domain.
+        domain: usize,
+        /// Component index.
+        component: Option<usize>,
+    },
     /// Total kinetic energy.
     KineticEnergy,
     /// Total stored work of internal forces.
@@ -137,6 +144,10 @@ impl Monitor {
                 } else {
                     f64::NAN // every point left the grid and was erased
                 }
+            }
+            MonitorKind::WallForce { domain, component } => {
+                let f = model.domains[*domain].wall_force().unwrap_or([f64::NAN; 3]);
+                pick(&f, dim, 0, *component)
             }
             MonitorKind::KineticEnergy => model.kinetic_energy(),
             MonitorKind::StrainEnergy => model.strain_energy(),

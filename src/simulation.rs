@@ -231,7 +231,10 @@ impl Simulation {
     /// One step of length [`Simulation::time_step`] (shortened to land on the end time);
     /// then adaptive step control chooses the next length and the rest criterion is checked.
     pub fn step(&mut self) -> Result<StepSummary, RunError> {
-        let target = (self.time() + self.time_step).min(self.end_time());
+        let mut target = (self.time() + self.time_step).min(self.end_time());
+        if let Some(t) = self.next_output_time() {
+            target = target.min(t);
+        }
         let shortened = target < self.time() + self.time_step;
         let summary = self.advance_step_to(target)?;
         if let Some(adaptive) = self.case.analysis.adaptive {
@@ -244,6 +247,19 @@ impl Simulation {
         }
         self.check_rest();
         Ok(summary)
+    }
+
+    /// The first of `output.times` after the committed time, on which [`Simulation::step`]
+    /// lands.
+    pub fn next_output_time(&self) -> Option<f64> {
+        let eps = 1e-9 * self.case.analysis.time_step;
+        self.case.output.times.iter().copied().find(|&t| t > self.time() + eps)
+    }
+
+    /// Whether the committed time is one of `output.times` (within 1e-9 of the case's step).
+    pub fn at_output_time(&self) -> bool {
+        let eps = 1e-9 * self.case.analysis.time_step;
+        self.case.output.times.iter().any(|&t| (t - self.time()).abs() <= eps)
     }
 
     /// `analysis.stop_at_rest`: the kinetic energy has stayed below its threshold long enough.

@@ -104,6 +104,9 @@ pub struct Projection {
     pub momentum: Vec<f64>,
     /// Nodal mass-weighted acceleration (per DOF).
     pub inertia: Vec<f64>,
+    /// Position and size of every projected particle (see [`Domain::point_extents`]), for
+    /// conditions that act where the material is (penalty contact walls).
+    pub points: Vec<([f64; 3], f64)>,
 }
 
 impl Projection {
@@ -115,6 +118,7 @@ impl Projection {
             mass: vec![0.0; num_nodes],
             momentum: vec![0.0; num_nodes * dim],
             inertia: vec![0.0; num_nodes * dim],
+            points: Vec::new(),
         }
     }
 
@@ -185,6 +189,10 @@ pub trait Domain: Send + Sync {
         false
     }
 
+    /// After every domain's [`Domain::begin_step`], before any assembly: the projection
+    /// summed over all domains (e.g. the nodal mass of every body on a shared grid).
+    fn end_projection(&mut self, _projection: &Projection) {}
+
     /// The tracked point (material point) nearest to `x`: its id and distance. Mesh
     /// domains have none.
     fn nearest_point(&self, _x: &[f64]) -> Option<(usize, f64)> {
@@ -218,6 +226,12 @@ pub trait Domain: Send + Sync {
     /// no tracked points to carry it.
     fn add_point_load(&mut self, _load: PointLoad) -> bool {
         false
+    }
+
+    /// Sum of the forces (N) a wall (a penalty boundary) exerted on the bodies in the last
+    /// converged step; `None` for domains that are not walls.
+    fn wall_force(&self) -> Option<[f64; 3]> {
+        None
     }
 
     /// The background grid for output at the committed state (particle domains; `None`

@@ -356,6 +356,9 @@ impl Model {
         for d in self.domains.iter_mut() {
             changed |= d.begin_step(&mut projection);
         }
+        for d in self.domains.iter_mut() {
+            d.end_projection(&projection);
+        }
         projection.apply(&mut self.committed);
         if changed {
             self.invalidate_pattern();
@@ -451,6 +454,9 @@ impl Model {
         let mut projection = Projection::new(self.coords.len(), self.dim);
         for d in self.domains.iter_mut() {
             topology_changed |= d.begin_step(&mut projection);
+        }
+        for d in self.domains.iter_mut() {
+            d.end_projection(&projection);
         }
         projection.apply(&mut self.committed);
         if topology_changed {

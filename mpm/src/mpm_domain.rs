@@ -194,6 +194,19 @@ impl Domain for MpmDomain {
     /// Initialisation phase: locate (erasing points outside the grid), sort by cell,
     /// compute shape functions at the points, mark the grid nodes for reset and project
     /// `m_I = Σ N_I m_p`, `(m v)_I = Σ N_I m_p v_p`, `(m a)_I = Σ N_I m_p a_p`.
+    /// A node that another body on the same grid gives mass is not an orphan of this
+    /// domain's pattern: its unit diagonal would add to that body's mass and stiffness (and
+    /// spoil, e.g., the initial acceleration `M a₀ = f_ext − f_int` of layered bodies).
+    fn end_projection(&mut self, projection: &Projection) {
+        for (mask, &c) in self.block_orphans.iter_mut().zip(&self.pattern_cells) {
+            for (a, &node) in self.grid.mesh.cell(c).iter().enumerate() {
+                if *mask & (1 << a) != 0 && projection.mass[self.node_ids[node]] > 0.0 {
+                    *mask &= !(1 << a);
+                }
+            }
+        }
+    }
+
     fn begin_step(&mut self, projection: &mut Projection) -> bool {
         let grid = &self.grid;
         let n_before = self.points.len();
@@ -310,6 +323,7 @@ impl Domain for MpmDomain {
         self.trial_state.clone_from(&self.points.state);
         self.trial_out.resize(self.points.len(), PointOutput::default());
         // grid reset and projection (summed with other domains on the same grid)
+        projection.points.extend(self.point_extents());
         let dim = self.dim();
         for &g in &self.node_ids {
             projection.reset[g] = true;

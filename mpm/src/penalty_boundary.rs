@@ -1,46 +1,85 @@
-//! Non-conforming Dirichlet boundaries by penalty augmentation: a rigid wall anywhere in the
-//! background grid, cutting through its cells (Chandra, Singer, Teschemacher, Wüchner &
-//! Larese 2021, *Nonconforming Dirichlet boundary conditions in implicit material point
-//! method by means of penalty augmentation*, Acta Geotechnica 16, 2315–2335,
-//! doi:10.1007/s11440-020-01123-3; Kratos' `MPMParticlePenaltyDirichletCondition`).
+//! Non-conforming rigid walls on a background grid, enforced by penalty: a wall anywhere in
+//! the grid, cutting through its cells.
 //!
-//! The wall is a set of *boundary particles* `b` at positions `x_b` (fixed, or moving with
-//! the wall), each carrying the measure `w_b` of the wall it represents (length × thickness
-//! in plane problems, length × 2πr in axisymmetry) and the unit normal `n_b` that points
-//! from the wall into the body. The grid is reset every step, so the nodal unknowns of a
-//! step are increments `Δu_I`; the grid's displacement at a boundary particle and its gap to
-//! the wall's own displacement over the step `Δū` are
+//! # Dirichlet form (Chandra et al. 2021)
+//!
+//! Chandra, Singer, Teschemacher, Wüchner & Larese (2021), *Nonconforming Dirichlet boundary
+//! conditions in implicit material point method by means of penalty augmentation*, Acta
+//! Geotechnica 16, 2315–2335, doi:10.1007/s11440-020-01123-3; Kratos'
+//! `MPMParticlePenaltyDirichletCondition`. The wall is a set of *boundary particles* `b` at
+//! positions `x_b` (fixed, or moving with the wall), each carrying the measure `w_b` of the
+//! wall it represents (length × thickness in plane problems, length × 2πr in axisymmetry) and
+//! the unit normal `n_b` that points from the wall into the body. The grid is reset every
+//! step, so the nodal unknowns of a step are increments `Δu_I`; the grid's displacement at a
+//! boundary particle and its gap to the wall's own displacement over the step `Δū` are
 //!
 //! $$ g_b = \sum_I N_I(x_b)\, \Delta u_I - \Delta\bar u . $$
 //!
 //! The penalty adds the potential `Π = ½ Σ_b β w_b g_bᵀ P_b g_b` with the penalty factor
-//! `β` (N/m³) and the projection `P_b = I` (**no-slip**: the wall holds every component) or
-//! `P_b = n_b ⊗ n_b` (**slip**: frictionless, only the normal component is held), so each
+//! `β` (N/m³) and the projection `P_b = I` (**no-slip**: every component held) or
+//! `P_b = n_b ⊗ n_b` (**slip**: frictionless, only the normal component held), so each
 //! boundary particle adds to the residual `r = f_int − f_ext + M ã` and to the tangent of the
 //! nodes `I, J` of the cell that holds it
 //!
 //! $$ r_I \mathrel{+}= \beta\, w_b\, N_I(x_b)\, P_b\, g_b, \qquad
 //!    K_{IJ} \mathrel{+}= \beta\, w_b\, N_I(x_b)\, N_J(x_b)\, P_b $$
 //!
-//! (Chandra et al. 2021, eqs. 20–23, with Kratos' weighting by the condition's area), and
-//! the wall exerts `f_b = −β w_b P_b g_b` on the body. Choices, as in Chandra et al.:
+//! (Chandra et al. 2021, with Kratos' weighting by the condition's area), and the wall
+//! exerts `f_b = −β w_b P_b g_b` on the body. A boundary particle acts only **where there is
+//! material**: if every node of its cell carries projected mass (`m_I > 0`, summed over the
+//! bodies on the grid), i.e. its cell lies inside the support of the bodies' material
+//! points; elsewhere it would tie nodes that carry no equation of the body. This form is a
+//! bilateral *Dirichlet* condition: it holds a body to the wall in tension as in
+//! compression (a clamp, or a slip support that cuts the grid). Benchmark 6 with slip: the
+//! cylinder slides ½ g sin α t² to 5e-7.
 //!
-//! - **Only where there is material.** A boundary particle acts only if every node of its
-//!   cell carries projected mass (`m_I > 0`, summed over the bodies on the grid), i.e. its
-//!   cell lies inside the support of the bodies' material points; elsewhere it would tie
-//!   nodes that carry no equation of the body. The nodal masses come from the
-//!   [`Projection`] handed to [`Domain::begin_step`], so a penalty boundary must come after
-//!   the particle domains of its grid in the model's domain list.
-//! - **Incremental gap.** The gap is measured over the step (the grid is reset), so a wall
-//!   holding a body at rest admits a penetration of `f / (β w)` per step (1e-8 m for the
-//!   benchmark), not a growing one: the material points move only by `Δu_p`.
-//! - **Optional contact** (separable wall, Kratos' `CONTACT` flag): a boundary particle acts
-//!   only while the grid moves into the wall, `n_b · g_b ≤ 0`, and releases a body that
-//!   moves away. Off by default; the cylinder benchmarks run without it.
-//! - **Initial acceleration.** In the solve for `a₀` (assembly with `stiffness == false`)
-//!   the penalty matrix is kept, so `a₀` obeys the wall as `Δu` does later; without it a body
-//!   resting on the wall would start with the free-fall acceleration into it, and the
-//!   trapezoidal rule would carry the resulting `±a` alternation for the whole run.
+//! # Contact form (a Loam extension)
+//!
+//! A body that *rolls* on a wall defeats the Dirichlet form: its boundary particles act over
+//! the whole band of cut cells that hold material (±6 cm along the wall for the 0.2 m
+//! cylinder on 0.02 m cells), and a rotation `Δθ` about the contact point moves the grid
+//! there by `Δθ s` normal to the wall at a distance `s` from the contact, which the penalty
+//! forbids. The no-slip cylinder of benchmark 6 then sticks and rocks in place, in Loam as in
+//! Kratos 10.4.4 (`"constrained": "fixed"`, same discretisation; measured after 0.1 s: 3.8 %
+//! and 0.9 % of the rolling distance). Kratos' separable variant (`"contact"`, normals
+//! flipped into the body) pivots about the foremost boundary particle and lifts off: −24 %,
+//! 7 mm off the wall after 0.1 s.
+//!
+//! The contact form therefore measures the gap between the wall and the material itself.
+//! Its penalty points are the **material points** `p` near the wall, each a disk of radius
+//! `r_p = ℓ_p / 2` (`ℓ_p` the side of the square of its current volume) at distance
+//! `d_p = n·(x_p − x_wall)` from the wall at the start of the step. Over the step the point
+//! moves by `Δu_p = Σ_I N_I(x_p) Δu_I`, and its normal gap is
+//!
+//! $$ g_{N,p} = d_p - r_p + n\cdot(\Delta u_p - \Delta\bar u) . $$
+//!
+//! It pushes while `g_{N,p} < 0` and, with no-slip, sticks if it was already in contact at
+//! the start of the step (`d_p − r_p < 0`): with the weight `w_p = ℓ_p` × thickness (× 2πr
+//! in axisymmetry), `a_N = [g_{N,p} < 0]` and `a_T = [d_p − r_p < 0]`,
+//!
+//! $$ r_I \mathrel{+}= \beta\, w_p\, N_I(x_p) \big[ a_N\, g_{N,p}\, n
+//!        + a_T\, (I - n\otimes n)(\Delta u_p - \Delta\bar u) \big], \qquad
+//!    K_{IJ} \mathrel{+}= \beta\, w_p\, N_I N_J \big[ a_N\, n\otimes n + a_T\, (I - n\otimes n) \big] $$
+//!
+//! (slip: `a_T = 0`). The normal gap is total, not incremental: a body at rest keeps the
+//! penetration `f / (β w)` that carries it, a body leaves the wall freely, and a point ahead
+//! of a rolling contact is held only once it reaches the wall. The stick is decided once per
+//! step, not per Newton iteration: switched with the normal contact it would make the
+//! residual discontinuous, and Newton then cycles between the two states (observed); so a
+//! new contact slides freely for its first step, and a point leaving the wall is held
+//! tangentially until the end of the step. Points more than one size `ℓ_p` behind the wall
+//! line (its far side) are ignored. The contact moves from point to point around a rolling
+//! body, whose surface is its material points: benchmark 6 with no-slip rolls ⅓ g sin α t²
+//! to about 2 % over 1 s, but the corners of this discrete surface make the cylinder hop
+//! (up to 3 cm off the plane at 4 m/s) as the trapezoidal rule returns the energy of each
+//! corner's impact.
+//!
+//! Both forms keep their penalty matrix in the solve for the initial acceleration
+//! (assembly with `stiffness == false`), so `a₀` obeys the wall as `Δu` does later: a body
+//! pressed on a wall does not start with the free-fall acceleration into it (which the
+//! trapezoidal rule would carry as a `±a` alternation for the whole run). The nodal masses
+//! and material points come from the [`Projection`] handed to [`Domain::begin_step`], so a
+//! penalty wall must come after the particle domains of its grid in the model's domain list.
 
 use loam_fem::amplitude::Amplitude;
 use loam_fem::assembly::BlockLayout;
@@ -50,7 +89,7 @@ use loam_fem::formulation::Formulation;
 
 use crate::grid::Grid;
 
-/// Which components of the grid's motion a penalty wall holds.
+/// Which components of the motion a penalty wall holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PenaltyKind {
     /// Every component (`P = I`): the body sticks to the wall (it may still roll).
@@ -73,22 +112,15 @@ pub struct BoundaryParticles {
 
 impl BoundaryParticles {
     /// Particles along the polyline `vertices` (2D): each segment of length `L` is split
-    /// into `⌈L / spacing⌉` equal parts with a particle at the middle of each, weighted by the
+    /// into `⌈L / spacing⌉` equal parts (one if `spacing` is not positive) with a particle at the middle of each, weighted by the
     /// part's length times the formulation's measure factor (thickness or `2πr`). The normal
     /// is the segment's left normal: the body lies on the left of the polyline as it runs
     /// from its first vertex to its last.
     pub fn on_polyline(vertices: &[[f64; 2]], spacing: f64, formulation: Formulation, thickness: f64) -> Self {
         let mut p = Self::default();
-        for w in vertices.windows(2) {
-            let (a, b) = (w[0], w[1]);
-            let d = [b[0] - a[0], b[1] - a[1]];
-            let len = d[0].hypot(d[1]);
-            if len <= 0.0 {
-                continue;
-            }
-            let n = (len / spacing).ceil().max(1.0) as usize;
-            let part = len / n as f64;
-            let normal = [-d[1] / len, d[0] / len, 0.0];
+        for Segment { start: a, direction: d, length, normal } in segments(vertices) {
+            let n = if spacing > 0.0 { (length / spacing).ceil().max(1.0) as usize } else { 1 };
+            let part = length / n as f64;
             for k in 0..n {
                 let s = (k as f64 + 0.5) / n as f64;
                 let x = [a[0] + s * d[0], a[1] + s * d[1], 0.0];
@@ -111,16 +143,47 @@ impl BoundaryParticles {
     }
 }
 
+/// A straight piece of a wall.
+#[derive(Debug, Clone, Copy)]
+struct Segment {
+    /// First point.
+    start: [f64; 2],
+    /// From the first point to the second.
+    direction: [f64; 2],
+    /// Length.
+    length: f64,
+    /// Left unit normal (into the body).
+    normal: [f64; 3],
+}
+
+/// The segments of a 2D polyline that have a positive length.
+fn segments(vertices: &[[f64; 2]]) -> Vec<Segment> {
+    vertices
+        .windows(2)
+        .filter_map(|w| {
+            let d = [w[1][0] - w[0][0], w[1][1] - w[0][1]];
+            let length = d[0].hypot(d[1]);
+            (length > 0.0).then(|| Segment {
+                start: w[0],
+                direction: d,
+                length,
+                normal: [-d[1] / length, d[0] / length, 0.0],
+            })
+        })
+        .collect()
+}
+
 /// Parameters of a penalty wall.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PenaltySettings {
     /// Penalty factor β (N/m³: force per wall measure per metre of gap). Chandra et al. use
-    /// 1e13 for steel-like bodies (E = 200 MPa); β w_b should exceed the body's stiffness
+    /// 1e13 for steel-like bodies (E = 200 MPa); β w should exceed the body's stiffness
     /// `E · thickness` by two to four orders of magnitude.
     pub penalty_factor: f64,
     /// No-slip or slip.
     pub kind: PenaltyKind,
-    /// Act only while the grid moves into the wall (separable contact).
+    /// Contact form (material points against the wall, unilateral) instead of the Dirichlet
+    /// form (boundary particles, bilateral).
     pub contact: bool,
     /// Wall displacement (m) scaled by `amplitude(t)`: a moving wall (zero for a fixed one).
     pub displacement: [f64; 3],
@@ -128,60 +191,87 @@ pub struct PenaltySettings {
     pub amplitude: Amplitude,
 }
 
-/// A rigid wall enforced on a background grid by penalty-augmented boundary particles.
+/// One penalty point of a step: a boundary particle (Dirichlet form) or a material point
+/// near the wall (contact form).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct PenaltyPoint {
+    /// Grid cell that holds it.
+    cell: usize,
+    /// Shape functions of the cell at the point.
+    shape: [f64; MAX_NODES],
+    /// Measure `w` (m² in plane problems).
+    weight: f64,
+    /// Unit normal from the wall into the body.
+    normal: [f64; 3],
+    /// Normal gap at the start of the step (contact form: `d_p − r_p`; Dirichlet form: 0).
+    gap: f64,
+    /// Position at the start of the step.
+    position: [f64; 3],
+}
+
+/// A rigid wall enforced on a background grid by penalty (see the module doc).
 pub struct PenaltyBoundary {
     name: String,
     formulation: Formulation,
     thickness: f64,
     grid: Grid,
     node_ids: Vec<usize>,
+    /// Wall polyline (positions at `t = 0`).
+    vertices: Vec<[f64; 2]>,
+    /// Boundary particles (Dirichlet form; empty in the contact form).
     particles: BoundaryParticles,
     settings: PenaltySettings,
     /// Time `t_n` of the committed state.
     time: f64,
     /// Wall displacement at `t_n`.
     offset: [f64; 3],
-    /// Cells with acting particles (ascending): the element blocks.
+    /// Penalty points of the step, sorted by cell.
+    points: Vec<PenaltyPoint>,
+    /// Cells holding penalty points (ascending): the element blocks.
     cells: Vec<usize>,
-    /// Particles of block `k`: `order[cell_ptr[k]..cell_ptr[k+1]]`.
+    /// Points of block `k`: `points[cell_ptr[k]..cell_ptr[k+1]]`.
     cell_ptr: Vec<usize>,
-    order: Vec<usize>,
-    /// Shape functions at each particle of `order`.
-    shape: Vec<[f64; MAX_NODES]>,
-    /// Force of the wall on the body at each particle (N), committed.
+    /// Force of the wall on the body at each point (N) and whether it acted, committed.
     force: Vec<[f64; 3]>,
-    /// Whether each particle acted in the last converged step.
     acting: Vec<bool>,
 }
 
 impl PenaltyBoundary {
-    /// A wall of `particles` on `grid`, whose local node `a` is global node `node_ids[a]`.
+    /// A wall along the 2D polyline `vertices` (the body on its left) on `grid`, whose local
+    /// node `a` is global node `node_ids[a]`; in the Dirichlet form its boundary particles
+    /// are `spacing` apart ([`BoundaryParticles::on_polyline`]).
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         name: &str,
         grid: Grid,
         node_ids: Vec<usize>,
         formulation: Formulation,
         thickness: f64,
-        particles: BoundaryParticles,
+        vertices: Vec<[f64; 2]>,
+        spacing: f64,
         settings: PenaltySettings,
     ) -> Self {
-        let n = particles.len();
+        let particles = if settings.contact {
+            BoundaryParticles::default()
+        } else {
+            BoundaryParticles::on_polyline(&vertices, spacing, formulation, thickness)
+        };
         Self {
             name: name.to_string(),
             formulation,
             thickness,
             grid,
             node_ids,
+            vertices,
             particles,
             settings,
             time: 0.0,
             offset: [0.0; 3],
+            points: Vec::new(),
             cells: Vec::new(),
             cell_ptr: vec![0],
-            order: Vec::new(),
-            shape: Vec::new(),
-            force: vec![[0.0; 3]; n],
-            acting: vec![false; n],
+            force: Vec::new(),
+            acting: Vec::new(),
         }
     }
 
@@ -196,8 +286,8 @@ impl PenaltyBoundary {
         f
     }
 
-    /// Number of boundary particles that acted in the last converged step.
-    pub fn acting_particles(&self) -> usize {
+    /// Number of penalty points that acted in the last converged step.
+    pub fn acting_points(&self) -> usize {
         self.acting.iter().filter(|a| **a).count()
     }
 
@@ -210,30 +300,59 @@ impl PenaltyBoundary {
         self.settings.displacement.map(|d| d * f)
     }
 
-    /// `(β w_b, g_b, whether it acts)` of particle `k` of `order` in block `cell` at `input`.
-    fn gap(&self, k: usize, cell: usize, input: &AssemblyInput<'_>) -> (f64, [f64; 3], bool) {
-        let b = self.order[k];
+    /// The point at `x` if it lies in a cell with projected mass on every node.
+    fn place(&self, x: [f64; 3], weight: f64, normal: [f64; 3], gap: f64, mass: &[f64]) -> Option<PenaltyPoint> {
+        let (cell, xi) = self.grid.locate(&x)?;
+        if !self.grid.mesh.cell(cell).iter().all(|&a| mass[self.node_ids[a]] > 0.0) {
+            return None;
+        }
+        let mut shape = [0.0; MAX_NODES];
+        let element = self.grid.mesh.element;
+        element.shape_functions(&xi, &mut shape[..element.num_nodes()]);
+        Some(PenaltyPoint { cell, shape, weight, normal, gap, position: x })
+    }
+
+    /// Penalty vector `v` (force on the body `−β w v`) of point `k` at `input`, its
+    /// derivative `P = ∂v/∂g` with respect to the point's displacement (the tangent is
+    /// `β w N_I N_J P`), and whether the point acts.
+    fn penalty_vector(&self, k: usize, input: &AssemblyInput<'_>) -> ([f64; 3], [[f64; 3]; 3], bool) {
+        let p = &self.points[k];
         let dim = self.dim();
         let wall = self.wall_displacement(input.time);
         let mut g = [0.0; 3];
         for i in 0..dim {
             g[i] = -(wall[i] - self.offset[i]);
         }
-        for (a, &node) in self.grid.mesh.cell(cell).iter().enumerate() {
+        for (a, &node) in self.grid.mesh.cell(p.cell).iter().enumerate() {
             let dof = self.node_ids[node] * dim;
             for i in 0..dim {
-                g[i] += self.shape[k][a] * (input.state.u[dof + i] - input.committed.u[dof + i]);
+                g[i] += p.shape[a] * (input.state.u[dof + i] - input.committed.u[dof + i]);
             }
         }
-        let n = self.particles.normal[b];
+        let n = p.normal;
         let gn: f64 = (0..dim).map(|i| n[i] * g[i]).sum();
-        let acts = !self.settings.contact || gn <= 0.0;
-        if self.settings.kind == PenaltyKind::Slip {
-            for i in 0..dim {
-                g[i] = n[i] * gn;
+        let no_slip = self.settings.kind == PenaltyKind::NoSlip;
+        let (normal, tangential) =
+            if self.settings.contact { (gn + p.gap < 0.0, no_slip && p.gap < 0.0) } else { (true, no_slip) };
+        let mut v = [0.0; 3];
+        let mut dv = [[0.0; 3]; 3];
+        for i in 0..dim {
+            if normal {
+                v[i] += (gn + p.gap) * n[i];
+                for j in 0..dim {
+                    dv[i][j] += n[i] * n[j];
+                }
             }
         }
-        (self.settings.penalty_factor * self.particles.weight[b], g, acts)
+        if tangential {
+            for i in 0..dim {
+                v[i] += g[i] - gn * n[i];
+                for j in 0..dim {
+                    dv[i][j] += f64::from(u8::from(i == j)) - n[i] * n[j];
+                }
+            }
+        }
+        (v, dv, normal || tangential)
     }
 }
 
@@ -250,42 +369,59 @@ impl Domain for PenaltyBoundary {
         self.thickness
     }
 
-    /// Locates the boundary particles at the wall's position at `t_n` and keeps those whose
-    /// cell has projected mass on every node; their cells are the element blocks.
+    /// Places the penalty points at the wall's position at `t_n`: the boundary particles
+    /// (Dirichlet form) or the material points within one size of the wall (contact form),
+    /// each kept only in a cell with projected mass on every node; their cells are the
+    /// element blocks.
     fn begin_step(&mut self, projection: &mut Projection) -> bool {
         self.offset = self.wall_displacement(self.time);
-        let element = self.grid.mesh.element;
-        let nn = element.num_nodes();
-        let mut found: Vec<(usize, usize, [f64; MAX_NODES])> = Vec::new();
-        for (b, x0) in self.particles.position.iter().enumerate() {
-            let x = [x0[0] + self.offset[0], x0[1] + self.offset[1], x0[2] + self.offset[2]];
-            let Some((cell, xi)) = self.grid.locate(&x) else { continue };
-            let with_mass = self.grid.mesh.cell(cell).iter().all(|&a| projection.mass[self.node_ids[a]] > 0.0);
-            if with_mass {
-                let mut n = [0.0; MAX_NODES];
-                element.shape_functions(&xi, &mut n[..nn]);
-                found.push((cell, b, n));
-            }
-        }
-        found.sort_unstable_by_key(|f| (f.0, f.1));
-        let mut cells = Vec::new();
-        self.cell_ptr.clear();
-        self.cell_ptr.push(0);
-        self.order.clear();
-        self.shape.clear();
-        for (k, (cell, b, n)) in found.into_iter().enumerate() {
-            if cells.last() != Some(&cell) {
-                if k > 0 {
-                    self.cell_ptr.push(k);
+        let o = self.offset;
+        let mut points = Vec::new();
+        if self.settings.contact {
+            let segs = segments(&self.vertices);
+            for &(x, size) in &projection.points {
+                let r = 0.5 * size;
+                // the nearest segment on whose span the point lies
+                let near = segs
+                    .iter()
+                    .filter_map(|seg| {
+                        let (a, d, n) = (seg.start, seg.direction, seg.normal);
+                        let rel = [x[0] - a[0] - o[0], x[1] - a[1] - o[1]];
+                        let s = (rel[0] * d[0] + rel[1] * d[1]) / seg.length;
+                        let dist = rel[0] * n[0] + rel[1] * n[1];
+                        (s >= 0.0 && s <= seg.length && dist > -size && dist - r < size).then_some((dist, n))
+                    })
+                    .min_by(|a, b| a.0.abs().total_cmp(&b.0.abs()));
+                if let Some((dist, n)) = near {
+                    let w = size * self.formulation.measure_factor(self.thickness, x[0]);
+                    points.extend(self.place(x, w, n, dist - r, &projection.mass));
                 }
-                cells.push(cell);
             }
-            self.order.push(b);
-            self.shape.push(n);
+        } else {
+            for b in 0..self.particles.len() {
+                let x0 = self.particles.position[b];
+                let x = [x0[0] + o[0], x0[1] + o[1], x0[2] + o[2]];
+                let (w, n) = (self.particles.weight[b], self.particles.normal[b]);
+                points.extend(self.place(x, w, n, 0.0, &projection.mass));
+            }
         }
-        if !cells.is_empty() {
-            self.cell_ptr.push(self.order.len());
+        // by cell, then by position (deterministic whatever the order of the projection)
+        points.sort_by(|a, b| {
+            a.cell
+                .cmp(&b.cell)
+                .then(a.position[0].total_cmp(&b.position[0]))
+                .then(a.position[1].total_cmp(&b.position[1]))
+        });
+        let mut cells: Vec<usize> = Vec::new();
+        self.cell_ptr.clear();
+        for (k, p) in points.iter().enumerate() {
+            if cells.last() != Some(&p.cell) {
+                cells.push(p.cell);
+                self.cell_ptr.push(k);
+            }
         }
+        self.cell_ptr.push(points.len());
+        self.points = points;
         let changed = cells != self.cells;
         self.cells = cells;
         changed
@@ -298,8 +434,8 @@ impl Domain for PenaltyBoundary {
         }
     }
 
-    /// `r_I = Σ_b β w_b N_I P_b g_b` and `K_IJ = Σ_b β w_b N_I N_J P_b` over the acting
-    /// particles of each block.
+    /// `r_I = Σ β w N_I v` and `K_IJ = Σ β w N_I N_J P` over the acting points of each block
+    /// (`v` and `P` of the form, see the module doc).
     fn assemble(
         &mut self,
         input: &AssemblyInput<'_>,
@@ -309,7 +445,7 @@ impl Domain for PenaltyBoundary {
         let nn = self.grid.mesh.element.num_nodes();
         let dim = self.dim();
         let nd = nn * dim;
-        for (blk, &cell) in self.cells.iter().enumerate() {
+        for blk in 0..self.cells.len() {
             let fv = &mut vectors[blk * nd..(blk + 1) * nd];
             fv.fill(0.0);
             let km = &mut matrices[blk * nd * nd..(blk + 1) * nd * nd];
@@ -317,28 +453,24 @@ impl Domain for PenaltyBoundary {
                 km.fill(0.0);
             }
             for k in self.cell_ptr[blk]..self.cell_ptr[blk + 1] {
-                let (bw, g, acts) = self.gap(k, cell, input);
+                let (v, dv, acts) = self.penalty_vector(k, input);
                 if !acts {
                     continue;
                 }
-                let n = &self.shape[k];
-                let normal = self.particles.normal[self.order[k]];
-                let p = |i: usize, j: usize| match self.settings.kind {
-                    PenaltyKind::NoSlip => f64::from(u8::from(i == j)),
-                    PenaltyKind::Slip => normal[i] * normal[j],
-                };
+                let p = &self.points[k];
+                let bw = self.settings.penalty_factor * p.weight;
                 for a in 0..nn {
                     for i in 0..dim {
-                        fv[a * dim + i] += bw * n[a] * g[i];
+                        fv[a * dim + i] += bw * p.shape[a] * v[i];
                     }
                 }
                 if input.with_tangent {
                     for a in 0..nn {
                         for c in 0..nn {
-                            let s = bw * n[a] * n[c];
+                            let s = bw * p.shape[a] * p.shape[c];
                             for i in 0..dim {
                                 for j in 0..dim {
-                                    km[(a * dim + i) * nd + c * dim + j] += s * p(i, j);
+                                    km[(a * dim + i) * nd + c * dim + j] += s * dv[i][j];
                                 }
                             }
                         }
@@ -349,22 +481,23 @@ impl Domain for PenaltyBoundary {
         Ok(())
     }
 
-    /// Records the force of the wall on the body at each particle, `f_b = −β w_b P_b g_b`,
-    /// and moves the wall's clock to `t_{n+1}`.
+    /// Records the force of the wall on the body at each point, `f = −β w v`, and moves the
+    /// wall's clock to `t_{n+1}`.
     fn commit(&mut self, input: &AssemblyInput<'_>) {
-        self.force.iter_mut().for_each(|f| *f = [0.0; 3]);
-        self.acting.iter_mut().for_each(|a| *a = false);
-        for (blk, &cell) in self.cells.iter().enumerate() {
-            for k in self.cell_ptr[blk]..self.cell_ptr[blk + 1] {
-                let (bw, g, acts) = self.gap(k, cell, input);
-                let b = self.order[k];
-                if acts {
-                    self.force[b] = g.map(|v| -bw * v);
-                    self.acting[b] = true;
-                }
-            }
-        }
+        let (force, acting): (Vec<[f64; 3]>, Vec<bool>) = (0..self.points.len())
+            .map(|k| {
+                let (v, _, acts) = self.penalty_vector(k, input);
+                let bw = self.settings.penalty_factor * self.points[k].weight;
+                (v.map(|c| -bw * c), acts)
+            })
+            .unzip();
+        self.force = force;
+        self.acting = acting;
         self.time = input.time;
+    }
+
+    fn wall_force(&self) -> Option<[f64; 3]> {
+        Some(self.total_force())
     }
 
     fn kinetic_energy(&self, _v: &[f64]) -> f64 {
@@ -379,25 +512,26 @@ impl Domain for PenaltyBoundary {
         Vec::new()
     }
 
-    /// The boundary particles at the wall's current position with `force` (of the wall on
-    /// the body, N), `normal` and `active` (1 where the particle acted in the last step).
+    /// The penalty points of the last step (boundary particles, or the material points near
+    /// the wall) with `force` (of the wall on the body, N), `normal` and `active` (1 where the
+    /// point acted).
     fn output(&self, _committed: &NodalState) -> DomainOutput {
-        let offset = self.wall_displacement(self.time);
-        let points = self.particles.position.iter().map(|x| [x[0] + offset[0], x[1] + offset[1], x[2] + offset[2]]);
+        let n = self.points.len().min(self.force.len());
+        let pts = &self.points[..n];
         DomainOutput {
-            points: points.collect(),
+            points: pts.iter().map(|p| p.position).collect(),
             cells: None,
             point_fields: vec![
-                Field { name: "force".into(), components: 3, values: self.force.iter().flatten().copied().collect() },
                 Field {
-                    name: "normal".into(),
+                    name: "force".into(),
                     components: 3,
-                    values: self.particles.normal.iter().flatten().copied().collect(),
+                    values: self.force[..n].iter().flatten().copied().collect(),
                 },
+                Field { name: "normal".into(), components: 3, values: pts.iter().flat_map(|p| p.normal).collect() },
                 Field {
                     name: "active".into(),
                     components: 1,
-                    values: self.acting.iter().map(|&a| f64::from(u8::from(a))).collect(),
+                    values: self.acting[..n].iter().map(|&a| f64::from(u8::from(a))).collect(),
                 },
             ],
             cell_fields: Vec::new(),
@@ -411,12 +545,15 @@ mod tests {
 
     use super::*;
 
+    const WALL: [[f64; 2]; 2] = [[0.1, 0.3], [2.9, 1.7]];
+
     /// A 3 × 2 quad grid of unit cells, a wall along a slanted segment through it, and a
-    /// projection with mass on every node but the top-right one.
+    /// projection with mass on every node but the top-right one; in the contact form, three
+    /// material points of size 0.2 near the wall (one 0.05 behind its line, one touching it,
+    /// one 0.15 in front).
     fn setup(kind: PenaltyKind, contact: bool) -> (PenaltyBoundary, Projection) {
         let grid = Grid::new([0.0; 3], [3.0, 2.0, 0.0], [3, 2, 1], ElementType::Quad4);
         let nodes = grid.mesh.coords.len();
-        let particles = BoundaryParticles::on_polyline(&[[0.1, 0.3], [2.9, 1.7]], 0.25, Formulation::PlaneStrain, 2.0);
         let settings = PenaltySettings {
             penalty_factor: 1e3,
             kind,
@@ -430,12 +567,18 @@ mod tests {
             (0..nodes).collect(),
             Formulation::PlaneStrain,
             2.0,
-            particles,
+            WALL.to_vec(),
+            0.25,
             settings,
         );
         let mut projection = Projection::new(nodes, 2);
         projection.mass.iter_mut().for_each(|m| *m = 1.0);
         projection.mass[nodes - 1] = 0.0;
+        let n = [-0.4472135954999579, 0.8944271909999159];
+        for (s, d) in [(0.6, 0.05), (1.2, 0.1), (1.8, 0.25)] {
+            let x = [WALL[0][0] + s * 0.8944271909999159 + d * n[0], WALL[0][1] + s * 0.4472135954999579 + d * n[1]];
+            projection.points.push(([x[0], x[1], 0.0], 0.2));
+        }
         (wall, projection)
     }
 
@@ -456,7 +599,8 @@ mod tests {
 
     #[test]
     fn polyline_particles_carry_the_wall_measure() {
-        let p = BoundaryParticles::on_polyline(&[[0.0, 0.0], [3.0, 4.0], [3.0, 5.0]], 0.3, Formulation::PlaneStrain, 2.0);
+        let p =
+            BoundaryParticles::on_polyline(&[[0.0, 0.0], [3.0, 4.0], [3.0, 5.0]], 0.3, Formulation::PlaneStrain, 2.0);
         assert_eq!(p.len(), 17 + 4);
         let total: f64 = p.weight.iter().sum();
         assert!((total - 2.0 * 6.0).abs() < 1e-12, "{total}");
@@ -464,91 +608,149 @@ mod tests {
     }
 
     #[test]
-    fn particles_act_only_in_cells_with_mass_on_every_node() {
+    fn penalty_points_lie_where_the_material_is() {
         let (mut wall, mut projection) = setup(PenaltyKind::NoSlip, false);
         assert!(wall.begin_step(&mut projection));
         // the segment crosses cells 0, 1, 4 and 5; cell 5 has the massless top-right node
         assert_eq!(wall.cells, vec![0, 1, 4]);
         assert!(!wall.begin_step(&mut projection), "same blocks: the pattern is kept");
+        // contact form: the three material points, gaps d − r
+        let (mut wall, mut projection) = setup(PenaltyKind::NoSlip, true);
+        assert!(wall.begin_step(&mut projection));
+        let gaps: Vec<f64> = wall.points.iter().map(|p| p.gap).collect();
+        assert_eq!(gaps.len(), 3);
+        for (g, e) in gaps.iter().zip([-0.05, 0.0, 0.15]) {
+            assert!((g - e).abs() < 1e-12, "{gaps:?}");
+        }
+    }
+
+    /// A uniform increment `u` of every node.
+    fn uniform(ndof: usize, u: [f64; 2]) -> NodalState {
+        let mut state = NodalState::zeros(ndof);
+        for (k, v) in state.u.iter_mut().enumerate() {
+            *v = u[k % 2];
+        }
+        state
     }
 
     /// The penalty tangent is the derivative of the penalty residual (central differences),
-    /// no-slip, slip and contact (away from its switch).
+    /// both forms, no-slip and slip (the contact form away from its switches).
     #[test]
     fn tangent_matches_finite_differences_of_the_residual() {
-        for (kind, contact) in [(PenaltyKind::NoSlip, false), (PenaltyKind::Slip, false), (PenaltyKind::Slip, true)] {
-            let (mut wall, mut projection) = setup(kind, contact);
-            wall.begin_step(&mut projection);
-            let mut layout = BlockLayout::default();
-            wall.blocks(&mut layout);
-            let ndof = 2 * wall.grid.mesh.coords.len();
-            let committed = NodalState::zeros(ndof);
-            let mut state = NodalState::zeros(ndof);
-            for (k, u) in state.u.iter_mut().enumerate() {
-                // into the wall (−n = (0.447, −0.894)) plus a pseudo-random part
-                *u = 0.01 * (if k % 2 == 0 { 0.447 } else { -0.894 }) + 1e-3 * ((k * 7919) % 13) as f64 / 13.0;
-            }
-            let mut mats = vec![0.0; layout.matrix_len()];
-            let mut vecs = vec![0.0; layout.vector_len()];
-            wall.assemble(&input(&state, &committed), &mut mats, &mut vecs).unwrap();
-            let scale = mats.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            assert!(scale > 0.0);
-            let h = 1e-6;
-            for blk in 0..layout.num_blocks() {
-                let dofs = &layout.dofs[layout.dof_ptr[blk]..layout.dof_ptr[blk + 1]];
-                let nd = dofs.len();
-                for (j, &gj) in dofs.iter().enumerate() {
-                    let mut r = [vec![0.0; layout.vector_len()], vec![0.0; layout.vector_len()]];
-                    for (s, sign) in [1.0, -1.0].into_iter().enumerate() {
-                        let mut st = state.clone();
-                        st.u[gj] += sign * h;
-                        let mut m = vec![0.0; layout.matrix_len()];
-                        wall.assemble(&input(&st, &committed), &mut m, &mut r[s]).unwrap();
-                    }
-                    for i in 0..nd {
-                        let fd = (r[0][layout.dof_ptr[blk] + i] - r[1][layout.dof_ptr[blk] + i]) / (2.0 * h);
-                        let k = mats[layout.matrix_offset[blk] + i * nd + j];
-                        assert!((fd - k).abs() <= 1e-7 * scale, "{kind:?} contact {contact}: K {k} vs FD {fd}");
+        for kind in [PenaltyKind::NoSlip, PenaltyKind::Slip] {
+            for contact in [false, true] {
+                let (mut wall, mut projection) = setup(kind, contact);
+                wall.begin_step(&mut projection);
+                let mut layout = BlockLayout::default();
+                wall.blocks(&mut layout);
+                let ndof = 2 * wall.grid.mesh.coords.len();
+                let committed = NodalState::zeros(ndof);
+                let mut state = NodalState::zeros(ndof);
+                for (k, u) in state.u.iter_mut().enumerate() {
+                    // 0.02 into the wall (−n = (0.447, −0.894)) plus a pseudo-random part
+                    *u = 0.02 * (if k % 2 == 0 { 0.447 } else { -0.894 }) + 1e-3 * ((k * 7919) % 13) as f64 / 13.0;
+                }
+                let mut mats = vec![0.0; layout.matrix_len()];
+                let mut vecs = vec![0.0; layout.vector_len()];
+                wall.assemble(&input(&state, &committed), &mut mats, &mut vecs).unwrap();
+                let scale = mats.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                assert!(scale > 0.0);
+                let h = 1e-6;
+                for blk in 0..layout.num_blocks() {
+                    let dofs = &layout.dofs[layout.dof_ptr[blk]..layout.dof_ptr[blk + 1]];
+                    let nd = dofs.len();
+                    for (j, &gj) in dofs.iter().enumerate() {
+                        let mut r = [vec![0.0; layout.vector_len()], vec![0.0; layout.vector_len()]];
+                        for (s, sign) in [1.0, -1.0].into_iter().enumerate() {
+                            let mut st = state.clone();
+                            st.u[gj] += sign * h;
+                            let mut m = vec![0.0; layout.matrix_len()];
+                            wall.assemble(&input(&st, &committed), &mut m, &mut r[s]).unwrap();
+                        }
+                        for i in 0..nd {
+                            let fd = (r[0][layout.dof_ptr[blk] + i] - r[1][layout.dof_ptr[blk] + i]) / (2.0 * h);
+                            let k = mats[layout.matrix_offset[blk] + i * nd + j];
+                            assert!((fd - k).abs() <= 1e-7 * scale, "{kind:?} contact {contact}: K {k} vs FD {fd}");
+                        }
                     }
                 }
             }
         }
     }
 
-    /// Slip holds only the normal component; contact releases a body moving away; the
-    /// committed forces sum to the wall's total force.
+    /// Slip holds only the normal component, no-slip also the tangential one; in the contact
+    /// form only the points whose gap closes push, with the total gap, and only those in
+    /// contact at the start of the step stick.
     #[test]
-    fn slip_holds_the_normal_component_and_contact_releases() {
-        for (kind, contact, sign) in [
-            (PenaltyKind::Slip, false, 1.0),
-            (PenaltyKind::NoSlip, false, 1.0),
-            (PenaltyKind::Slip, true, 1.0),
-            (PenaltyKind::Slip, true, -1.0),
-        ] {
-            let (mut wall, mut projection) = setup(kind, contact);
+    fn forces_of_both_forms() {
+        let n = [-0.4472135954999579, 0.8944271909999159];
+        let t = [n[1], -n[0]];
+        // uniform motion: tangential 1 cm, normal 0.1 into the wall
+        let u = [0.01 * t[0] - 0.1 * n[0], 0.01 * t[1] - 0.1 * n[1]];
+        for kind in [PenaltyKind::Slip, PenaltyKind::NoSlip] {
+            for contact in [false, true] {
+                let (mut wall, mut projection) = setup(kind, contact);
+                wall.begin_step(&mut projection);
+                let ndof = 2 * wall.grid.mesh.coords.len();
+                let (committed, state) = (NodalState::zeros(ndof), uniform(ndof, u));
+                wall.commit(&input(&state, &committed));
+                let f = wall.total_force();
+                let (fn_, ft) = (f[0] * n[0] + f[1] * n[1], f[0] * t[0] + f[1] * t[1]);
+                let (expected_n, expected_t, acting) = if contact {
+                    // points of weight 0.2 × thickness 2 with gaps −0.05 and 0 close by 0.1 (not
+                    // the one at 0.15); only the first was in contact at the start: it sticks
+                    let stick = if kind == PenaltyKind::NoSlip { -1e3 * 0.4 * 0.01 } else { 0.0 };
+                    (1e3 * 0.4 * (0.15 + 0.1), stick, 2)
+                } else {
+                    // every boundary particle of cells 0, 1, 4
+                    let m: f64 = wall.points.iter().map(|p| p.weight).sum();
+                    let stick = if kind == PenaltyKind::NoSlip { -1e3 * m * 0.01 } else { 0.0 };
+                    (1e3 * 0.1 * m, stick, wall.points.len())
+                };
+                assert_eq!(wall.acting_points(), acting, "{kind:?} contact {contact}");
+                assert!((fn_ - expected_n).abs() < 1e-9 * expected_n, "{kind:?} {contact}: normal force {fn_}");
+                assert!((ft - expected_t).abs() < 1e-9 * fn_.abs(), "{kind:?} {contact}: tangential force {ft}");
+            }
+        }
+        // contact releases a body moving away from the wall
+        let (mut wall, mut projection) = setup(PenaltyKind::Slip, true);
+        wall.begin_step(&mut projection);
+        let ndof = 2 * wall.grid.mesh.coords.len();
+        let (committed, state) = (NodalState::zeros(ndof), uniform(ndof, [0.1 * n[0], 0.1 * n[1]]));
+        wall.commit(&input(&state, &committed));
+        assert_eq!((wall.acting_points(), wall.total_force()), (0, [0.0; 3]));
+    }
+
+    /// A moving wall (displacement × amplitude ramp): a body that follows the wall's
+    /// increment feels no force, one left behind is pulled along; boundary particles move
+    /// with the wall, and the contact form measures gaps from the moved wall.
+    #[test]
+    fn moving_wall_prescribes_its_increment() {
+        for contact in [false, true] {
+            let (mut wall, mut projection) = setup(PenaltyKind::NoSlip, contact);
+            wall.settings.displacement = [0.05, -0.02, 0.0];
+            wall.settings.amplitude = Amplitude::Table(vec![[0.0, 0.0], [1.0, 1.0], [2.0, 3.0]]);
             wall.begin_step(&mut projection);
             let ndof = 2 * wall.grid.mesh.coords.len();
             let committed = NodalState::zeros(ndof);
-            let mut state = NodalState::zeros(ndof);
-            let n = wall.particles.normal[0];
-            let t = [n[1], -n[0]];
-            // uniform motion: tangential 1 cm, normal 1 mm into (sign 1) or away from the wall
-            for node in 0..ndof / 2 {
-                for i in 0..2 {
-                    state.u[2 * node + i] = 0.01 * t[i] - sign * 0.001 * n[i];
-                }
-            }
-            wall.commit(&input(&state, &committed));
+            wall.commit(&input(&committed, &committed));
+            let left_behind = wall.total_force();
+            // t = 1 → 2: the wall moves by 2 × (0.05, −0.02)
+            wall.begin_step(&mut projection);
+            let state = uniform(ndof, [0.1, -0.04]);
+            wall.commit(&AssemblyInput { time: 2.0, ..input(&state, &committed) });
             let f = wall.total_force();
-            let measure: f64 = (0..wall.order.len()).map(|k| wall.particles.weight[wall.order[k]]).sum();
-            let (fn_, ft) = (f[0] * n[0] + f[1] * n[1], f[0] * t[0] + f[1] * t[1]);
-            if contact && sign < 0.0 {
-                assert_eq!((fn_, ft, wall.acting_particles()), (0.0, 0.0, 0));
-                continue;
+            if contact {
+                // the wall moved away from the points (which the test keeps in place)
+                let n = wall.points[0].normal;
+                let away = -(n[0] * 0.05 - n[1] * 0.02);
+                assert!((wall.points[0].gap - (-0.05 + away)).abs() < 1e-12, "{}", wall.points[0].gap);
+            } else {
+                assert!(f.iter().all(|v| v.abs() < 1e-9), "a following body feels {f:?}");
+                assert!(left_behind[0] > 1.0 && left_behind[1] < -1.0, "left behind: {left_behind:?}");
+                let x = wall.points[0].position;
+                assert!((x[0] - wall.particles.position[0][0] - 0.05).abs() < 1e-12, "{x:?}");
             }
-            assert!((fn_ - 1e3 * measure * 0.001).abs() < 1e-9 * fn_, "{kind:?}: normal force {fn_}");
-            let expected_t = if kind == PenaltyKind::NoSlip { -1e3 * measure * 0.01 } else { 0.0 };
-            assert!((ft - expected_t).abs() < 1e-9 * fn_.abs().max(1.0), "{kind:?}: tangential force {ft}");
         }
     }
 }

@@ -64,9 +64,9 @@ impl ResultWriter {
                 }
                 due
             }
-            None => self.interval > 0 && sim.step % self.interval == 0,
+            None => sim.case.output.times.is_empty() && self.interval > 0 && sim.step % self.interval == 0,
         };
-        if (force || on_interval) && self.last_vtk_step != Some(sim.step) {
+        if (force || on_interval || sim.at_output_time()) && self.last_vtk_step != Some(sim.step) {
             if let Some(vtk) = &mut self.vtk {
                 vtk.write(sim)?;
             }
