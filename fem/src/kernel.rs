@@ -22,7 +22,7 @@
 //! with the hoop term `F33 = 1 + u_r/R` added for axisymmetry and `F33` condensed out by
 //! `P̃33 = 0` for plane stress.
 
-use loam_laws::{idx, ConstitutiveLaw, Kinematics, LawError, StressResponse, Tangent};
+use loam_laws::{idx, ConstitutiveLaw, Kinematics, LawError, StressResponse, Tangent, TangentRequest};
 use nalgebra::Matrix3;
 
 use crate::element::{ElementType, MAX_NODES};
@@ -165,8 +165,10 @@ pub fn active_components(formulation: Formulation) -> &'static [usize] {
     }
 }
 
-/// `P̃ = J0⁻¹ P F0ᵀ` and `Ã_iJkM = J0⁻¹ A_iKkL F0_JK F0_ML` (see the module doc), in place.
-fn pull_back(f0: &Matrix3<f64>, p: &mut Matrix3<f64>, a: &mut Tangent) {
+/// `P̃ = J0⁻¹ P F0ᵀ` and `Ã_iJkM = J0⁻¹ A_iKkL F0_JK F0_ML` (see the module doc), in place,
+/// over the rows and columns `components` of the tangent (`F0` is block diagonal with respect
+/// to them, so the sums over `K` and `L` stay inside them too).
+fn pull_back(f0: &Matrix3<f64>, p: &mut Matrix3<f64>, a: &mut Tangent, components: &[usize]) {
     if *f0 == Matrix3::identity() {
         return;
     }
@@ -174,37 +176,38 @@ fn pull_back(f0: &Matrix3<f64>, p: &mut Matrix3<f64>, a: &mut Tangent) {
     *p = *p * f0.transpose() * inv_j0;
     // right-multiply the second index pair: A F0 over (L→M) then over (K→J)
     let mut tmp = Tangent::zeros();
-    for r in 0..9 {
-        for k in 0..3 {
-            for m in 0..3 {
-                let mut v = 0.0;
-                for l in 0..3 {
-                    v += a[(r, idx(k, l))] * f0[(m, l)];
-                }
-                tmp[(r, idx(k, m))] = v;
+    for &row in components {
+        for &col in components {
+            let (k, m) = (col / 3, col % 3);
+            let mut v = 0.0;
+            for l in 0..3 {
+                v += a[(row, idx(k, l))] * f0[(m, l)];
             }
+            tmp[(row, col)] = v;
         }
     }
-    for i in 0..3 {
-        for j in 0..3 {
-            for c in 0..9 {
-                let mut v = 0.0;
-                for kk in 0..3 {
-                    v += tmp[(idx(i, kk), c)] * f0[(j, kk)];
-                }
-                a[(idx(i, j), c)] = v * inv_j0;
+    for &row in components {
+        let (i, j) = (row / 3, row % 3);
+        for &col in components {
+            let mut v = 0.0;
+            for kk in 0..3 {
+                v += tmp[(idx(i, kk), col)] * f0[(j, kk)];
             }
+            a[(row, col)] = v * inv_j0;
         }
     }
 }
 
 /// Evaluates the law at one point for nodal displacements `disp` (from the step reference
-/// configuration) and returns the pulled-back stress and tangent.
+/// configuration) and returns the pulled-back stress and, if `with_tangent`, the tangent
+/// over the [`active_components`] (plane stress always forms them, for its `P̃33 = 0`
+/// iteration); without it the law is asked for the stress alone.
 pub fn evaluate_point(
     ctx: &KernelContext<'_>,
     geometry: &PointGeometry,
     disp: &[[f64; 3]],
     state: PointState<'_>,
+    with_tangent: bool,
 ) -> Result<PointResponse, LawError> {
     let nn = ctx.element.num_nodes();
     let dim = ctx.element.dim();
@@ -224,7 +227,13 @@ pub fn evaluate_point(
         deformation_gradient: delta_f * state.f0,
         previous_deformation_gradient: *state.f_prev,
         time_step: ctx.time_step,
+        tangent: match ctx.formulation {
+            Formulation::PlaneStress => TangentRequest::Components(&ACTIVE_2D),
+            _ if with_tangent => TangentRequest::Components(active_components(ctx.formulation)),
+            _ => TangentRequest::None,
+        },
     };
+    let components = kin.tangent.components();
     if ctx.formulation == Formulation::PlaneStress {
         // local Newton on ΔF33 such that P̃33 = 0
         let active = active_components(ctx.formulation);
@@ -234,7 +243,7 @@ pub fn evaluate_point(
             kin.deformation_gradient = delta_f * state.f0;
             let StressResponse { first_piola, tangent: mut a } = ctx.law.update(&kin, state.committed, state.trial)?;
             let mut p = first_piola;
-            pull_back(state.f0, &mut p, &mut a);
+            pull_back(state.f0, &mut p, &mut a, components);
             let scale = p.amax().max(1e-300);
             if p[(2, 2)].abs() <= 1e-12 * scale || it == 29 {
                 if p[(2, 2)].abs() > 1e-8 * scale {
@@ -268,7 +277,7 @@ pub fn evaluate_point(
         Err(e) => return Err(e),
     };
     let mut p = r.first_piola;
-    pull_back(state.f0, &mut p, &mut r.tangent);
+    pull_back(state.f0, &mut p, &mut r.tangent, components);
     let cauchy = cauchy_stress(&r.first_piola, &kin.deformation_gradient);
     Ok(PointResponse { deformation_gradient: kin.deformation_gradient, stress: p, tangent: r.tangent, cauchy })
 }
@@ -360,7 +369,8 @@ fn element_tensor<const D: usize, const NN: usize>(
             committed: &committed[p * stride..(p + 1) * stride],
             trial: &mut trial[p * stride..(p + 1) * stride],
         };
-        let r = evaluate_point(ctx, g, disp, state).map_err(|source| KernelError::Law { point: p, source })?;
+        let r = evaluate_point(ctx, g, disp, state, stiffness.is_some())
+            .map_err(|source| KernelError::Law { point: p, source })?;
         point_out[p] = PointOutput { deformation_gradient: r.deformation_gradient, cauchy: r.cauchy, stress: r.stress };
         let w = g.weight;
         for a in 0..NN {
@@ -478,7 +488,8 @@ fn element_general(
             committed: &committed[p * stride..(p + 1) * stride],
             trial: &mut trial[p * stride..(p + 1) * stride],
         };
-        let r = evaluate_point(ctx, g, disp, state).map_err(|source| KernelError::Law { point: p, source })?;
+        let r = evaluate_point(ctx, g, disp, state, stiffness.is_some())
+            .map_err(|source| KernelError::Law { point: p, source })?;
         point_out[p] = PointOutput { deformation_gradient: r.deformation_gradient, cauchy: r.cauchy, stress: r.stress };
         let nc = gradient_operator(ctx.formulation, ctx.element, g, &mut b);
         let w = g.weight;
@@ -517,6 +528,7 @@ fn element_general(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use loam_laws::mohr_coulomb::MohrCoulomb;
     use loam_laws::neo_hookean::NeoHookean;
 
     fn element_coords(element: ElementType) -> Vec<[f64; 3]> {
@@ -540,7 +552,18 @@ mod tests {
     /// formulation, with `F0 ≠ I` (the MPM pull-back) and plane-stress condensation.
     #[test]
     fn element_tangent_matches_finite_differences_of_internal_force() {
-        let law = NeoHookean::new(1000.0, 1.0e6, 0.3);
+        // hyperelastic, and elasto-plastic in the multiplicative frame (the deformation below
+        // takes this weak Mohr–Coulomb material onto its yield surface): both reach the
+        // kernel through the restricted tangent request, with F0 ≠ I as in MPM
+        let neo_hookean = NeoHookean::new(1000.0, 1.0e6, 0.3);
+        let mohr_coulomb = MohrCoulomb::new(1000.0, 1.0e6, 0.3, 0.5, 2.0e3, 0.1);
+        let laws: [&dyn ConstitutiveLaw; 2] = [&neo_hookean, &mohr_coulomb];
+        for law in laws {
+            element_tangent_check(law);
+        }
+    }
+
+    fn element_tangent_check(law: &dyn ConstitutiveLaw) {
         let cases = [
             (ElementType::Tri3, Formulation::PlaneStrain),
             (ElementType::Quad4, Formulation::PlaneStrain),
@@ -570,7 +593,12 @@ mod tests {
                 f0[(2, 2)] = 1.02;
             }
             let f0s = vec![f0; np];
-            let ctx = KernelContext { element, formulation, law: &law, time_step: 0.0 };
+            let ctx = KernelContext { element, formulation, law, time_step: 0.0 };
+            let stride = law.state_len();
+            let mut committed = vec![0.0; np * stride];
+            for p in 0..np {
+                law.initialise_state(&mut committed[p * stride..(p + 1) * stride]);
+            }
             let mut disp = vec![[0.0; 3]; nn];
             for a in 0..nn {
                 for i in 0..dim {
@@ -580,11 +608,24 @@ mod tests {
             let internal = |d: &[[f64; 3]], k: Option<&mut [f64]>| {
                 let mut f = vec![0.0; nd];
                 let mut out = vec![PointOutput::default(); np];
-                solid_element(&ctx, d, &geometry, &f0s, &f0s, &[], &mut [], &mut out, &mut f, k).unwrap();
+                let mut trial = committed.clone();
+                solid_element(&ctx, d, &geometry, &f0s, &f0s, &committed, &mut trial, &mut out, &mut f, k).unwrap();
                 f
             };
             let mut k = vec![0.0; nd * nd];
             internal(&disp, Some(&mut k));
+            if let Some(flag) = law.state_variables().iter().position(|v| *v == "yield_flag") {
+                let mut trial = committed.clone();
+                let (mut f, mut out) = (vec![0.0; nd], vec![PointOutput::default(); np]);
+                solid_element(&ctx, &disp, &geometry, &f0s, &f0s, &committed, &mut trial, &mut out, &mut f, None)
+                    .unwrap();
+                let mut values = vec![0.0; law.state_variables().len()];
+                let plastic = trial.chunks(stride).filter(|st| {
+                    law.state_output(st, &mut values);
+                    values[flag] > 0.0
+                });
+                assert!(plastic.count() > 0, "{element:?} {formulation:?}: the check must reach the yield surface");
+            }
             let h = 1e-6;
             let mut err = 0.0f64;
             let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -598,7 +639,8 @@ mod tests {
                 }
             }
             println!(
-                "{element:?} {formulation:?}: element tangent vs central FD, relative error {err:.2e} (tolerance 1e-6)"
+                "{} {element:?} {formulation:?}: element tangent vs central FD, relative error {err:.2e} (tolerance 1e-6)",
+                law.name()
             );
             assert!(err < 1e-6, "{element:?} {formulation:?}: {err}");
         }

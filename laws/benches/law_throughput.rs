@@ -9,7 +9,7 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use loam_laws::multiplicative::hencky_strain;
-use loam_laws::{ConstitutiveLaw, Kinematics, MaterialSpec};
+use loam_laws::{ConstitutiveLaw, Kinematics, MaterialSpec, TangentRequest};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use serde_json::json;
 
@@ -86,6 +86,7 @@ fn main() {
                 deformation_gradient: f,
                 previous_deformation_gradient: Matrix3::identity(),
                 time_step: 0.01,
+                tangent: TangentRequest::Full,
             };
             let (r, plastic) = rate(law.as_ref(), &kin);
             assert_eq!(plastic, label.starts_with("plastic"), "{} {label}", law.name());

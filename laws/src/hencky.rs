@@ -57,14 +57,15 @@ impl ConstitutiveLaw for Hencky {
     ) -> Result<StressResponse, LawError> {
         let f = &kinematics.deformation_gradient;
         let f_inv = checked_inverse(f)?;
-        let ku = kirchhoff_update(f, &Matrix3::identity(), |eps| {
+        let components = kinematics.tangent.components();
+        let ku = kirchhoff_update(f, &Matrix3::identity(), components, |eps| {
             Ok(PrincipalResponse {
                 tau: hencky_stress(self.lambda, self.mu, eps),
                 eps_e: eps,
                 dtau_deps: hencky_matrix(self.lambda, self.mu),
             })
         })?;
-        let (first_piola, tangent) = piola_from_kirchhoff(&f_inv, &ku.tau, &ku.dtau_df);
+        let (first_piola, tangent) = piola_from_kirchhoff(&f_inv, &ku.tau, &ku.dtau_df, components);
         Ok(StressResponse { first_piola, tangent })
     }
 }

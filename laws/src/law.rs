@@ -17,12 +17,48 @@ pub struct Kinematics {
     pub previous_deformation_gradient: Matrix3<f64>,
     /// Time step `Δt` in s (0 for a static load step).
     pub time_step: f64,
+    /// Which entries of the consistent tangent the caller will read.
+    pub tangent: TangentRequest,
 }
 
 impl Kinematics {
-    /// Kinematics of a static evaluation at `F` from the undeformed state.
+    /// Kinematics of a static evaluation at `F` from the undeformed state (full tangent).
     pub fn at(deformation_gradient: Matrix3<f64>) -> Self {
-        Self { deformation_gradient, previous_deformation_gradient: Matrix3::identity(), time_step: 0.0 }
+        Self {
+            deformation_gradient,
+            previous_deformation_gradient: Matrix3::identity(),
+            time_step: 0.0,
+            tangent: TangentRequest::Full,
+        }
+    }
+}
+
+/// The part of the consistent tangent `A = ∂P/∂F` a caller needs. A law may always return
+/// more (the full tangent is correct for every request); entries outside the request may be
+/// left zero. The finite-element kernel asks for the in-plane components in 2D and for no
+/// tangent at all when it assembles a residual alone, which lets the elasto-plastic laws skip
+/// most of their work (the derivative of the spectral decomposition).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TangentRequest {
+    /// Every entry of the 9×9 tangent.
+    Full,
+    /// The rows and columns of these flattened components of `F` (see
+    /// [`crate::tensor::idx`]), e.g. `xx, xy, yx, yy` in plane strain. The caller guarantees
+    /// that `F` is block diagonal with respect to them (the other components do not couple).
+    Components(&'static [usize]),
+    /// The stress alone (a residual evaluation).
+    None,
+}
+
+impl TangentRequest {
+    /// The flattened components whose rows and columns are needed (empty for `None`).
+    pub fn components(self) -> &'static [usize] {
+        const ALL: [usize; 9] = [0, 1, 2, 3, 4, 5, 6, 7, 8];
+        match self {
+            Self::Full => &ALL,
+            Self::Components(c) => c,
+            Self::None => &[],
+        }
     }
 }
 

@@ -42,6 +42,6 @@ pub mod spectral;
 pub mod tensor;
 
 pub use error::{LawError, ParameterError};
-pub use law::{ConstitutiveLaw, Kinematics, StressResponse};
+pub use law::{ConstitutiveLaw, Kinematics, StressResponse, TangentRequest};
 pub use material::MaterialSpec;
 pub use tensor::{idx, Tangent};

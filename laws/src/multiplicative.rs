@@ -93,10 +93,12 @@ pub struct KirchhoffUpdate {
 }
 
 /// Steps 2–6 of the module doc for a given `F` and `Cp⁻¹` with the principal return
-/// `principal_return(ε_tr)`.
+/// `principal_return(ε_tr)`. Only the columns `components` of `dτ/dF` are formed (all
+/// rows of each); the others stay zero.
 pub fn kirchhoff_update(
     F: &Matrix3<f64>,
     cp_inv: &Matrix3<f64>,
+    components: &[usize],
     principal_return: impl FnOnce([f64; 3]) -> Result<PrincipalResponse, LawError>,
 ) -> Result<KirchhoffUpdate, LawError> {
     let G = F * cp_inv;
@@ -110,20 +112,28 @@ pub fn kirchhoff_update(
     }
     let eps_tr = x.map(|v| 0.5 * v.ln());
     let r = principal_return(eps_tr)?;
+    let mut dtau_df = Tangent::zeros();
+    if components.is_empty() {
+        return Ok(KirchhoffUpdate {
+            tau: spec.compose(r.tau),
+            dtau_df,
+            b_e: spec.compose(r.eps_e.map(|e| (2.0 * e).exp())),
+        });
+    }
     let dydx = Matrix3::from_fn(|a, c| r.dtau_deps[(a, c)] / (2.0 * x[c]));
     let theta = isotropic_theta(x, r.tau, &dydx);
     let q = &spec.vectors;
     // h_L = Qᵀ g_L, g_L the L-th column of G.
     let h = q.transpose() * G;
-    let mut dtau_df = Tangent::zeros();
-    for k in 0..3 {
-        for l in 0..3 {
+    for &col in components {
+        let (k, l) = (col / 3, col % 3);
+        {
             // d b̃ = Qᵀ (e_k g_Lᵀ + g_L e_kᵀ) Q = q_k h_Lᵀ + h_L q_kᵀ, q_k = row k of Q.
             let db = Matrix3::from_fn(|a, b| q[(k, a)] * h[(b, l)] + h[(a, l)] * q[(k, b)]);
             let dtau = q * isotropic_differential(&dydx, &theta, &db) * q.transpose();
             for i in 0..3 {
                 for j in 0..3 {
-                    dtau_df[(idx(i, j), idx(k, l))] = dtau[(i, j)];
+                    dtau_df[(idx(i, j), col)] = dtau[(i, j)];
                 }
             }
         }
@@ -151,11 +161,12 @@ pub fn update<M: PrincipalModel + ?Sized>(
     let f_inv = checked_inverse(F)?;
     let cp_inv = read_sym(&committed[..CP_INV_LEN]);
     let (trial_cp, trial_internal) = trial.split_at_mut(CP_INV_LEN);
-    let ku = kirchhoff_update(F, &cp_inv, |eps_tr| {
+    let components = kinematics.tangent.components();
+    let ku = kirchhoff_update(F, &cp_inv, components, |eps_tr| {
         model.principal_update(eps_tr, &committed[CP_INV_LEN..], trial_internal)
     })?;
     write_sym(&(f_inv * ku.b_e * f_inv.transpose()), trial_cp);
-    let (first_piola, tangent) = piola_from_kirchhoff(&f_inv, &ku.tau, &ku.dtau_df);
+    let (first_piola, tangent) = piola_from_kirchhoff(&f_inv, &ku.tau, &ku.dtau_df, components);
     Ok(StressResponse { first_piola, tangent })
 }
 

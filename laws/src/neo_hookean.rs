@@ -12,7 +12,7 @@
 
 use nalgebra::Matrix3;
 
-use crate::{idx, ConstitutiveLaw, Kinematics, LawError, StressResponse, Tangent};
+use crate::{ConstitutiveLaw, Kinematics, LawError, StressResponse, Tangent};
 
 /// Compressible Neo-Hookean solid with Lamé constants `λ`, `μ` (Pa) and density ρ (kg/m³).
 #[derive(Debug, Clone, Copy)]
@@ -62,17 +62,16 @@ impl ConstitutiveLaw for NeoHookean {
         let c = self.lambda * ln_j - self.mu;
         let first_piola = self.mu * f + c * f_inv.transpose();
         let mut tangent = Tangent::zeros();
-        for i in 0..3 {
-            for jj in 0..3 {
-                for k in 0..3 {
-                    for l in 0..3 {
-                        let mut v = self.lambda * f_inv[(jj, i)] * f_inv[(l, k)] - c * f_inv[(jj, k)] * f_inv[(l, i)];
-                        if i == k && jj == l {
-                            v += self.mu;
-                        }
-                        tangent[(idx(i, jj), idx(k, l))] = v;
-                    }
+        let components = kinematics.tangent.components();
+        for &row in components {
+            let (i, jj) = (row / 3, row % 3);
+            for &col in components {
+                let (k, l) = (col / 3, col % 3);
+                let mut v = self.lambda * f_inv[(jj, i)] * f_inv[(l, k)] - c * f_inv[(jj, k)] * f_inv[(l, i)];
+                if i == k && jj == l {
+                    v += self.mu;
                 }
+                tangent[(row, col)] = v;
             }
         }
         Ok(StressResponse { first_piola, tangent })

@@ -69,8 +69,10 @@ impl ConstitutiveLaw for NewtonianFluid {
         let dev_d = dev(&(0.5 * (l + l.transpose())));
         let tau = Matrix3::identity() * (self.bulk_modulus * j.ln()) + dev_d * (2.0 * visc * j);
         let mut dtau_df = Tangent::zeros();
-        for k in 0..3 {
-            for ll in 0..3 {
+        let components = kinematics.tangent.components();
+        for &col in components {
+            let (k, ll) = (col / 3, col % 3);
+            {
                 let dj = f_inv[(ll, k)];
                 let dl = fnfi.column(k) * f_inv.row(ll) * rate;
                 let dtau = Matrix3::identity() * (self.bulk_modulus * dj)
@@ -78,12 +80,12 @@ impl ConstitutiveLaw for NewtonianFluid {
                     + dev(&(0.5 * (dl + dl.transpose()))) * (2.0 * visc * j);
                 for a in 0..3 {
                     for b in 0..3 {
-                        dtau_df[(idx(a, b), idx(k, ll))] = dtau[(a, b)];
+                        dtau_df[(idx(a, b), col)] = dtau[(a, b)];
                     }
                 }
             }
         }
-        let (first_piola, tangent) = piola_from_kirchhoff(&f_inv, &tau, &dtau_df);
+        let (first_piola, tangent) = piola_from_kirchhoff(&f_inv, &tau, &dtau_df, components);
         Ok(StressResponse { first_piola, tangent })
     }
 }
@@ -92,6 +94,7 @@ impl ConstitutiveLaw for NewtonianFluid {
 mod tests {
     use super::*;
     use crate::tensor::tangent_relative_error;
+    use crate::TangentRequest;
 
     #[test]
     fn tangent_with_and_without_time_step() {
@@ -99,7 +102,12 @@ mod tests {
         let f = Matrix3::new(1.02, 0.05, 0.0, -0.01, 0.97, 0.02, 0.0, 0.01, 1.01);
         let fn_ = Matrix3::new(1.01, 0.03, 0.0, 0.0, 0.99, 0.01, 0.0, 0.0, 1.0);
         for dt in [0.0, 1e-3] {
-            let kin = Kinematics { deformation_gradient: f, previous_deformation_gradient: fn_, time_step: dt };
+            let kin = Kinematics {
+                deformation_gradient: f,
+                previous_deformation_gradient: fn_,
+                time_step: dt,
+                tangent: TangentRequest::Full,
+            };
             let err = tangent_relative_error(&law, &kin, &[]).unwrap();
             println!("newtonian_fluid Δt = {dt}: tangent error vs FD {err:.2e} (tolerance 1e-6)");
             assert!(err < 1e-6);
@@ -113,8 +121,12 @@ mod tests {
         let (rate, dt) = (0.5, 1e-4);
         let mut f = Matrix3::identity();
         f[(0, 1)] = rate * dt;
-        let kin =
-            Kinematics { deformation_gradient: f, previous_deformation_gradient: Matrix3::identity(), time_step: dt };
+        let kin = Kinematics {
+            deformation_gradient: f,
+            previous_deformation_gradient: Matrix3::identity(),
+            time_step: dt,
+            tangent: TangentRequest::Full,
+        };
         let r = law.update(&kin, &[], &mut []).unwrap();
         let sigma = r.first_piola * f.transpose() / f.determinant();
         println!(

@@ -38,8 +38,28 @@ impl Spectral {
         if !m.iter().all(|v| v.is_finite()) {
             return None;
         }
+        if m[(0, 2)] == 0.0 && m[(1, 2)] == 0.0 && m[(2, 0)] == 0.0 && m[(2, 1)] == 0.0 {
+            return Some(Self::of_in_plane(m));
+        }
         let e = SymmetricEigen::try_new(*m, f64::EPSILON, 200)?;
         Some(Self { values: [e.eigenvalues[0], e.eigenvalues[1], e.eigenvalues[2]], vectors: e.eigenvectors })
+    }
+
+    /// Closed form for a tensor without `xz`, `yz` components (plane strain, plane stress and
+    /// axisymmetry): the in-plane block `[[a, b], [b, d]]` has the eigenvalues
+    /// `(a + d)/2 ± r`, `r = √(((a − d)/2)² + b²)`, the smaller in magnitude taken as
+    /// `(a d − b²)` over the larger (no cancellation), on the axes rotated by
+    /// `φ = ½ atan2(2b, a − d)`; `zz` is the third eigenvalue, on `e_z`.
+    fn of_in_plane(m: &Matrix3<f64>) -> Self {
+        let (a, b, d) = (m[(0, 0)], 0.5 * (m[(0, 1)] + m[(1, 0)]), m[(1, 1)]);
+        let mean = 0.5 * (a + d);
+        let r = (0.5 * (a - d)).hypot(b);
+        let (big, small) = if mean >= 0.0 { (mean + r, mean - r) } else { (mean - r, mean + r) };
+        let small = if big != 0.0 { (a * d - b * b) / big } else { small };
+        let (first, second) = if mean >= 0.0 { (big, small) } else { (small, big) };
+        let phi = 0.5 * (2.0 * b).atan2(a - d);
+        let (sin, cos) = phi.sin_cos();
+        Self { values: [first, second, m[(2, 2)]], vectors: Matrix3::new(cos, -sin, 0.0, sin, cos, 0.0, 0.0, 0.0, 1.0) }
     }
 
     /// `Σ_a y_a n_a ⊗ n_a` on this eigenbasis.
@@ -88,6 +108,34 @@ mod tests {
 
     /// `Y = ln X` (y_a = ln x_a) differentiated at a tensor with a double and at one with a
     /// triple eigenvalue, against central differences.
+    #[test]
+    fn in_plane_closed_form_reconstructs_the_tensor() {
+        let cases = [
+            [1.2, 0.3, 0.9, 1.1],
+            [1.0, 0.0, 1.0, 1.0],
+            [-2.0e5, 3.0e4, -5.0e4, -7.0e4],
+            [1.0, 1e-12, 1.0 + 1e-14, 0.5],
+            [-1.0, 0.0, 1e-10, 0.0],
+            [0.9, -0.4, 1.3, 1.0],
+        ];
+        for [a, b, d, z] in cases {
+            let m = Matrix3::new(a, b, 0.0, b, d, 0.0, 0.0, 0.0, z);
+            let s = Spectral::of(&m).expect("finite");
+            let back = s.compose(s.values);
+            let scale = m.amax();
+            let err = (back - m).amax() / scale;
+            let orth = (s.vectors.transpose() * s.vectors - Matrix3::identity()).amax();
+            let general = SymmetricEigen::new(m).eigenvalues;
+            let mut ours = s.values;
+            let mut theirs = [general[0], general[1], general[2]];
+            ours.sort_by(f64::total_cmp);
+            theirs.sort_by(f64::total_cmp);
+            let value_err = (0..3).map(|i| (ours[i] - theirs[i]).abs()).fold(0.0, f64::max) / scale;
+            println!("{m:?}: reconstruction {err:.1e}, orthogonality {orth:.1e}, eigenvalues vs QR {value_err:.1e}");
+            assert!(err < 1e-14 && orth < 1e-15 && value_err < 1e-14);
+        }
+    }
+
     #[test]
     fn log_derivative_at_repeated_eigenvalues() {
         let rot = nalgebra::Rotation3::from_euler_angles(0.3, -0.7, 1.1).into_inner();

@@ -16,23 +16,28 @@ pub const fn idx(i: usize, j: usize) -> usize {
 /// derivative `dτ/dF` (9×9, same index convention):
 ///
 /// `P = τ F^{-T}`,
-/// `∂P_iJ/∂F_mN = Σ_k ∂τ_ik/∂F_mN F^{-1}_Jk − τ_ik F^{-1}_Jm F^{-1}_Nk`
+/// `∂P_iJ/∂F_mN = Σ_k ∂τ_ik/∂F_mN F^{-1}_Jk − F^{-1}_Jm P_iN`
 /// (using `∂F^{-1}_Jk/∂F_mN = −F^{-1}_Jm F^{-1}_Nk`).
-pub fn piola_from_kirchhoff(f_inv: &Matrix3<f64>, tau: &Matrix3<f64>, dtau_df: &Tangent) -> (Matrix3<f64>, Tangent) {
+///
+/// Only the rows and columns of `components` are formed (the others stay zero); they read
+/// the columns `components` of `dτ/dF`.
+pub fn piola_from_kirchhoff(
+    f_inv: &Matrix3<f64>,
+    tau: &Matrix3<f64>,
+    dtau_df: &Tangent,
+    components: &[usize],
+) -> (Matrix3<f64>, Tangent) {
     let p = tau * f_inv.transpose();
     let mut a = Tangent::zeros();
-    for i in 0..3 {
-        for jj in 0..3 {
-            for m in 0..3 {
-                for n in 0..3 {
-                    let mut v = 0.0;
-                    for k in 0..3 {
-                        v += dtau_df[(idx(i, k), idx(m, n))] * f_inv[(jj, k)]
-                            - tau[(i, k)] * f_inv[(jj, m)] * f_inv[(n, k)];
-                    }
-                    a[(idx(i, jj), idx(m, n))] = v;
-                }
+    for &col in components {
+        let (m, n) = (col / 3, col % 3);
+        for &row in components {
+            let (i, jj) = (row / 3, row % 3);
+            let mut v = -f_inv[(jj, m)] * p[(i, n)];
+            for k in 0..3 {
+                v += dtau_df[(idx(i, k), col)] * f_inv[(jj, k)];
             }
+            a[(row, col)] = v;
         }
     }
     (p, a)

@@ -17,7 +17,7 @@ use loam_laws::mohr_coulomb::{MohrCoulomb, Region};
 use loam_laws::multiplicative::{hencky_strain, CP_INV_LEN};
 use loam_laws::spectral::Spectral;
 use loam_laws::tensor::tangent_relative_error;
-use loam_laws::{ConstitutiveLaw, Kinematics, MaterialSpec};
+use loam_laws::{ConstitutiveLaw, Kinematics, MaterialSpec, TangentRequest};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use serde_json::json;
 
@@ -99,6 +99,7 @@ fn tangent_of_elastic_laws() {
         deformation_gradient: general([0.02, -0.01, 0.005]),
         previous_deformation_gradient: general([0.015, -0.008, 0.004]),
         time_step: 1e-2,
+        tangent: TangentRequest::Full,
     };
     check_tangent("newtonian_fluid with Δt = 0.01 s", fluid.as_ref(), &kin, &[]);
 }
@@ -244,6 +245,7 @@ fn objectivity_under_superposed_rotation() {
             deformation_gradient: F,
             previous_deformation_gradient: Fn,
             time_step: 0.01,
+            tangent: TangentRequest::Full,
         };
         let p1 = law.update(&kin(F, Fn), &s, &mut t1).unwrap().first_piola;
         let p2 = law.update(&kin(q * F, q * Fn), &s, &mut t2).unwrap().first_piola;

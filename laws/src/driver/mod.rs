@@ -26,7 +26,7 @@ use nalgebra::Matrix3;
 use thiserror::Error;
 
 use crate::spectral::Spectral;
-use crate::{idx, ConstitutiveLaw, Kinematics, LawError, ParameterError};
+use crate::{idx, ConstitutiveLaw, Kinematics, LawError, ParameterError, TangentRequest};
 pub use spec::{Drainage, InitialStress, Loading, PathFile, PathSpec};
 
 /// A failure of the material-point driver. `Display` is a one-line message.
@@ -217,7 +217,12 @@ impl Point<'_> {
         groups: &[(Vec<usize>, f64)],
         step: usize,
     ) -> Result<Evaluation, DriverError> {
-        let kin = Kinematics { deformation_gradient: *F, previous_deformation_gradient: self.F, time_step: self.dt };
+        let kin = Kinematics {
+            deformation_gradient: *F,
+            previous_deformation_gradient: self.F,
+            time_step: self.dt,
+            tangent: TangentRequest::Full,
+        };
         let response = self
             .law
             .update(&kin, &self.committed, &mut self.trial)
