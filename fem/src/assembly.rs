@@ -160,6 +160,17 @@ impl AssemblyPattern {
         &self.symbolic
     }
 
+    /// `y = A x` for the matrix with nonzeros `values` (column-compressed).
+    pub fn multiply(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
+        y.fill(0.0);
+        let (col_ptr, row_idx) = (self.symbolic.col_ptr(), self.symbolic.row_idx());
+        for (c, &xc) in x.iter().enumerate() {
+            for k in col_ptr[c]..col_ptr[c + 1] {
+                y[row_idx[k]] += values[k] * xc;
+            }
+        }
+    }
+
     /// Sums the element matrices of `matrix_buffer` into `values` (one per nonzero).
     pub fn gather_matrix(&self, matrix_buffer: &[f64], values: &mut [f64]) {
         values.par_iter_mut().enumerate().with_min_len(4096).for_each(|(k, v)| {
@@ -175,6 +186,16 @@ impl AssemblyPattern {
             let src = &self.vector_gather_src[self.vector_gather_ptr[g]..self.vector_gather_ptr[g + 1]];
             *v = src.iter().map(|&s| vector_buffer[s as usize]).sum();
         });
+    }
+
+    /// The symmetric part `(A + Aᵀ)/2` of the matrix with nonzeros `values`, on the same
+    /// (structurally symmetric) pattern.
+    pub fn symmetric_part(&self, values: &[f64], out: &mut Vec<f64>) {
+        out.resize(values.len(), 0.0);
+        out.par_iter_mut()
+            .enumerate()
+            .with_min_len(4096)
+            .for_each(|(k, s)| *s = 0.5 * (values[k] + values[self.transpose[k]]));
     }
 
     /// Largest asymmetry `max |a_ij − a_ji|` relative to `max |a_ij|`.

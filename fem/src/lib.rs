@@ -17,6 +17,7 @@ pub mod element;
 pub mod formulation;
 pub mod gmsh;
 pub mod kernel;
+pub mod krylov;
 pub mod linear_solver;
 pub mod loads;
 pub mod mesh;

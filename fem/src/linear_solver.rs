@@ -6,17 +6,32 @@
 //! `A = L Lᵀ` when it is symmetric and positive definite, sparse LU `P A Q = L U`
 //! otherwise. On this project's FEM/MPM matrices Cholesky with AMD ordering was up to 10×
 //! faster than LU (whose column ordering fills in more), see `../shared/STACK.md`.
+//!
+//! With factorisation reuse ([`LinearSolver::with_reuse`]) a solve first tries GMRES
+//! preconditioned by the factors of an earlier matrix on the same pattern
+//! ([`crate::krylov`]); only if that does not reach [`KRYLOV_TOLERANCE`] within
+//! [`KRYLOV_MAX_ITERATIONS`] is the matrix factorised afresh. After a solve that needed more
+//! than [`KRYLOV_REFACTOR_AFTER`] iterations the next solve factorises directly.
 
 use std::time::Instant;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky};
-use faer::sparse::linalg::lu::{factorize_symbolic_lu, NumericLu, SymbolicLu};
+use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::{Conj, MatMut, Side};
 use serde::Deserialize;
 
 use crate::assembly::AssemblyPattern;
+use crate::krylov::Gmres;
+
+/// Relative residual `‖b − A x‖/‖b‖` a reused-factor GMRES solve must reach: far below the
+/// Newton tolerances, so that Newton takes the same path as with exact solves.
+pub const KRYLOV_TOLERANCE: f64 = 1e-9;
+/// Arnoldi steps before a reused factorisation is given up for a fresh one.
+pub const KRYLOV_MAX_ITERATIONS: usize = 12;
+/// A solve that took more GMRES iterations than this refactorises at the next solve.
+pub const KRYLOV_REFACTOR_AFTER: usize = 6;
 
 /// Choice of direct solver.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
@@ -50,8 +65,21 @@ pub struct SolverTimings {
     pub symbolic: f64,
     /// Numeric factorisations.
     pub factorisation: f64,
-    /// Triangular solves.
+    /// Triangular solves (and the GMRES iterations of reused factorisations).
     pub solve: f64,
+    /// Numeric factorisations done.
+    pub factorisations: usize,
+    /// Solves done by GMRES on a reused factorisation, and their iterations.
+    pub krylov_solves: usize,
+    /// GMRES iterations of those solves (failed attempts included).
+    pub krylov_iterations: usize,
+}
+
+/// Which factorisation is held for reuse.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Factor {
+    Cholesky,
+    Lu,
 }
 
 /// Symbolic Cholesky factorisation with the numeric factor and the workspace kept between
@@ -98,6 +126,17 @@ pub struct LinearSolver {
     llt: Option<CholeskyState>,
     /// Set once Cholesky failed on this pattern (indefinite tangent): use LU from then on.
     llt_failed: bool,
+    /// Try GMRES on the held factorisation before factorising.
+    reuse: bool,
+    /// The factorisation held (of an earlier matrix on this pattern).
+    held: Option<Factor>,
+    /// Factorise at the next solve (the last GMRES solve was slow).
+    refactor_next: bool,
+    /// Set once GMRES on the symmetric part's factors failed on this pattern: LU from then on.
+    symmetric_part_failed: bool,
+    /// `(A + Aᵀ)/2` for its factorisation.
+    symmetric_values: Vec<f64>,
+    gmres: Gmres,
     /// Accumulated timings.
     pub timings: SolverTimings,
 }
@@ -105,7 +144,25 @@ pub struct LinearSolver {
 impl LinearSolver {
     /// A solver of the given kind; symbolic analyses happen at the first solve.
     pub fn new(kind: LinearSolverKind) -> Self {
-        Self { kind, lu: None, llt: None, llt_failed: false, timings: SolverTimings::default() }
+        Self {
+            kind,
+            lu: None,
+            llt: None,
+            llt_failed: false,
+            reuse: false,
+            held: None,
+            refactor_next: false,
+            symmetric_part_failed: false,
+            symmetric_values: Vec::new(),
+            gmres: Gmres::default(),
+            timings: SolverTimings::default(),
+        }
+    }
+
+    /// Enables or disables factorisation reuse (module doc).
+    pub fn with_reuse(mut self, reuse: bool) -> Self {
+        self.reuse = reuse;
+        self
     }
 
     /// Forgets the symbolic factorisations (call when the pattern changes).
@@ -113,6 +170,9 @@ impl LinearSolver {
         self.lu = None;
         self.llt = None;
         self.llt_failed = false;
+        self.held = None;
+        self.refactor_next = false;
+        self.symmetric_part_failed = false;
     }
 
     /// Solves `A x = b` in place (`rhs` holds `b` on entry and `x` on exit).
@@ -126,70 +186,124 @@ impl LinearSolver {
         if n == 0 {
             return Ok(());
         }
-        let a = pattern.matrix(values);
+        if self.reuse && !self.refactor_next {
+            if let Some(held) = self.held {
+                let t = Instant::now();
+                let converged = self.solve_with_held_factor(held, pattern, values, rhs);
+                self.timings.solve += t.elapsed().as_secs_f64();
+                if converged {
+                    return check_finite(rhs);
+                }
+            }
+        }
+        self.refactor_next = false;
+        self.factorise_and_solve(pattern, values, rhs)
+    }
+
+    /// GMRES on `A x = b` preconditioned by the held factors; `true` if it converged (then
+    /// `rhs` holds `x`; otherwise `rhs` is unchanged).
+    fn solve_with_held_factor(
+        &mut self,
+        held: Factor,
+        pattern: &AssemblyPattern,
+        values: &[f64],
+        rhs: &mut [f64],
+    ) -> bool {
+        let n = rhs.len();
         let par = faer::get_global_parallelism();
-        let use_llt = match self.kind {
+        let (llt, lu) = (&mut self.llt, &mut self.lu);
+        let precondition = |z: &mut [f64]| {
+            let z = MatMut::from_column_major_slice_mut(z, n, 1);
+            match held {
+                Factor::Cholesky => {
+                    let st = llt.as_mut().expect("held Cholesky factor");
+                    LltRef::new(&st.symbolic, &st.values).solve_in_place_with_conj(
+                        Conj::No,
+                        z,
+                        par,
+                        MemStack::new(&mut st.scratch),
+                    );
+                }
+                Factor::Lu => {
+                    let st = lu.as_mut().expect("held LU factor");
+                    LuRef::new_unchecked(&st.symbolic, &st.numeric).solve_in_place_with_conj(
+                        Conj::No,
+                        z,
+                        par,
+                        MemStack::new(&mut st.scratch),
+                    );
+                }
+            }
+        };
+        let report = self.gmres.solve(
+            rhs,
+            KRYLOV_MAX_ITERATIONS,
+            KRYLOV_TOLERANCE,
+            |x, y| pattern.multiply(values, x, y),
+            precondition,
+        );
+        self.timings.krylov_solves += usize::from(report.converged);
+        self.timings.krylov_iterations += report.iterations;
+        self.refactor_next = report.iterations > KRYLOV_REFACTOR_AFTER;
+        report.converged
+    }
+
+    /// Numeric factorisation (symbolic analysis first if the pattern is new), then the
+    /// solve: Cholesky and triangular solves for a symmetric `A`; for an unsymmetric one under
+    /// `auto`, GMRES preconditioned by the Cholesky factors of the symmetric part
+    /// `(A + Aᵀ)/2` (far cheaper than LU, whose column ordering fills in more), and LU with
+    /// partial pivoting if that part is not positive definite or GMRES does not converge
+    /// (then LU for the rest of this pattern).
+    fn factorise_and_solve(
+        &mut self,
+        pattern: &AssemblyPattern,
+        values: &[f64],
+        rhs: &mut [f64],
+    ) -> Result<(), LinearSolverError> {
+        let n = pattern.num_equations();
+        self.held = None;
+        let par = faer::get_global_parallelism();
+        let symmetric = match self.kind {
             LinearSolverKind::Cholesky => true,
             LinearSolverKind::Lu => false,
             LinearSolverKind::Auto => !self.llt_failed && pattern.is_symmetric(values, 1e-10),
         };
-        if use_llt {
-            if self.llt.is_none() {
+        if symmetric {
+            if self.factorise_cholesky(pattern, values)? {
                 let t = Instant::now();
-                let params = CholeskySymbolicParams {
-                    supernodal_flop_ratio_threshold: cholesky_threshold(),
-                    ..Default::default()
-                };
-                let symbolic = factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), params)
-                    .map_err(factorisation_error)?;
-                let scratch = buffer(StackReq::any_of(&[
-                    symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-                    symbolic.solve_in_place_scratch::<f64>(1, par),
-                ]))?;
-                let values = vec![0.0; symbolic.len_val()];
-                self.llt = Some(CholeskyState { symbolic, values, scratch });
-                self.timings.symbolic += t.elapsed().as_secs_f64();
+                let st = self.llt.as_mut().expect("Cholesky factor present");
+                LltRef::new(&st.symbolic, &st.values).solve_in_place_with_conj(
+                    Conj::No,
+                    MatMut::from_column_major_slice_mut(rhs, n, 1),
+                    par,
+                    MemStack::new(&mut st.scratch),
+                );
+                self.timings.solve += t.elapsed().as_secs_f64();
+                return check_finite(rhs);
             }
-            let t = Instant::now();
-            let st = self.llt.as_mut().expect("symbolic Cholesky present");
-            let stack = MemStack::new(&mut st.scratch);
-            let factor = st.symbolic.factorize_numeric_llt::<f64>(
-                &mut st.values,
-                a,
-                Side::Lower,
-                Default::default(),
-                par,
-                stack,
-                Default::default(),
-            );
-            match factor {
-                Ok(_) => {
-                    self.timings.factorisation += t.elapsed().as_secs_f64();
-                    let t = Instant::now();
-                    let llt = LltRef::new(&st.symbolic, &st.values);
-                    llt.solve_in_place_with_conj(
-                        Conj::No,
-                        MatMut::from_column_major_slice_mut(rhs, n, 1),
-                        par,
-                        MemStack::new(&mut st.scratch),
-                    );
-                    self.timings.solve += t.elapsed().as_secs_f64();
+            if self.kind == LinearSolverKind::Cholesky {
+                return Err(LinearSolverError::Factorisation("Cholesky failed: matrix not positive definite".into()));
+            }
+            self.llt_failed = true;
+        } else if self.kind == LinearSolverKind::Auto && !self.symmetric_part_failed {
+            let mut sym = std::mem::take(&mut self.symmetric_values);
+            pattern.symmetric_part(values, &mut sym);
+            let factored = self.factorise_cholesky(pattern, &sym);
+            self.symmetric_values = sym;
+            if factored? {
+                let t = Instant::now();
+                let converged = self.solve_with_held_factor(Factor::Cholesky, pattern, values, rhs);
+                self.timings.solve += t.elapsed().as_secs_f64();
+                if converged {
                     return check_finite(rhs);
                 }
-                Err(e) if self.kind == LinearSolverKind::Cholesky => {
-                    return Err(LinearSolverError::Factorisation(format!(
-                        "Cholesky failed ({e}): matrix not positive definite"
-                    )));
-                }
-                Err(_) => {
-                    self.timings.factorisation += t.elapsed().as_secs_f64();
-                    self.llt_failed = true;
-                    self.llt = None;
-                }
             }
+            self.held = None;
+            self.symmetric_part_failed = true;
         }
         if self.lu.is_none() {
             let t = Instant::now();
+            let a = pattern.matrix(values);
             let symbolic = factorize_symbolic_lu(a.symbolic(), Default::default()).map_err(factorisation_error)?;
             let scratch = buffer(StackReq::any_of(&[
                 symbolic.factorize_numeric_lu_scratch::<f64>(par, Default::default()),
@@ -202,9 +316,17 @@ impl LinearSolver {
         let st = self.lu.as_mut().expect("symbolic LU present");
         let lu = st
             .symbolic
-            .factorize_numeric_lu::<f64>(&mut st.numeric, a, par, MemStack::new(&mut st.scratch), Default::default())
+            .factorize_numeric_lu::<f64>(
+                &mut st.numeric,
+                pattern.matrix(values),
+                par,
+                MemStack::new(&mut st.scratch),
+                Default::default(),
+            )
             .map_err(|e| LinearSolverError::Factorisation(format!("LU failed: {e}")))?;
         self.timings.factorisation += t.elapsed().as_secs_f64();
+        self.timings.factorisations += 1;
+        self.held = Some(Factor::Lu);
         let t = Instant::now();
         lu.solve_in_place_with_conj(
             Conj::No,
@@ -214,6 +336,45 @@ impl LinearSolver {
         );
         self.timings.solve += t.elapsed().as_secs_f64();
         check_finite(rhs)
+    }
+
+    /// Cholesky factorisation of the symmetric matrix with nonzeros `values` (its lower
+    /// triangle is read) into the held Cholesky state; `false` if it is not positive
+    /// definite.
+    fn factorise_cholesky(&mut self, pattern: &AssemblyPattern, values: &[f64]) -> Result<bool, LinearSolverError> {
+        let a = pattern.matrix(values);
+        let par = faer::get_global_parallelism();
+        if self.llt.is_none() {
+            let t = Instant::now();
+            let params =
+                CholeskySymbolicParams { supernodal_flop_ratio_threshold: cholesky_threshold(), ..Default::default() };
+            let symbolic = factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), params)
+                .map_err(factorisation_error)?;
+            let scratch = buffer(StackReq::any_of(&[
+                symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+                symbolic.solve_in_place_scratch::<f64>(1, par),
+            ]))?;
+            let values = vec![0.0; symbolic.len_val()];
+            self.llt = Some(CholeskyState { symbolic, values, scratch });
+            self.timings.symbolic += t.elapsed().as_secs_f64();
+        }
+        let t = Instant::now();
+        let st = self.llt.as_mut().expect("symbolic Cholesky present");
+        let factor = st.symbolic.factorize_numeric_llt::<f64>(
+            &mut st.values,
+            a,
+            Side::Lower,
+            Default::default(),
+            par,
+            MemStack::new(&mut st.scratch),
+            Default::default(),
+        );
+        self.timings.factorisation += t.elapsed().as_secs_f64();
+        self.timings.factorisations += 1;
+        if factor.is_ok() {
+            self.held = Some(Factor::Cholesky);
+        }
+        Ok(factor.is_ok())
     }
 }
 

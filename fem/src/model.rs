@@ -60,6 +60,11 @@ pub struct NewtonSettings {
     pub line_search: bool,
     /// Halvings tried per iteration by the line search (default 4).
     pub line_search_max_cuts: u32,
+    /// Reuse the factorisation of an earlier Newton iteration or step as the preconditioner
+    /// of GMRES, factorising afresh only when that converges slowly (default off; see
+    /// [`crate::linear_solver`]). Pays when the tangent changes little between solves:
+    /// small steps of mass-dominated dynamics.
+    pub factorisation_reuse: bool,
 }
 
 impl Default for NewtonSettings {
@@ -74,6 +79,7 @@ impl Default for NewtonSettings {
             linear_solver: LinearSolverKind::Auto,
             line_search: false,
             line_search_max_cuts: 4,
+            factorisation_reuse: false,
         }
     }
 }
@@ -149,6 +155,24 @@ impl std::ops::AddAssign for PhaseTimings {
         self.solve += o.solve;
         self.commit += o.commit;
         self.pattern_builds += o.pattern_builds;
+    }
+}
+
+impl std::ops::Sub for PhaseTimings {
+    type Output = Self;
+
+    /// The timings accumulated between two snapshots (`later − earlier`).
+    fn sub(self, o: Self) -> Self {
+        Self {
+            search: self.search - o.search,
+            pattern: self.pattern - o.pattern,
+            assembly: self.assembly - o.assembly,
+            factorisation: self.factorisation - o.factorisation,
+            symbolic: self.symbolic - o.symbolic,
+            solve: self.solve - o.solve,
+            commit: self.commit - o.commit,
+            pattern_builds: self.pattern_builds - o.pattern_builds,
+        }
     }
 }
 
@@ -329,7 +353,7 @@ impl Model {
             rhs: vec![0.0; n_eq],
             delta: vec![0.0; self.num_dofs()],
             slip,
-            solver: LinearSolver::new(self.settings.linear_solver),
+            solver: LinearSolver::new(self.settings.linear_solver).with_reuse(self.settings.factorisation_reuse),
             dofs,
             pattern,
             domain_matrix,
