@@ -121,6 +121,10 @@ pub struct DomainSpec {
     /// velocity noise of granular bodies coming to rest.
     #[serde(default)]
     pub pic_fraction: f64,
+    /// Instead of `pic_fraction`: relaxation time τ (s) of the PIC blend, θ = 1 − exp(−Δt/τ)
+    /// in a step Δt, so that the damping does not depend on the step size.
+    #[serde(default)]
+    pub pic_relaxation_time: Option<f64>,
     /// Initial stress of the material points (MPM domains), e.g. a geostatic `K0` state.
     #[serde(default)]
     pub initial_stress: Option<InitialStressSpec>,
@@ -742,6 +746,27 @@ pub enum MonitorSpec {
         /// Component.
         component: Component,
     },
+    /// Total current volume (m³) of the material points inside `box` (every point if
+    /// absent), `Σ_p V_p` with `V_p = J_p V_p⁰` the bulk volume the law carries: per unit
+    /// thickness × thickness in plane problems, the full ring (2πr) in axisymmetry. Its
+    /// rate of change includes the dilation of the material in the box: a discharge rate is
+    /// better taken from `material_mass` divided by the bulk density.
+    MaterialVolume {
+        /// Column name.
+        name: String,
+        /// Box (m) in which points are counted at each step (their current position).
+        #[serde(default, rename = "box")]
+        within: Option<PointBox>,
+    },
+    /// Total mass (kg) of the material points inside `box` (every point if absent), same
+    /// conventions as `material_volume`.
+    MaterialMass {
+        /// Column name.
+        name: String,
+        /// Box (m) in which points are counted at each step (their current position).
+        #[serde(default, rename = "box")]
+        within: Option<PointBox>,
+    },
     /// Total kinetic energy (J).
     KineticEnergy {
         /// Column name.
@@ -768,6 +793,8 @@ impl MonitorSpec {
             | MonitorSpec::Runout { name, .. }
             | MonitorSpec::SurfaceHeight { name, .. }
             | MonitorSpec::WallForce { name, .. }
+            | MonitorSpec::MaterialVolume { name, .. }
+            | MonitorSpec::MaterialMass { name, .. }
             | MonitorSpec::KineticEnergy { name }
             | MonitorSpec::StrainEnergy { name } => name,
         }

@@ -129,6 +129,7 @@ fn base_unit(unit: &str) -> Option<[i32; 3]> {
         "Pa" => [1, -1, -2],
         "J" => [1, 2, -2],
         "kg" => [1, 0, 0],
+        "m3" => [0, 3, 0],
         _ => return None,
     })
 }

@@ -17,7 +17,7 @@ use loam_fem::solid_domain::FemDomain;
 use loam_laws::ConstitutiveLaw;
 use loam_mpm::grid::Grid;
 use loam_mpm::material_points::{self, MaterialPoints};
-use loam_mpm::mpm_domain::MpmDomain;
+use loam_mpm::mpm_domain::{MpmDomain, VelocityBlend};
 use loam_mpm::penalty_boundary::{BoundaryParticles, PenaltyBoundary, PenaltyKind, PenaltySettings};
 
 use crate::case::{
@@ -195,6 +195,9 @@ fn build_discretisation(
             }
             if d.pic_fraction != 0.0 {
                 return Err(misplaced("pic_fraction"));
+            }
+            if d.pic_relaxation_time.is_some() {
+                return Err(misplaced("pic_relaxation_time"));
             }
             let spec =
                 d.mesh.as_ref().ok_or_else(|| CaseError::new(format!("{loc}.mesh"), "an fem domain needs a mesh"))?;
@@ -616,7 +619,23 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
                     format!("must lie in [0, 1], got {}", d.pic_fraction),
                 ));
             }
-            domain.set_pic_fraction(d.pic_fraction);
+            let blend = match d.pic_relaxation_time {
+                None => VelocityBlend::PicFraction(d.pic_fraction),
+                Some(_) if d.pic_fraction != 0.0 => {
+                    return Err(CaseError::new(
+                        format!("domains[{k}].pic_relaxation_time"),
+                        "give either pic_fraction or pic_relaxation_time, not both",
+                    ))
+                }
+                Some(tau) if tau > 0.0 && tau.is_finite() => VelocityBlend::RelaxationTime(tau),
+                Some(tau) => {
+                    return Err(CaseError::new(
+                        format!("domains[{k}].pic_relaxation_time"),
+                        format!("must be a positive time in s, got {tau}"),
+                    ))
+                }
+            };
+            domain.set_velocity_blend(blend);
             if let Some(InitialStressSpec::Geostatic { surface, k0 }) = d.initial_stress {
                 let loc = format!("domains[{k}].initial_stress.geostatic");
                 if !(k0 >= 0.0 && k0.is_finite()) {
@@ -899,6 +918,29 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
                 )?,
                 component: component_index(&format!("{loc}.component"), *component, dim)?,
             },
+            MonitorSpec::MaterialVolume { within, .. } | MonitorSpec::MaterialMass { within, .. } => {
+                if model.domains.iter().all(|d| d.point_extents().is_empty()) {
+                    return Err(CaseError::new(format!("{loc}.type"), "the model has no material points"));
+                }
+                let (min, max) = match within {
+                    Some(b) => {
+                        check_len(&format!("{loc}.box.min"), &b.min, dim)?;
+                        check_len(&format!("{loc}.box.max"), &b.max, dim)?;
+                        if let Some(d) = (0..dim).find(|&d| b.max[d] < b.min[d]) {
+                            return Err(CaseError::new(
+                                format!("{loc}.box.max[{d}]"),
+                                format!("must not lie below box.min[{d}] = {}, got {}", b.min[d], b.max[d]),
+                            ));
+                        }
+                        (b.min.clone(), b.max.clone())
+                    }
+                    None => (vec![f64::NEG_INFINITY; dim], vec![f64::INFINITY; dim]),
+                };
+                match m {
+                    MonitorSpec::MaterialVolume { .. } => MonitorKind::MaterialVolume { min, max },
+                    _ => MonitorKind::MaterialMass { min, max },
+                }
+            }
             MonitorSpec::KineticEnergy { .. } => MonitorKind::KineticEnergy,
             MonitorSpec::StrainEnergy { .. } => MonitorKind::StrainEnergy,
         };
@@ -1042,6 +1084,8 @@ pub fn monitor_unit(kind: &MonitorKind) -> &'static str {
             PointTensor::CauchyStress => "Pa",
             PointTensor::DeformationGradient => "1",
         },
+        MonitorKind::MaterialVolume { .. } => "m3",
+        MonitorKind::MaterialMass { .. } => "kg",
         MonitorKind::KineticEnergy | MonitorKind::StrainEnergy => "J",
     }
 }

@@ -78,6 +78,20 @@ pub enum MonitorKind {
         /// Component index.
         component: Option<usize>,
     },
+    /// Total current volume `Σ_p V_p` (m³) of the material points inside a box.
+    MaterialVolume {
+        /// Lower corner of the box.
+        min: Vec<f64>,
+        /// Upper corner of the box.
+        max: Vec<f64>,
+    },
+    /// Total mass `Σ_p m_p` (kg) of the material points inside a box.
+    MaterialMass {
+        /// Lower corner of the box.
+        min: Vec<f64>,
+        /// Upper corner of the box.
+        max: Vec<f64>,
+    },
     /// Total kinetic energy.
     KineticEnergy,
     /// Total stored work of internal forces.
@@ -148,6 +162,12 @@ impl Monitor {
             MonitorKind::WallForce { domain, component } => {
                 let f = model.domains[*domain].wall_force().unwrap_or([f64::NAN; 3]);
                 pick(&f, dim, 0, *component)
+            }
+            MonitorKind::MaterialVolume { min, max } => {
+                model.domains.iter().map(|d| d.points_volume_mass(min, max).0).sum()
+            }
+            MonitorKind::MaterialMass { min, max } => {
+                model.domains.iter().map(|d| d.points_volume_mass(min, max).1).sum()
             }
             MonitorKind::KineticEnergy => model.kinetic_energy(),
             MonitorKind::StrainEnergy => model.strain_energy(),

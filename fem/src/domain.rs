@@ -222,6 +222,14 @@ pub trait Domain: Send + Sync {
         Vec::new()
     }
 
+    /// Current volume `Σ_p V_p` (m³) and mass `Σ_p m_p` (kg) of the tracked points whose
+    /// current position lies in the axis-aligned box `[min, max]` (first `min.len()`
+    /// coordinates, bounds included): per unit thickness × thickness in plane problems, the
+    /// full ring (2πr) in axisymmetry. Mesh domains have none.
+    fn points_volume_mass(&self, _min: &[f64], _max: &[f64]) -> (f64, f64) {
+        (0.0, 0.0)
+    }
+
     /// Attaches a force to tracked points (see [`PointLoad`]); `false` if this domain has
     /// no tracked points to carry it.
     fn add_point_load(&mut self, _load: PointLoad) -> bool {

@@ -51,8 +51,32 @@ pub struct MpmDomain {
     pattern_rings: usize,
     /// Forces carried by material points (particle Neumann conditions).
     point_loads: Vec<PointLoad>,
-    /// Share θ of the PIC velocity in the convective phase (0: pure FLIP-type update).
-    pic_fraction: f64,
+    /// Share of the PIC velocity in the convective phase (default: pure FLIP-type update).
+    velocity_blend: VelocityBlend,
+}
+
+/// Share θ of the grid (PIC) velocity in the material points' velocity update of the
+/// convective phase, `v_p ← (1 − θ) v_p^FLIP + θ Σ_I N_I v_I^{n+1}` (Brackbill & Ruppel
+/// 1986; Nairn 2015 on FLIP/PIC blending). The blend damps the particle-velocity modes the
+/// grid does not see by the factor `1 − θ` per step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum VelocityBlend {
+    /// The same θ in every step (θ = 0: FLIP-type Newmark update; θ = 1: PIC); the damping
+    /// per unit time then grows as the step shrinks.
+    PicFraction(f64),
+    /// `θ = 1 − exp(−Δt/τ)`: the modes decay as `exp(−t/τ)` whatever the step sizes, so that
+    /// runs with different (or adaptive) steps damp alike.
+    RelaxationTime(f64),
+}
+
+impl VelocityBlend {
+    /// θ for a step of length `dt`.
+    pub fn theta(self, dt: f64) -> f64 {
+        match self {
+            Self::PicFraction(theta) => theta,
+            Self::RelaxationTime(tau) => -(-dt / tau).exp_m1(),
+        }
+    }
 }
 
 const EMPTY: usize = usize::MAX;
@@ -102,16 +126,15 @@ impl MpmDomain {
             block_orphans: Vec::new(),
             pattern_rings: pattern_rings(),
             point_loads: Vec::new(),
-            pic_fraction: 0.0,
+            velocity_blend: VelocityBlend::PicFraction(0.0),
         }
     }
 
-    /// Blends the particle velocity update: `v_p ← (1 − θ) v_p^FLIP + θ Σ_I N_I v_I^{n+1}`
-    /// (θ = 0: the Newmark update of the points' own velocity; θ = 1: PIC, the grid velocity).
-    /// A small θ damps the particle-velocity noise that the FLIP-type update accumulates in
-    /// granular bodies at rest (Brackbill & Ruppel 1986; Nairn 2015 on FLIP/PIC blending).
-    pub fn set_pic_fraction(&mut self, theta: f64) {
-        self.pic_fraction = theta;
+    /// Blends the particle velocity update with the grid velocity ([`VelocityBlend`]). A
+    /// small share damps the particle-velocity noise that the FLIP-type update accumulates in
+    /// granular bodies coming to rest.
+    pub fn set_velocity_blend(&mut self, blend: VelocityBlend) {
+        self.velocity_blend = blend;
     }
 
     /// Starts every material point from the Cauchy stress `stress(x_p)` (at rest, `F = I`):
@@ -475,7 +498,8 @@ impl Domain for MpmDomain {
         let element = self.grid.mesh.element;
         let nn = element.num_nodes();
         let dim = self.dim();
-        let (dt, gamma, theta) = (input.time_step, input.gamma, self.pic_fraction);
+        let (dt, gamma) = (input.time_step, input.gamma);
+        let theta = self.velocity_blend.theta(dt);
         let dynamic = input.inertial_acceleration.is_some();
         let (grid, node_ids, geometry, cells) = (&self.grid, &self.node_ids, &self.geometry, &self.cell_of_point);
         let pts = &mut self.points;
@@ -600,6 +624,14 @@ impl Domain for MpmDomain {
             (0..self.points.len()).filter(|&p| inside(&self.points.position[p])).map(|p| self.points.id[p]).collect();
         ids.sort_unstable();
         ids
+    }
+
+    fn points_volume_mass(&self, min: &[f64], max: &[f64]) -> (f64, f64) {
+        let pts = &self.points;
+        let inside = |x: &[f64; 3]| (0..min.len()).all(|d| x[d] >= min[d] && x[d] <= max[d]);
+        (0..pts.len())
+            .filter(|&p| inside(&pts.position[p]))
+            .fold((0.0, 0.0), |(v, m), p| (v + pts.volume[p], m + pts.mass[p]))
     }
 
     fn add_point_load(&mut self, load: PointLoad) -> bool {
