@@ -21,11 +21,11 @@
 //! (material points or `nN`) with `LOAM_BENCH_MPM_SIZES=448,28672,n64`; threads with
 //! `LOAM_BENCH_THREADS=1,2`. Nothing is asserted about times.
 
-use std::time::Instant;
+mod common;
 
+use common::{print_table, time_steps, StepTiming};
 use loam::case::Case;
 use loam::simulation::Simulation;
-use loam_fem::model::PhaseTimings;
 
 /// The case JSON for `n` cells through the thickness, `steps` steps of 0.01 s.
 pub fn case_json(n: usize, steps: usize) -> String {
@@ -65,49 +65,12 @@ fn parse_size(s: &str) -> Option<usize> {
     Some(((points / 28.0).sqrt()).round() as usize)
 }
 
-struct Row {
-    points: usize,
-    threads: usize,
-    steps: usize,
-    iterations: usize,
-    wall: f64,
-    t: PhaseTimings,
-    tip: f64,
-}
-
-fn run(n: usize, threads: usize, steps: usize) -> Row {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
+fn run(n: usize, threads: usize, steps: usize) -> StepTiming {
     let case = Case::parse(&case_json(n, steps)).expect("benchmark case parses");
     let mut sim = Simulation::new(case).expect("benchmark case builds");
-    let points = 28 * n * n;
-    pool.install(|| {
-        let t = Instant::now();
-        sim.step().expect("warm-up step converges");
-        let warm = t.elapsed().as_secs_f64();
-        let before = sim.stats.clone();
-        let t = Instant::now();
-        for _ in 0..steps {
-            sim.step().expect("step converges");
-        }
-        let wall = t.elapsed().as_secs_f64();
-        let mut d = sim.stats.timings;
-        let b = before.timings;
-        d.search -= b.search;
-        d.pattern -= b.pattern;
-        d.assembly -= b.assembly;
-        d.factorisation -= b.factorisation;
-        d.symbolic -= b.symbolic;
-        d.solve -= b.solve;
-        d.commit -= b.commit;
-        d.pattern_builds -= b.pattern_builds;
-        let tip = sim.monitor_values()[0];
-        eprintln!(
-            "  {points} points, {threads} thread(s): warm-up step {warm:.4} s, {steps} steps {wall:.3} s, {} iterations, {} pattern builds, tip uy {tip:.6e}",
-            sim.stats.iterations - before.iterations,
-            d.pattern_builds
-        );
-        Row { points, threads, steps, iterations: sim.stats.iterations - before.iterations, wall, t: d, tip }
-    })
+    let mut row = time_steps(&mut sim, &format!("n = {n}"), 28 * n * n, threads, 1, steps);
+    row.extra.push(format!("{:.5}", sim.monitor_values()[0]));
+    row
 }
 
 fn main() {
@@ -128,38 +91,5 @@ fn main() {
             rows.push(run(n, th, steps));
         }
     }
-    println!();
-    println!(
-        "Milliseconds per step (mean over {steps} steps after one warm-up step); per Newton iteration in parentheses."
-    );
-    println!();
-    println!("| points | threads | iter/step | step | initialisation | pattern + symbolic | assembly | factorisation + solve | convective | other | MP updates/s | tip uy (m) |");
-    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
-    for r in &rows {
-        let s = r.steps as f64;
-        let it = r.iterations.max(1) as f64;
-        let ms = |x: f64| 1e3 * x / s;
-        let t = &r.t;
-        let pattern = t.pattern + t.symbolic;
-        let fs = t.factorisation - t.symbolic + t.solve;
-        let other = r.wall - (t.search + t.pattern + t.assembly + t.factorisation + t.solve + t.commit);
-        println!(
-            "| {} | {} | {:.1} | {:.3} | {:.3} | {:.3} ({} builds) | {:.3} ({:.3}) | {:.3} ({:.3}) | {:.3} | {:.3} | {:.3e} | {:.5} |",
-            r.points,
-            r.threads,
-            it / s,
-            ms(r.wall),
-            ms(t.search),
-            ms(pattern),
-            t.pattern_builds,
-            ms(t.assembly),
-            1e3 * t.assembly / it,
-            ms(fs),
-            1e3 * fs / it,
-            ms(t.commit),
-            ms(other),
-            r.points as f64 * s / r.wall,
-            r.tip,
-        );
-    }
+    print_table(&rows, &["tip uy (m)"]);
 }

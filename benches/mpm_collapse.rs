@@ -1,0 +1,115 @@
+//! Time per step of the Bui et al. (2008) column collapse (benchmark 8 of
+//! `shared/BENCHMARKS.md`), by phase, at the refinement levels of `cases/`.
+//!
+//! Two parts:
+//!
+//! - **steps** (default): from the start of the collapse, one warm-up step and then
+//!   `LOAM_BENCH_STEPS` (default 10) steps of Kratos' step Δt = 5e-5 s, with 1 and 2 threads,
+//!   on the quadrilateral grids h = 10 / 5 / 2.5 mm (`collapse_bui2008_quad_h10`, `_quad`,
+//!   `_quad_h2.5`) and on Kratos' own validation discretisation of this benchmark
+//!   (`collapse_bui2008_tri_h2`: triangles h = 2 mm, 3 points each, 30 000 points). Kratos'
+//!   MPM application needs 0.83 s per step there on one thread (`shared/kratos/README.md`);
+//!   the last column is that over Loam's time per step.
+//! - **full** (`LOAM_BENCH_COLLAPSE=full`): each quadrilateral level run as its case file
+//!   says (adaptive steps until at rest, no output files), with its wall time, steps, Newton
+//!   iterations, per-step phase split, and final runout and height at the wall; threads from
+//!   `LOAM_BENCH_THREADS` (default 2). The h = 2.5 mm level takes about 10 minutes on 2 cores.
+//!
+//! Choose cases with `LOAM_BENCH_CASES=collapse_bui2008_quad,collapse_bui2008_tri_h2`.
+//! Run: `cargo bench --bench mpm_collapse`. Nothing is asserted about times.
+
+mod common;
+
+use std::path::Path;
+use std::time::Instant;
+
+use common::{print_table, time_steps, StepTiming};
+use loam::case::Case;
+use loam::simulation::Simulation;
+
+/// Kratos' MPM application on `collapse_bui2008_tri_h2`'s discretisation at Δt = 5e-5 s,
+/// one thread (s per step; `shared/kratos/README.md`).
+const KRATOS_SECONDS_PER_STEP: f64 = 0.83;
+const KRATOS_CASE: &str = "collapse_bui2008_tri_h2";
+const KRATOS_TIME_STEP: f64 = 5e-5;
+
+fn load(name: &str, fixed_step: Option<(f64, usize)>) -> Case {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases").join(format!("{name}.json"));
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("case file")).expect("case JSON");
+    json["output"] = serde_json::json!({ "interval": 0, "vtk": false });
+    if let Some((dt, steps)) = fixed_step {
+        let analysis = json["analysis"].as_object_mut().expect("analysis");
+        analysis.remove("adaptive");
+        analysis.remove("stop_at_rest");
+        analysis.insert("time_step".into(), dt.into());
+        analysis.insert("end_time".into(), (dt * (steps + 1) as f64).into());
+    }
+    Case::parse(&json.to_string()).expect("case parses")
+}
+
+fn point_count(sim: &Simulation) -> usize {
+    sim.model.domains.iter().map(|d| d.points_in_box(&[f64::MIN; 3], &[f64::MAX; 3]).len()).sum()
+}
+
+fn env_list(name: &str) -> Option<Vec<String>> {
+    std::env::var(name).ok().map(|v| v.split(',').map(|s| s.trim().to_string()).filter(|s| !s.is_empty()).collect())
+}
+
+fn main() {
+    faer::set_global_parallelism(faer::Par::Seq);
+    let full = std::env::var("LOAM_BENCH_COLLAPSE").is_ok_and(|v| v == "full");
+    let levels = ["collapse_bui2008_quad_h10", "collapse_bui2008_quad", "collapse_bui2008_quad_h2.5"];
+    let mut cases: Vec<String> = levels.iter().map(|s| s.to_string()).collect();
+    if !full {
+        cases.push(KRATOS_CASE.into());
+    }
+    let cases = env_list("LOAM_BENCH_CASES").unwrap_or(cases);
+    let default_threads = if full { vec![2] } else { vec![1, 2] };
+    let threads: Vec<usize> = env_list("LOAM_BENCH_THREADS")
+        .map(|v| v.iter().filter_map(|s| s.parse().ok()).collect())
+        .unwrap_or(default_threads);
+    let steps: usize = std::env::var("LOAM_BENCH_STEPS").ok().and_then(|v| v.parse().ok()).unwrap_or(10);
+    let mut rows: Vec<StepTiming> = Vec::new();
+    for name in &cases {
+        for &th in &threads {
+            if full {
+                let mut sim = Simulation::new(load(name, None)).expect("case builds");
+                let points = point_count(&sim);
+                let t = Instant::now();
+                let mut row = time_steps(&mut sim, name, points, th, 0, usize::MAX);
+                let wall = t.elapsed().as_secs_f64();
+                let value = |m: &str| {
+                    let k = sim.monitor_names().iter().position(|n| *n == m).expect("monitor");
+                    sim.monitor_values()[k]
+                };
+                row.extra = vec![
+                    format!("{wall:.1}"),
+                    format!("{}", row.steps),
+                    format!("{:.3}{}", sim.time(), if sim.at_rest { " (rest)" } else { "" }),
+                    format!("{:.4}", value("runout")),
+                    format!("{:.4}", value("height_at_wall")),
+                ];
+                rows.push(row);
+            } else {
+                let mut sim = Simulation::new(load(name, Some((KRATOS_TIME_STEP, steps)))).expect("case builds");
+                let points = point_count(&sim);
+                let mut row = time_steps(&mut sim, name, points, th, 1, steps);
+                let per_step = row.wall / row.steps.max(1) as f64;
+                row.extra = vec![if name == KRATOS_CASE {
+                    format!("{:.1}", KRATOS_SECONDS_PER_STEP / per_step)
+                } else {
+                    "—".into()
+                }];
+                rows.push(row);
+            }
+        }
+    }
+    if full {
+        println!("\nWhole runs (adaptive steps until at rest), no output files.");
+        print_table(&rows, &["wall (s)", "steps", "end time (s)", "runout (m)", "height at wall (m)"]);
+    } else {
+        println!("\nSteps of Δt = {KRATOS_TIME_STEP} s from the start of the collapse.");
+        print_table(&rows, &["Kratos 1 thread / Loam"]);
+    }
+}
