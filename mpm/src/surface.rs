@@ -6,6 +6,29 @@
 //! volume) covers `[x_p − s_p/2, x_p + s_p/2] × [y_p − s_p/2, y_p + s_p/2]`. The surface
 //! height above the base `y_b` at `x` is `h(x) = max_p (y_p + s_p/2) − y_b` over the points
 //! whose square covers `x`.
+//!
+//! The inclination of a heap's flank ([`SurfaceProfile::slope_fit`]) is the least-squares
+//! line through `h(x)` sampled over the part of the flank between two fractions of the heap
+//! height, which leaves out the rounded crest and the toe.
+
+/// A straight line fitted to the free surface: `h(x) ≈ intercept + slope · x`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlopeFit {
+    /// Height of the line at `x = 0` above the base (m).
+    pub intercept: f64,
+    /// `dh/dx` (negative on a flank that falls towards `+x`).
+    pub slope: f64,
+    /// Inclination from the horizontal, `atan |dh/dx|` in degrees.
+    pub angle: f64,
+    /// Heap height `H`: the largest `h(x_k)` over the sampled range (m).
+    pub height: f64,
+    /// First and last abscissa of the fitted samples (m).
+    pub x_span: [f64; 2],
+    /// Number of fitted samples.
+    pub samples: usize,
+    /// Root mean square of the residuals `h(x_k) − (intercept + slope x_k)` (m).
+    pub rms_residual: f64,
+}
 
 /// Material points as seen by the surface: positions and sizes.
 #[derive(Debug, Clone, Copy)]
@@ -62,6 +85,57 @@ impl<'a> SurfaceProfile<'a> {
         let sum: f64 = reference.iter().map(|&(x, y)| (self.height_at(x) - y).powi(2)).sum();
         (sum / reference.len() as f64).sqrt()
     }
+
+    /// Inclination of a heap's flank. The surface is sampled at `x_k = x_range[0] + k ·
+    /// spacing` up to `x_range[1]`; with the heap height `H = max_k h(x_k)`, the flank is the
+    /// stretch from the first to the last sample whose height lies in
+    /// `[band[0] · H, band[1] · H]` (e.g. `[0.2, 0.8]`: without the crest and the toe), and
+    /// every sample of that stretch is fitted by least squares,
+    ///
+    /// $$ b = \frac{\sum_k (x_k - \bar x)(h_k - \bar h)}{\sum_k (x_k - \bar x)^2}, \qquad
+    ///    a = \bar h - b \bar x, \qquad \beta = \arctan |b| . $$
+    ///
+    /// The stretch is chosen by the heights at its ends only, so that a rough surface is not
+    /// filtered by height inside it (selecting samples on `h` would bias `b` towards zero).
+    /// `x_range` should hold one flank (a monotonic surface); `None` if there is no surface
+    /// or fewer than two samples fall in the band.
+    pub fn slope_fit(&self, x_range: [f64; 2], spacing: f64, band: [f64; 2]) -> Option<SlopeFit> {
+        assert!(spacing > 0.0, "slope_fit: spacing must be positive");
+        let n = ((x_range[1] - x_range[0]) / spacing).floor().max(0.0) as usize + 1;
+        let samples: Vec<(f64, f64)> = (0..n)
+            .map(|k| {
+                let x = x_range[0] + k as f64 * spacing;
+                (x, self.height_at(x))
+            })
+            .collect();
+        let height = samples.iter().map(|s| s.1).fold(0.0, f64::max);
+        if height <= 0.0 {
+            return None;
+        }
+        let in_band = |h: f64| h >= band[0] * height && h <= band[1] * height;
+        let first = samples.iter().position(|s| in_band(s.1))?;
+        let last = samples.iter().rposition(|s| in_band(s.1))?;
+        let flank = &samples[first..=last];
+        if flank.len() < 2 {
+            return None;
+        }
+        let m = flank.len() as f64;
+        let (mx, mh) = (flank.iter().map(|s| s.0).sum::<f64>() / m, flank.iter().map(|s| s.1).sum::<f64>() / m);
+        let sxh: f64 = flank.iter().map(|s| (s.0 - mx) * (s.1 - mh)).sum();
+        let sxx: f64 = flank.iter().map(|s| (s.0 - mx).powi(2)).sum();
+        let slope = sxh / sxx;
+        let intercept = mh - slope * mx;
+        let rss: f64 = flank.iter().map(|s| (s.1 - intercept - slope * s.0).powi(2)).sum();
+        Some(SlopeFit {
+            intercept,
+            slope,
+            angle: slope.abs().atan().to_degrees(),
+            height,
+            x_span: [flank[0].0, flank[flank.len() - 1].0],
+            samples: flank.len(),
+            rms_residual: (rss / m).sqrt(),
+        })
+    }
 }
 
 #[cfg(test)]
@@ -88,5 +162,40 @@ mod tests {
         assert_eq!(SurfaceProfile::new(&pts, 0.0).runout(0.0, 0.5), 10.0);
         let reference = [(2.5, 8.0), (4.5, 6.0)];
         assert!(SurfaceProfile::new(&pts, 0.0).rms_distance(&reference) < 1e-12);
+    }
+
+    /// Points on a fine lattice filling a heap with a flat crest (height 1 for x < 1) and a
+    /// 30° flank down to the base: the fit between 20 % and 80 % of the height finds 30°,
+    /// the height and the flank's line; the unit staircase of `staircase_heap` gives 45°.
+    #[test]
+    fn slope_of_a_heap_flank() {
+        let (beta, s) = (30f64.to_radians(), 0.01);
+        let toe = 1.0 + 1.0 / beta.tan();
+        let mut pts = Vec::new();
+        for i in 0..(toe / s).ceil() as usize {
+            let x = (i as f64 + 0.5) * s;
+            let top = if x < 1.0 { 1.0 } else { (toe - x) * beta.tan() };
+            for j in 0..(top / s).round() as usize {
+                pts.push(([x, (j as f64 + 0.5) * s, 0.0], s));
+            }
+        }
+        let fit = SurfaceProfile::new(&pts, 0.0).slope_fit([0.0, toe + 0.1], 0.001, [0.2, 0.8]).expect("a flank");
+        assert!((fit.angle - 30.0).abs() < 0.3, "angle {}", fit.angle);
+        assert!((fit.height - 1.0).abs() < s, "height {}", fit.height);
+        // the line meets the base at the toe and the crest where the flank starts
+        assert!((-fit.intercept / fit.slope - toe).abs() < 2.0 * s, "toe {}", -fit.intercept / fit.slope);
+        assert!((fit.x_span[0] - (1.0 + 0.2 / beta.tan())).abs() < 2.0 * s, "span {:?}", fit.x_span);
+        assert!(fit.rms_residual < s, "residual {}", fit.rms_residual);
+
+        let mut stairs = Vec::new();
+        for i in 0..10 {
+            for j in 0..(10 - i) {
+                stairs.push(([0.5 + i as f64, 0.5 + j as f64, 0.0], 1.0));
+            }
+        }
+        let fit = SurfaceProfile::new(&stairs, 0.0).slope_fit([0.0, 11.0], 0.01, [0.2, 0.8]).expect("a flank");
+        assert!((fit.angle - 45.0).abs() < 1.0, "staircase angle {}", fit.angle);
+        // nothing to fit on a bare base
+        assert!(SurfaceProfile::new(&[], 0.0).slope_fit([0.0, 1.0], 0.1, [0.2, 0.8]).is_none());
     }
 }
