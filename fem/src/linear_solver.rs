@@ -44,6 +44,11 @@ pub enum LinearSolverKind {
     Lu,
     /// Sparse Cholesky (symmetric positive definite matrices only).
     Cholesky,
+    /// As `auto` for symmetric matrices; an unsymmetric one (non-associated plasticity) by
+    /// GMRES preconditioned with the Cholesky factors of its symmetric part, LU if that part
+    /// is not positive definite or GMRES does not converge. Pays in mass-dominated steps
+    /// (small Δt), where the skew part is small beside `M/(βΔt²)`.
+    SymmetricPartGmres,
 }
 
 /// Failure of the linear solve.
@@ -250,10 +255,10 @@ impl LinearSolver {
 
     /// Numeric factorisation (symbolic analysis first if the pattern is new), then the
     /// solve: Cholesky and triangular solves for a symmetric `A`; for an unsymmetric one under
-    /// `auto`, GMRES preconditioned by the Cholesky factors of the symmetric part
-    /// `(A + Aᵀ)/2` (far cheaper than LU, whose column ordering fills in more), and LU with
-    /// partial pivoting if that part is not positive definite or GMRES does not converge
-    /// (then LU for the rest of this pattern).
+    /// `symmetric_part_gmres`, GMRES preconditioned by the Cholesky factors of the symmetric
+    /// part `(A + Aᵀ)/2` (far cheaper than LU, whose column ordering fills in more), and LU
+    /// with partial pivoting otherwise, or if that part is not positive definite or GMRES
+    /// does not converge (then LU for the rest of this pattern).
     fn factorise_and_solve(
         &mut self,
         pattern: &AssemblyPattern,
@@ -266,7 +271,9 @@ impl LinearSolver {
         let symmetric = match self.kind {
             LinearSolverKind::Cholesky => true,
             LinearSolverKind::Lu => false,
-            LinearSolverKind::Auto => !self.llt_failed && pattern.is_symmetric(values, 1e-10),
+            LinearSolverKind::Auto | LinearSolverKind::SymmetricPartGmres => {
+                !self.llt_failed && pattern.is_symmetric(values, 1e-10)
+            }
         };
         if symmetric {
             if self.factorise_cholesky(pattern, values)? {
@@ -285,7 +292,7 @@ impl LinearSolver {
                 return Err(LinearSolverError::Factorisation("Cholesky failed: matrix not positive definite".into()));
             }
             self.llt_failed = true;
-        } else if self.kind == LinearSolverKind::Auto && !self.symmetric_part_failed {
+        } else if self.kind == LinearSolverKind::SymmetricPartGmres && !self.symmetric_part_failed {
             let mut sym = std::mem::take(&mut self.symmetric_values);
             pattern.symmetric_part(values, &mut sym);
             let factored = self.factorise_cholesky(pattern, &sym);

@@ -95,6 +95,7 @@ pub struct KirchhoffUpdate {
 /// Steps 2–6 of the module doc for a given `F` and `Cp⁻¹` with the principal return
 /// `principal_return(ε_tr)`. Only the columns `components` of `dτ/dF` are formed (all
 /// rows of each); the others stay zero.
+#[inline(always)]
 pub fn kirchhoff_update(
     F: &Matrix3<f64>,
     cp_inv: &Matrix3<f64>,

@@ -48,8 +48,9 @@ impl Spectral {
     /// Closed form for a tensor without `xz`, `yz` components (plane strain, plane stress and
     /// axisymmetry): the in-plane block `[[a, b], [b, d]]` has the eigenvalues
     /// `(a + d)/2 ± r`, `r = √(((a − d)/2)² + b²)`, the smaller in magnitude taken as
-    /// `(a d − b²)` over the larger (no cancellation), on the axes rotated by
-    /// `φ = ½ atan2(2b, a − d)`; `zz` is the third eigenvalue, on `e_z`.
+    /// `(a d − b²)` over the larger (no cancellation); the eigenvector of `(a + d)/2 + r` is
+    /// `(x₁ − d, b)` if `a ≥ d`, else `(b, x₁ − a)` (the longer of the two, each at least
+    /// `|b|` long), normalised; `zz` is the third eigenvalue, on `e_z`.
     fn of_in_plane(m: &Matrix3<f64>) -> Self {
         let (a, b, d) = (m[(0, 0)], 0.5 * (m[(0, 1)] + m[(1, 0)]), m[(1, 1)]);
         let mean = 0.5 * (a + d);
@@ -57,8 +58,10 @@ impl Spectral {
         let (big, small) = if mean >= 0.0 { (mean + r, mean - r) } else { (mean - r, mean + r) };
         let small = if big != 0.0 { (a * d - b * b) / big } else { small };
         let (first, second) = if mean >= 0.0 { (big, small) } else { (small, big) };
-        let phi = 0.5 * (2.0 * b).atan2(a - d);
-        let (sin, cos) = phi.sin_cos();
+        let upper = mean + r;
+        let (vx, vy) = if a >= d { (upper - d, b) } else { (b, upper - a) };
+        let length = (vx * vx + vy * vy).sqrt();
+        let (cos, sin) = if length > 0.0 { (vx / length, vy / length) } else { (1.0, 0.0) };
         Self { values: [first, second, m[(2, 2)]], vectors: Matrix3::new(cos, -sin, 0.0, sin, cos, 0.0, 0.0, 0.0, 1.0) }
     }
 

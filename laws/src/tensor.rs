@@ -21,6 +21,7 @@ pub const fn idx(i: usize, j: usize) -> usize {
 ///
 /// Only the rows and columns of `components` are formed (the others stay zero); they read
 /// the columns `components` of `dτ/dF`.
+#[inline(always)]
 pub fn piola_from_kirchhoff(
     f_inv: &Matrix3<f64>,
     tau: &Matrix3<f64>,
