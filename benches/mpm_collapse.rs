@@ -15,6 +15,11 @@
 //!   iterations, per-step phase split, and final runout and height at the wall; threads from
 //!   `LOAM_BENCH_THREADS` (default 2). The h = 2.5 mm level takes about 10 minutes on 2 cores.
 //!
+//! - **small step** (`LOAM_BENCH_COLLAPSE=small_step`): the first case (default
+//!   `collapse_bui2008_quad`) run twice until at rest, with Kratos' fixed step Δt = 5e-5 s
+//!   and with the case's adaptive steps; prints both wall times and the RMS vertical distance
+//!   between the two final surfaces (sampled every millimetre from the wall to 0.5 m).
+//!
 //! Choose cases with `LOAM_BENCH_CASES=collapse_bui2008_quad,collapse_bui2008_tri_h2`.
 //! Run: `cargo bench --bench mpm_collapse`. Nothing is asserted about times.
 
@@ -25,7 +30,9 @@ use std::time::Instant;
 
 use common::{print_table, time_steps, StepTiming};
 use loam::case::Case;
+use loam::monitor::point_extents;
 use loam::simulation::Simulation;
+use loam_mpm::surface::SurfaceProfile;
 
 /// Kratos' MPM application on `collapse_bui2008_tri_h2`'s discretisation at Δt = 5e-5 s,
 /// one thread (s per step; `shared/kratos/README.md`).
@@ -33,17 +40,34 @@ const KRATOS_SECONDS_PER_STEP: f64 = 0.83;
 const KRATOS_CASE: &str = "collapse_bui2008_tri_h2";
 const KRATOS_TIME_STEP: f64 = 5e-5;
 
-fn load(name: &str, fixed_step: Option<(f64, usize)>) -> Case {
+/// How [`load`] changes the case's analysis.
+enum Steps {
+    /// As in the case file.
+    AsCase,
+    /// `n` fixed steps of length `dt` (no adaptivity, no rest criterion).
+    Fixed(f64, usize),
+    /// Fixed steps of length `dt` until at rest (the case's rest criterion).
+    FixedToRest(f64),
+}
+
+fn load(name: &str, steps: Steps) -> Case {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases").join(format!("{name}.json"));
     let mut json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).expect("case file")).expect("case JSON");
     json["output"] = serde_json::json!({ "interval": 0, "vtk": false });
-    if let Some((dt, steps)) = fixed_step {
-        let analysis = json["analysis"].as_object_mut().expect("analysis");
-        analysis.remove("adaptive");
-        analysis.remove("stop_at_rest");
-        analysis.insert("time_step".into(), dt.into());
-        analysis.insert("end_time".into(), (dt * (steps + 1) as f64).into());
+    let analysis = json["analysis"].as_object_mut().expect("analysis");
+    match steps {
+        Steps::AsCase => {}
+        Steps::Fixed(dt, n) => {
+            analysis.remove("adaptive");
+            analysis.remove("stop_at_rest");
+            analysis.insert("time_step".into(), dt.into());
+            analysis.insert("end_time".into(), (dt * (n + 1) as f64).into());
+        }
+        Steps::FixedToRest(dt) => {
+            analysis.remove("adaptive");
+            analysis.insert("time_step".into(), dt.into());
+        }
     }
     Case::parse(&json.to_string()).expect("case parses")
 }
@@ -56,8 +80,57 @@ fn env_list(name: &str) -> Option<Vec<String>> {
     std::env::var(name).ok().map(|v| v.split(',').map(|s| s.trim().to_string()).filter(|s| !s.is_empty()).collect())
 }
 
+/// Runs `case` until its end (or rest) in a pool of `threads`; returns the simulation and the
+/// wall time.
+fn run_whole(case: Case, threads: usize) -> (Simulation, f64) {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
+    let mut sim = Simulation::new(case).expect("case builds");
+    let t = Instant::now();
+    pool.install(|| {
+        while !sim.finished() {
+            sim.step().expect("step converges");
+        }
+    });
+    (sim, t.elapsed().as_secs_f64())
+}
+
+fn small_step_comparison(name: &str, threads: usize) {
+    let runs = [("Δt = 5e-5 s", Steps::FixedToRest(KRATOS_TIME_STEP)), ("adaptive", Steps::AsCase)];
+    let mut surfaces = Vec::new();
+    println!("\n{name}, {threads} thread(s), until at rest:\n");
+    println!("| steps | count | end time (s) | wall (s) | s per step | runout (m) | height at wall (m) |");
+    println!("|---|---:|---:|---:|---:|---:|---:|");
+    for (label, steps) in runs {
+        let (sim, wall) = run_whole(load(name, steps), threads);
+        let value = |m: &str| {
+            let k = sim.monitor_names().iter().position(|n| *n == m).expect("monitor");
+            sim.monitor_values()[k]
+        };
+        println!(
+            "| {label} | {} | {:.3}{} | {wall:.1} | {:.4} | {:.4} | {:.4} |",
+            sim.stats.steps,
+            sim.time(),
+            if sim.at_rest { " (rest)" } else { "" },
+            wall / sim.stats.steps as f64,
+            value("runout"),
+            value("height_at_wall")
+        );
+        surfaces.push(point_extents(&sim.model));
+    }
+    let reference = SurfaceProfile::new(&surfaces[0], 0.0);
+    let samples: Vec<(f64, f64)> = (0..=500).map(|k| 1e-3 * k as f64).map(|x| (x, reference.height_at(x))).collect();
+    let rms = SurfaceProfile::new(&surfaces[1], 0.0).rms_distance(&samples);
+    println!("\nRMS vertical distance between the final surfaces (x = 0 … 0.5 m every 1 mm): {:.2} mm", rms * 1e3);
+}
+
 fn main() {
     faer::set_global_parallelism(faer::Par::Seq);
+    if std::env::var("LOAM_BENCH_COLLAPSE").is_ok_and(|v| v == "small_step") {
+        let name = env_list("LOAM_BENCH_CASES").and_then(|v| v.first().cloned());
+        let threads = env_list("LOAM_BENCH_THREADS").and_then(|v| v.first().and_then(|s| s.parse().ok()));
+        small_step_comparison(name.as_deref().unwrap_or("collapse_bui2008_quad"), threads.unwrap_or(2));
+        return;
+    }
     let full = std::env::var("LOAM_BENCH_COLLAPSE").is_ok_and(|v| v == "full");
     let levels = ["collapse_bui2008_quad_h10", "collapse_bui2008_quad", "collapse_bui2008_quad_h2.5"];
     let mut cases: Vec<String> = levels.iter().map(|s| s.to_string()).collect();
@@ -74,7 +147,7 @@ fn main() {
     for name in &cases {
         for &th in &threads {
             if full {
-                let mut sim = Simulation::new(load(name, None)).expect("case builds");
+                let mut sim = Simulation::new(load(name, Steps::AsCase)).expect("case builds");
                 let points = point_count(&sim);
                 let t = Instant::now();
                 let mut row = time_steps(&mut sim, name, points, th, 0, usize::MAX);
@@ -92,7 +165,7 @@ fn main() {
                 ];
                 rows.push(row);
             } else {
-                let mut sim = Simulation::new(load(name, Some((KRATOS_TIME_STEP, steps)))).expect("case builds");
+                let mut sim = Simulation::new(load(name, Steps::Fixed(KRATOS_TIME_STEP, steps))).expect("case builds");
                 let points = point_count(&sim);
                 let mut row = time_steps(&mut sim, name, points, th, 1, steps);
                 let per_step = row.wall / row.steps.max(1) as f64;
