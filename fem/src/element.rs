@@ -245,9 +245,9 @@ impl ElementType {
                 xi[d] += step[d];
                 norm = norm.max(step[d].abs());
             }
-            // converged, or at the round-off floor (small cells far from the origin: the
-            // steps stop shrinking at |x|·ε / h)
-            if norm < 1e-13 || (norm < 1e-9 && norm >= last) {
+            // affine elements: one step is exact; otherwise converged, or at the round-off
+            // floor (small cells far from the origin: the steps stop shrinking at |x|·ε / h)
+            if matches!(self, ElementType::Tri3 | ElementType::Tet4) || norm < 1e-13 || (norm < 1e-9 && norm >= last) {
                 return Some(xi);
             }
             last = norm;
