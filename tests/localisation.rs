@@ -12,7 +12,7 @@
 
 mod common;
 
-use common::{case, monitor, run};
+use common::{case, monitor, principal_angle, run};
 use loam::case::{Case, MeshSpec};
 use loam::simulation::Simulation;
 
@@ -31,20 +31,6 @@ fn cell_field(sim: &Simulation, k: usize, name: &str) -> (Vec<[f64; 2]>, Vec<f64
         .collect();
     let field = out.cell_fields.iter().find(|f| f.name == name).unwrap_or_else(|| panic!("cell field {name}"));
     (centres, field.values.clone())
-}
-
-/// Angle (degrees from the horizontal) of the principal axis of `points`.
-fn principal_angle(points: &[[f64; 2]]) -> f64 {
-    let n = points.len() as f64;
-    let (mx, my) = points.iter().fold((0.0, 0.0), |(x, y), p| (x + p[0] / n, y + p[1] / n));
-    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
-    for p in points {
-        let (dx, dy) = (p[0] - mx, p[1] - my);
-        sxx += dx * dx;
-        syy += dy * dy;
-        sxy += dx * dy;
-    }
-    (0.5 * (2.0 * sxy).atan2(sxx - syy)).to_degrees().abs()
 }
 
 /// Localisation measures of the specimen (domain 2): (κ max, κ mean, share of cells with

@@ -61,3 +61,19 @@ pub fn frequency(h: &[(f64, f64)]) -> f64 {
     assert!(crossings.len() >= 3, "need two periods, got crossings {crossings:?}");
     (crossings.len() - 1) as f64 / (crossings.last().unwrap() - crossings[0])
 }
+
+/// Angle (degrees from the horizontal, in [0°, 90°]) of the principal axis of `points`: the
+/// direction θ of largest spread, `tan 2θ = 2 S_xy / (S_xx − S_yy)` with the central second
+/// moments `S` (a band fitted through its points).
+pub fn principal_angle(points: &[[f64; 2]]) -> f64 {
+    let n = points.len() as f64;
+    let (mx, my) = points.iter().fold((0.0, 0.0), |(x, y), p| (x + p[0] / n, y + p[1] / n));
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for p in points {
+        let (dx, dy) = (p[0] - mx, p[1] - my);
+        sxx += dx * dx;
+        syy += dy * dy;
+        sxy += dx * dy;
+    }
+    (0.5 * (2.0 * sxy).atan2(sxx - syy)).to_degrees().abs()
+}
