@@ -99,16 +99,16 @@ fn main() -> ExitCode {
                 Ok((end, wall)) => {
                     let t = &sim.stats.timings;
                     let solver = sim.model.solver_timings();
-                    let reuse = if solver.krylov_iterations > 0 {
+                    let gmres = if solver.krylov_iterations > 0 {
                         format!(
-                            "; {} factorisations, {} solves by GMRES on a reused one ({} iterations)",
+                            "; {} factorisations, {} solves by GMRES ({} iterations)",
                             solver.factorisations, solver.krylov_solves, solver.krylov_iterations
                         )
                     } else {
                         String::new()
                     };
                     let summary = format!(
-                        "{} steps, {} Newton iterations, {} step cuts, wall time {:.2} s (assembly {:.2} s, factorisation {:.2} s, solve {:.2} s{reuse})",
+                        "{} steps, {} Newton iterations, {} step cuts, wall time {:.2} s (assembly {:.2} s, factorisation {:.2} s, solve {:.2} s{gmres})",
                         sim.stats.steps, sim.stats.iterations, sim.stats.cuts, wall, t.assembly, t.factorisation, t.solve
                     );
                     match end {

@@ -1,4 +1,4 @@
-//! Right-preconditioned GMRES for reusing a factorisation of an earlier matrix.
+//! Right-preconditioned GMRES, preconditioned by a factorisation of a nearby matrix.
 //!
 //! Saad & Schultz (1986), "GMRES: a generalized minimal residual algorithm for solving
 //! nonsymmetric linear systems", SIAM J. Sci. Stat. Comput. 7:856–869; Saad (2003),
@@ -9,11 +9,11 @@
 //! `x_m = M⁻¹ V_m y_m`. The true residual of `x_m` equals the minimised one, so the
 //! stopping test `|g_{m+1}| ≤ tol β` bounds `‖b − A x_m‖ / ‖b‖` directly.
 //!
-//! Used by [`crate::linear_solver`] with `M` the LU or Cholesky factors of the tangent
-//! of an earlier Newton iteration or step: when the tangent has changed little (small time
-//! steps, mass-dominated dynamics), a few iterations replace a numeric factorisation.
+//! Used by [`crate::linear_solver`] with `M` the Cholesky factors of the symmetric part
+//! `(K + Kᵀ)/2` of an unsymmetric tangent: when the skew part is small beside the mass
+//! term (small time steps), a few iterations replace an LU factorisation.
 
-/// Workspace of [`gmres`], reused between solves (no allocation once sized).
+/// Workspace of [`Gmres::solve`], reused between solves (no allocation once sized).
 #[derive(Debug, Default)]
 pub struct Gmres {
     /// Krylov basis `v_1 … v_{m+1}`, column after column.

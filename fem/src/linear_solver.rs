@@ -7,17 +7,17 @@
 //! otherwise. On this project's FEM/MPM matrices Cholesky with AMD ordering was up to 10×
 //! faster than LU (whose column ordering fills in more), see `../shared/STACK.md`.
 //!
-//! With factorisation reuse ([`LinearSolver::with_reuse`]) a solve first tries GMRES
-//! preconditioned by the factors of an earlier matrix on the same pattern
-//! ([`crate::krylov`]); only if that does not reach [`KRYLOV_TOLERANCE`] within
-//! [`KRYLOV_MAX_ITERATIONS`] is the matrix factorised afresh. After a solve that needed more
-//! than [`KRYLOV_REFACTOR_AFTER`] iterations the next solve factorises directly.
+//! `symmetric_part_gmres` solves an unsymmetric tangent by GMRES ([`crate::krylov`])
+//! preconditioned with the Cholesky factors of its symmetric part, to [`KRYLOV_TOLERANCE`]
+//! within [`KRYLOV_MAX_ITERATIONS`], and falls back to LU for the rest of the pattern when that
+//! fails. (Reusing an earlier iteration's factors as the preconditioner was tried and gave no
+//! gain on the MPM cantilever or the Bui column, so every solve factorises.)
 
 use std::time::Instant;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky};
-use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
+use faer::sparse::linalg::lu::{factorize_symbolic_lu, NumericLu, SymbolicLu};
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::{Conj, MatMut, Side};
 use serde::Deserialize;
@@ -25,13 +25,11 @@ use serde::Deserialize;
 use crate::assembly::AssemblyPattern;
 use crate::krylov::Gmres;
 
-/// Relative residual `‖b − A x‖/‖b‖` a reused-factor GMRES solve must reach: far below the
+/// Relative residual `‖b − A x‖/‖b‖` a GMRES solve must reach: far below the
 /// Newton tolerances, so that Newton takes the same path as with exact solves.
 pub const KRYLOV_TOLERANCE: f64 = 1e-9;
-/// Arnoldi steps before a reused factorisation is given up for a fresh one.
+/// Arnoldi steps before GMRES is given up for LU.
 pub const KRYLOV_MAX_ITERATIONS: usize = 12;
-/// A solve that took more GMRES iterations than this refactorises at the next solve.
-pub const KRYLOV_REFACTOR_AFTER: usize = 6;
 
 /// Choice of direct solver.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
@@ -70,21 +68,14 @@ pub struct SolverTimings {
     pub symbolic: f64,
     /// Numeric factorisations.
     pub factorisation: f64,
-    /// Triangular solves (and the GMRES iterations of reused factorisations).
+    /// Triangular solves (and GMRES iterations).
     pub solve: f64,
     /// Numeric factorisations done.
     pub factorisations: usize,
-    /// Solves done by GMRES on a reused factorisation, and their iterations.
+    /// Solves done by GMRES.
     pub krylov_solves: usize,
     /// GMRES iterations of those solves (failed attempts included).
     pub krylov_iterations: usize,
-}
-
-/// Which factorisation is held for reuse.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Factor {
-    Cholesky,
-    Lu,
 }
 
 /// Symbolic Cholesky factorisation with the numeric factor and the workspace kept between
@@ -131,12 +122,6 @@ pub struct LinearSolver {
     llt: Option<CholeskyState>,
     /// Set once Cholesky failed on this pattern (indefinite tangent): use LU from then on.
     llt_failed: bool,
-    /// Try GMRES on the held factorisation before factorising.
-    reuse: bool,
-    /// The factorisation held (of an earlier matrix on this pattern).
-    held: Option<Factor>,
-    /// Factorise at the next solve (the last GMRES solve was slow).
-    refactor_next: bool,
     /// Set once GMRES on the symmetric part's factors failed on this pattern: LU from then on.
     symmetric_part_failed: bool,
     /// `(A + Aᵀ)/2` for its factorisation.
@@ -154,9 +139,6 @@ impl LinearSolver {
             lu: None,
             llt: None,
             llt_failed: false,
-            reuse: false,
-            held: None,
-            refactor_next: false,
             symmetric_part_failed: false,
             symmetric_values: Vec::new(),
             gmres: Gmres::default(),
@@ -164,19 +146,11 @@ impl LinearSolver {
         }
     }
 
-    /// Enables or disables factorisation reuse (module doc).
-    pub fn with_reuse(mut self, reuse: bool) -> Self {
-        self.reuse = reuse;
-        self
-    }
-
     /// Forgets the symbolic factorisations (call when the pattern changes).
     pub fn reset_pattern(&mut self) {
         self.lu = None;
         self.llt = None;
         self.llt_failed = false;
-        self.held = None;
-        self.refactor_next = false;
         self.symmetric_part_failed = false;
     }
 
@@ -191,54 +165,23 @@ impl LinearSolver {
         if n == 0 {
             return Ok(());
         }
-        if self.reuse && !self.refactor_next {
-            if let Some(held) = self.held {
-                let t = Instant::now();
-                let converged = self.solve_with_held_factor(held, pattern, values, rhs);
-                self.timings.solve += t.elapsed().as_secs_f64();
-                if converged {
-                    return check_finite(rhs);
-                }
-            }
-        }
-        self.refactor_next = false;
         self.factorise_and_solve(pattern, values, rhs)
     }
 
-    /// GMRES on `A x = b` preconditioned by the held factors; `true` if it converged (then
-    /// `rhs` holds `x`; otherwise `rhs` is unchanged).
-    fn solve_with_held_factor(
-        &mut self,
-        held: Factor,
-        pattern: &AssemblyPattern,
-        values: &[f64],
-        rhs: &mut [f64],
-    ) -> bool {
+    /// GMRES on `A x = b` preconditioned by the Cholesky factors held in the Cholesky state
+    /// (of the symmetric part); `true` if it converged (then `rhs` holds `x`; otherwise `rhs`
+    /// is unchanged).
+    fn solve_by_gmres(&mut self, pattern: &AssemblyPattern, values: &[f64], rhs: &mut [f64]) -> bool {
         let n = rhs.len();
         let par = faer::get_global_parallelism();
-        let (llt, lu) = (&mut self.llt, &mut self.lu);
+        let st = self.llt.as_mut().expect("Cholesky factor present");
         let precondition = |z: &mut [f64]| {
-            let z = MatMut::from_column_major_slice_mut(z, n, 1);
-            match held {
-                Factor::Cholesky => {
-                    let st = llt.as_mut().expect("held Cholesky factor");
-                    LltRef::new(&st.symbolic, &st.values).solve_in_place_with_conj(
-                        Conj::No,
-                        z,
-                        par,
-                        MemStack::new(&mut st.scratch),
-                    );
-                }
-                Factor::Lu => {
-                    let st = lu.as_mut().expect("held LU factor");
-                    LuRef::new_unchecked(&st.symbolic, &st.numeric).solve_in_place_with_conj(
-                        Conj::No,
-                        z,
-                        par,
-                        MemStack::new(&mut st.scratch),
-                    );
-                }
-            }
+            LltRef::new(&st.symbolic, &st.values).solve_in_place_with_conj(
+                Conj::No,
+                MatMut::from_column_major_slice_mut(z, n, 1),
+                par,
+                MemStack::new(&mut st.scratch),
+            );
         };
         let report = self.gmres.solve(
             rhs,
@@ -249,7 +192,6 @@ impl LinearSolver {
         );
         self.timings.krylov_solves += usize::from(report.converged);
         self.timings.krylov_iterations += report.iterations;
-        self.refactor_next = report.iterations > KRYLOV_REFACTOR_AFTER;
         report.converged
     }
 
@@ -266,7 +208,6 @@ impl LinearSolver {
         rhs: &mut [f64],
     ) -> Result<(), LinearSolverError> {
         let n = pattern.num_equations();
-        self.held = None;
         let par = faer::get_global_parallelism();
         let symmetric = match self.kind {
             LinearSolverKind::Cholesky => true,
@@ -299,13 +240,12 @@ impl LinearSolver {
             self.symmetric_values = sym;
             if factored? {
                 let t = Instant::now();
-                let converged = self.solve_with_held_factor(Factor::Cholesky, pattern, values, rhs);
+                let converged = self.solve_by_gmres(pattern, values, rhs);
                 self.timings.solve += t.elapsed().as_secs_f64();
                 if converged {
                     return check_finite(rhs);
                 }
             }
-            self.held = None;
             self.symmetric_part_failed = true;
         }
         if self.lu.is_none() {
@@ -333,7 +273,6 @@ impl LinearSolver {
             .map_err(|e| LinearSolverError::Factorisation(format!("LU failed: {e}")))?;
         self.timings.factorisation += t.elapsed().as_secs_f64();
         self.timings.factorisations += 1;
-        self.held = Some(Factor::Lu);
         let t = Instant::now();
         lu.solve_in_place_with_conj(
             Conj::No,
@@ -346,7 +285,7 @@ impl LinearSolver {
     }
 
     /// Cholesky factorisation of the symmetric matrix with nonzeros `values` (its lower
-    /// triangle is read) into the held Cholesky state; `false` if it is not positive
+    /// triangle is read) into the Cholesky state; `false` if it is not positive
     /// definite.
     fn factorise_cholesky(&mut self, pattern: &AssemblyPattern, values: &[f64]) -> Result<bool, LinearSolverError> {
         let a = pattern.matrix(values);
@@ -378,9 +317,6 @@ impl LinearSolver {
         );
         self.timings.factorisation += t.elapsed().as_secs_f64();
         self.timings.factorisations += 1;
-        if factor.is_ok() {
-            self.held = Some(Factor::Cholesky);
-        }
         Ok(factor.is_ok())
     }
 }

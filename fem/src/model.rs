@@ -60,11 +60,6 @@ pub struct NewtonSettings {
     pub line_search: bool,
     /// Halvings tried per iteration by the line search (default 4).
     pub line_search_max_cuts: u32,
-    /// Reuse the factorisation of an earlier Newton iteration or step as the preconditioner
-    /// of GMRES, factorising afresh only when that converges slowly (default off; see
-    /// [`crate::linear_solver`]). Pays when the tangent changes little between solves:
-    /// small steps of mass-dominated dynamics.
-    pub factorisation_reuse: bool,
 }
 
 impl Default for NewtonSettings {
@@ -79,7 +74,6 @@ impl Default for NewtonSettings {
             linear_solver: LinearSolverKind::Auto,
             line_search: false,
             line_search_max_cuts: 4,
-            factorisation_reuse: false,
         }
     }
 }
@@ -353,7 +347,7 @@ impl Model {
             rhs: vec![0.0; n_eq],
             delta: vec![0.0; self.num_dofs()],
             slip,
-            solver: LinearSolver::new(self.settings.linear_solver).with_reuse(self.settings.factorisation_reuse),
+            solver: LinearSolver::new(self.settings.linear_solver),
             dofs,
             pattern,
             domain_matrix,
