@@ -114,21 +114,14 @@ pub fn kirchhoff_update(
     let eps_tr = x.map(|v| 0.5 * v.ln());
     let r = principal_return(eps_tr)?;
     let mut dtau_df = Tangent::zeros();
-    if components.is_empty() {
-        return Ok(KirchhoffUpdate {
-            tau: spec.compose(r.tau),
-            dtau_df,
-            b_e: spec.compose(r.eps_e.map(|e| (2.0 * e).exp())),
-        });
-    }
-    let dydx = Matrix3::from_fn(|a, c| r.dtau_deps[(a, c)] / (2.0 * x[c]));
-    let theta = isotropic_theta(x, r.tau, &dydx);
-    let q = &spec.vectors;
-    // h_L = Qᵀ g_L, g_L the L-th column of G.
-    let h = q.transpose() * G;
-    for &col in components {
-        let (k, l) = (col / 3, col % 3);
-        {
+    if !components.is_empty() {
+        let dydx = Matrix3::from_fn(|a, c| r.dtau_deps[(a, c)] / (2.0 * x[c]));
+        let theta = isotropic_theta(x, r.tau, &dydx);
+        let q = &spec.vectors;
+        // h_L = Qᵀ g_L, g_L the L-th column of G.
+        let h = q.transpose() * G;
+        for &col in components {
+            let (k, l) = (col / 3, col % 3);
             // d b̃ = Qᵀ (e_k g_Lᵀ + g_L e_kᵀ) Q = q_k h_Lᵀ + h_L q_kᵀ, q_k = row k of Q.
             let db = Matrix3::from_fn(|a, b| q[(k, a)] * h[(b, l)] + h[(a, l)] * q[(k, b)]);
             let dtau = q * isotropic_differential(&dydx, &theta, &db) * q.transpose();

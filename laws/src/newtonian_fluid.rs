@@ -72,16 +72,14 @@ impl ConstitutiveLaw for NewtonianFluid {
         let components = kinematics.tangent.components();
         for &col in components {
             let (k, ll) = (col / 3, col % 3);
-            {
-                let dj = f_inv[(ll, k)];
-                let dl = fnfi.column(k) * f_inv.row(ll) * rate;
-                let dtau = Matrix3::identity() * (self.bulk_modulus * dj)
-                    + dev_d * (2.0 * visc * j * dj)
-                    + dev(&(0.5 * (dl + dl.transpose()))) * (2.0 * visc * j);
-                for a in 0..3 {
-                    for b in 0..3 {
-                        dtau_df[(idx(a, b), col)] = dtau[(a, b)];
-                    }
+            let dj = f_inv[(ll, k)];
+            let dl = fnfi.column(k) * f_inv.row(ll) * rate;
+            let dtau = Matrix3::identity() * (self.bulk_modulus * dj)
+                + dev_d * (2.0 * visc * j * dj)
+                + dev(&(0.5 * (dl + dl.transpose()))) * (2.0 * visc * j);
+            for a in 0..3 {
+                for b in 0..3 {
+                    dtau_df[(idx(a, b), col)] = dtau[(a, b)];
                 }
             }
         }
