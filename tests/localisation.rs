@@ -12,7 +12,7 @@
 
 mod common;
 
-use common::{case, monitor, principal_angle, run};
+use common::{case, run};
 use loam::case::{Case, MeshSpec};
 use loam::simulation::Simulation;
 
@@ -33,23 +33,15 @@ fn cell_field(sim: &Simulation, k: usize, name: &str) -> (Vec<[f64; 2]>, Vec<f64
     (centres, field.values.clone())
 }
 
-/// Localisation measures of the specimen (domain 2): (κ max, κ mean, share of cells with
-/// κ > κ_max / 2, band angle in degrees).
+/// Localisation measures of the specimen (domain 2) over its cells ([`common::localisation`]).
 fn localisation(sim: &Simulation) -> (f64, f64, f64, f64) {
     let (centres, kappa) = cell_field(sim, 2, "accumulated_plastic_deviatoric_strain");
-    let max = kappa.iter().copied().fold(0.0, f64::max);
-    let mean = kappa.iter().sum::<f64>() / kappa.len() as f64;
-    let band: Vec<[f64; 2]> = centres.iter().zip(&kappa).filter(|(_, &k)| k > 0.5 * max).map(|(c, _)| *c).collect();
-    (max, mean, band.len() as f64 / kappa.len() as f64, principal_angle(&band))
+    common::localisation(&centres, &kappa)
 }
 
-/// Peak platen force (N/m, compression positive), the force at the end, and whether the
-/// peak lies before the last tenth of the run.
+/// [`common::force_history`] of the platen force.
 fn force_history(sim: &Simulation, h: &common::History) -> (f64, f64, bool) {
-    let col = monitor(sim, "top_force");
-    let forces: Vec<f64> = h.iter().map(|r| -r.1[col]).collect();
-    let (i_peak, peak) = forces.iter().enumerate().fold((0, 0.0), |b, (i, &f)| if f > b.1 { (i, f) } else { b });
-    (peak, *forces.last().unwrap(), i_peak < forces.len() * 9 / 10)
+    common::force_history(sim, h, "top_force")
 }
 
 /// The MC-softening specimen with its specimen cells stretched so that their diagonals

@@ -16,7 +16,7 @@
 
 mod common;
 
-use common::{case, monitor, principal_angle, run};
+use common::{case, localisation, run};
 use loam::simulation::Simulation;
 
 /// Reference positions `X = x − u` of the material points of domain `k` and the values of
@@ -37,22 +37,9 @@ fn specimen_kappa(sim: &Simulation, keep: impl Fn(&[f64; 2]) -> bool) -> (Vec<[f
     x.into_iter().zip(kappa).filter(|(x, _)| keep(x)).unzip()
 }
 
-/// Localisation measures of points `x` with κ `kappa`: (κ max, κ mean, share of points with
-/// κ > κ_max / 2, band angle in degrees).
-fn localisation(x: &[[f64; 2]], kappa: &[f64]) -> (f64, f64, f64, f64) {
-    let max = kappa.iter().copied().fold(0.0, f64::max);
-    let mean = kappa.iter().sum::<f64>() / kappa.len() as f64;
-    let band: Vec<[f64; 2]> = x.iter().zip(kappa).filter(|(_, &k)| k > 0.5 * max).map(|(c, _)| *c).collect();
-    (max, mean, band.len() as f64 / kappa.len() as f64, principal_angle(&band))
-}
-
-/// Peak platen force (N/m, compression positive), the force at the end, and whether the
-/// peak lies before the last tenth of the run.
+/// [`common::force_history`] of the platen force.
 fn force_history(sim: &Simulation, h: &common::History) -> (f64, f64, bool) {
-    let col = monitor(sim, "platen_force");
-    let forces: Vec<f64> = h.iter().map(|r| -r.1[col]).collect();
-    let (i_peak, peak) = forces.iter().enumerate().fold((0, 0.0), |b, (i, &f)| if f > b.1 { (i, f) } else { b });
-    (peak, *forces.last().unwrap(), i_peak < forces.len() * 9 / 10)
+    common::force_history(sim, h, "platen_force")
 }
 
 /// Mohr–Coulomb strain softening (φ 30° → 20°, c 20 → 5 kPa, ψ 5° → 0°), unconfined, the

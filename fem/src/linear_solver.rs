@@ -94,6 +94,19 @@ struct LuState {
     scratch: MemBuffer,
 }
 
+impl CholeskyState {
+    /// Overwrites `x` with `L⁻ᵀ L⁻¹ x` (the factor must be numeric).
+    fn solve_in_place(&mut self, x: &mut [f64]) {
+        let n = x.len();
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(x, n, 1),
+            faer::get_global_parallelism(),
+            MemStack::new(&mut self.scratch),
+        );
+    }
+}
+
 impl std::fmt::Debug for CholeskyState {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("CholeskyState").field("len_val", &self.values.len()).finish_non_exhaustive()
@@ -172,17 +185,8 @@ impl LinearSolver {
     /// (of the symmetric part); `true` if it converged (then `rhs` holds `x`; otherwise `rhs`
     /// is unchanged).
     fn solve_by_gmres(&mut self, pattern: &AssemblyPattern, values: &[f64], rhs: &mut [f64]) -> bool {
-        let n = rhs.len();
-        let par = faer::get_global_parallelism();
         let st = self.llt.as_mut().expect("Cholesky factor present");
-        let precondition = |z: &mut [f64]| {
-            LltRef::new(&st.symbolic, &st.values).solve_in_place_with_conj(
-                Conj::No,
-                MatMut::from_column_major_slice_mut(z, n, 1),
-                par,
-                MemStack::new(&mut st.scratch),
-            );
-        };
+        let precondition = |z: &mut [f64]| st.solve_in_place(z);
         let report = self.gmres.solve(
             rhs,
             KRYLOV_MAX_ITERATIONS,
@@ -219,13 +223,7 @@ impl LinearSolver {
         if symmetric {
             if self.factorise_cholesky(pattern, values)? {
                 let t = Instant::now();
-                let st = self.llt.as_mut().expect("Cholesky factor present");
-                LltRef::new(&st.symbolic, &st.values).solve_in_place_with_conj(
-                    Conj::No,
-                    MatMut::from_column_major_slice_mut(rhs, n, 1),
-                    par,
-                    MemStack::new(&mut st.scratch),
-                );
+                self.llt.as_mut().expect("Cholesky factor present").solve_in_place(rhs);
                 self.timings.solve += t.elapsed().as_secs_f64();
                 return check_finite(rhs);
             }

@@ -77,3 +77,22 @@ pub fn principal_angle(points: &[[f64; 2]]) -> f64 {
     }
     (0.5 * (2.0 * sxy).atan2(sxx - syy)).to_degrees().abs()
 }
+
+/// Localisation measures of a field `kappa` (accumulated plastic deviatoric strain) at
+/// positions `x`: (κ max, κ mean, share of positions with κ > κ_max / 2, angle of that band
+/// in degrees by [`principal_angle`]).
+pub fn localisation(x: &[[f64; 2]], kappa: &[f64]) -> (f64, f64, f64, f64) {
+    let max = kappa.iter().copied().fold(0.0, f64::max);
+    let mean = kappa.iter().sum::<f64>() / kappa.len() as f64;
+    let band: Vec<[f64; 2]> = x.iter().zip(kappa).filter(|(_, &k)| k > 0.5 * max).map(|(c, _)| *c).collect();
+    (max, mean, band.len() as f64 / kappa.len() as f64, principal_angle(&band))
+}
+
+/// Peak of the force monitor `name` sign-flipped (compression positive, N/m), its value at
+/// the end, and whether the peak lies before the last tenth of the run.
+pub fn force_history(sim: &Simulation, h: &History, name: &str) -> (f64, f64, bool) {
+    let col = monitor(sim, name);
+    let forces: Vec<f64> = h.iter().map(|r| -r.1[col]).collect();
+    let (i_peak, peak) = forces.iter().enumerate().fold((0, 0.0), |b, (i, &f)| if f > b.1 { (i, f) } else { b });
+    (peak, *forces.last().unwrap(), i_peak < forces.len() * 9 / 10)
+}
