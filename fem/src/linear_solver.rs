@@ -167,20 +167,6 @@ impl LinearSolver {
         self.symmetric_part_failed = false;
     }
 
-    /// Solves `A x = b` in place (`rhs` holds `b` on entry and `x` on exit).
-    pub fn solve(
-        &mut self,
-        pattern: &AssemblyPattern,
-        values: &[f64],
-        rhs: &mut [f64],
-    ) -> Result<(), LinearSolverError> {
-        let n = pattern.num_equations();
-        if n == 0 {
-            return Ok(());
-        }
-        self.factorise_and_solve(pattern, values, rhs)
-    }
-
     /// GMRES on `A x = b` preconditioned by the Cholesky factors held in the Cholesky state
     /// (of the symmetric part); `true` if it converged (then `rhs` holds `x`; otherwise `rhs`
     /// is unchanged).
@@ -199,19 +185,22 @@ impl LinearSolver {
         report.converged
     }
 
-    /// Numeric factorisation (symbolic analysis first if the pattern is new), then the
-    /// solve: Cholesky and triangular solves for a symmetric `A`; for an unsymmetric one under
+    /// Solves `A x = b` in place (`rhs` holds `b` on entry and `x` on exit): numeric
+    /// factorisation (symbolic analysis first if the pattern is new), then the solve: Cholesky and triangular solves for a symmetric `A`; for an unsymmetric one under
     /// `symmetric_part_gmres`, GMRES preconditioned by the Cholesky factors of the symmetric
     /// part `(A + Aᵀ)/2` (far cheaper than LU, whose column ordering fills in more), and LU
     /// with partial pivoting otherwise, or if that part is not positive definite or GMRES
     /// does not converge (then LU for the rest of this pattern).
-    fn factorise_and_solve(
+    pub fn solve(
         &mut self,
         pattern: &AssemblyPattern,
         values: &[f64],
         rhs: &mut [f64],
     ) -> Result<(), LinearSolverError> {
         let n = pattern.num_equations();
+        if n == 0 {
+            return Ok(());
+        }
         let par = faer::get_global_parallelism();
         let symmetric = match self.kind {
             LinearSolverKind::Cholesky => true,
