@@ -515,6 +515,7 @@ impl Model {
         let mut r0 = 0.0;
         let mut du_step = vec![0.0; n];
         let mut last_du = f64::INFINITY;
+        let mut previous_du = f64::INFINITY;
         let mut ws = self.workspace.take().expect("prepared");
         let result = (|| {
             for it in 0..=settings.max_iterations {
@@ -523,14 +524,27 @@ impl Model {
                         *m = scheme.inertial_acceleration(a, an);
                     }
                 }
-                // the displacement criterion is known before assembling: when it holds the
-                // step has most likely converged, so assemble the residual alone first and
-                // the tangent only if the residual says otherwise
+                // when the step has most likely converged, assemble the residual alone first
+                // and the tangent only if the residual says otherwise: the displacement
+                // criterion is known before assembling, and Newton's quadratic convergence
+                // predicts the residual after the last correction δu_k from the one before,
+                // r_k ≈ r_{k−1} (|δu_k| / |δu_{k−1}|)² (trusted with a factor 2 to spare; a
+                // wrong guess costs one residual-only assembly)
                 let du_norm = norm(&du_step);
                 let disp_ok = it > 0
                     && (last_du <= settings.displacement_absolute_tolerance
                         || last_du <= settings.displacement_relative_tolerance * du_norm);
-                let mut with_tangent = !disp_ok;
+                let residual_likely_ok = it > 1 && {
+                    let predicted = report.residuals[it - 1] * (last_du / previous_du).powi(2);
+                    predicted
+                        <= 0.5 * settings.residual_absolute_tolerance.max(settings.residual_relative_tolerance * r0)
+                };
+                let likely_converged = match settings.convergence_criterion {
+                    ConvergenceCriterion::Residual => residual_likely_ok,
+                    ConvergenceCriterion::Displacement | ConvergenceCriterion::And => disp_ok,
+                    ConvergenceCriterion::Or => disp_ok || residual_likely_ok,
+                };
+                let mut with_tangent = !likely_converged;
                 let mut first_pass = true;
                 // fraction of the last correction `ws.delta` currently applied
                 let mut step_length = 1.0;
@@ -586,7 +600,7 @@ impl Model {
                     first_pass = false;
                     report.residuals.push(r_norm);
                     if trace_newton() {
-                        eprintln!("newton t={t_new:.6e} dt={dt:.3e} it={it} |r|={r_norm:.3e} |du|={last_du:.3e} |Du|={du_norm:.3e} backtracks={backtracks}");
+                        eprintln!("newton t={t_new:.6e} dt={dt:.3e} it={it} |r|={r_norm:.3e} |du|={last_du:.3e} |Du|={du_norm:.3e} backtracks={backtracks} tangent={with_tangent}");
                     }
                     if it == 0 {
                         r0 = r_norm;
@@ -643,6 +657,7 @@ impl Model {
                     *u += d;
                     *du += d;
                 }
+                previous_du = last_du;
                 last_du = norm(&ws.rhs);
                 self.update_kinematics(dt);
             }
