@@ -77,9 +77,7 @@ pub fn point_geometry(
 ) -> Result<PointGeometry, KernelError> {
     let nn = element.num_nodes();
     let dim = element.dim();
-    let mut g = PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
     let mut dn = [[0.0; 3]; MAX_NODES];
-    element.shape_functions(xi, &mut g.shape);
     element.shape_gradients(xi, &mut dn);
     let mut jac = Matrix3::<f64>::identity();
     for d in 0..dim {
@@ -96,19 +94,51 @@ pub fn point_geometry(
     if det_j <= 0.0 || !det_j.is_finite() {
         return Err(KernelError::InvertedElement { det_j });
     }
-    let jinv_t = jac.try_inverse().ok_or(KernelError::InvertedElement { det_j })?.transpose();
+    let jacobian_inverse = jac.try_inverse().ok_or(KernelError::InvertedElement { det_j })?;
+    let map = CellMap { jacobian_inverse, det_j };
+    Ok(point_geometry_in_map(element, formulation, thickness, coords, xi, gauss_weight, &map))
+}
+
+/// The Jacobian `J = ∂x/∂ξ` of an element's isoparametric map at a point, inverted, with
+/// its determinant (> 0). Constant over an affine cell (tri3, tet4, parallelogram quad4),
+/// which lets an MPM grid keep one per cell.
+#[derive(Debug, Clone, Copy)]
+pub struct CellMap {
+    /// `J⁻¹ = ∂ξ/∂x`.
+    pub jacobian_inverse: Matrix3<f64>,
+    /// `det J`.
+    pub det_j: f64,
+}
+
+/// [`point_geometry`] with the Jacobian at `xi` already known: `∂N_a/∂x = J⁻ᵀ ∂N_a/∂ξ`,
+/// weight `gauss_weight · det J` times the formulation's measure factor. `coords` is read
+/// for the radius of axisymmetric points only.
+pub fn point_geometry_in_map(
+    element: ElementType,
+    formulation: Formulation,
+    thickness: f64,
+    coords: &[[f64; 3]],
+    xi: &[f64; 3],
+    gauss_weight: f64,
+    map: &CellMap,
+) -> PointGeometry {
+    let nn = element.num_nodes();
+    let dim = element.dim();
+    let mut g = PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
+    let mut dn = [[0.0; 3]; MAX_NODES];
+    element.shape_functions(xi, &mut g.shape);
+    element.shape_gradients(xi, &mut dn);
+    let jinv = &map.jacobian_inverse;
     for a in 0..nn {
-        let v = jinv_t * nalgebra::Vector3::new(dn[a][0], dn[a][1], dn[a][2]);
         for d in 0..dim {
-            g.gradient[a][d] = v[d];
+            g.gradient[a][d] = (0..dim).map(|e| jinv[(e, d)] * dn[a][e]).sum();
         }
-        g.radius += g.shape[a] * coords[a][0];
     }
-    if formulation != Formulation::Axisymmetric {
-        g.radius = 0.0;
+    if formulation == Formulation::Axisymmetric {
+        g.radius = (0..nn).map(|a| g.shape[a] * coords[a][0]).sum();
     }
-    g.weight = gauss_weight * det_j * formulation.measure_factor(thickness, g.radius);
-    Ok(g)
+    g.weight = gauss_weight * map.det_j * formulation.measure_factor(thickness, g.radius);
+    g
 }
 
 /// Inputs shared by all points of one kernel call.
@@ -136,21 +166,6 @@ pub struct PointState<'a> {
     pub trial: &'a mut [f64],
 }
 
-/// Result of the law at one point, pulled back to the step reference configuration.
-pub struct PointResponse {
-    /// Total deformation gradient `F = ΔF F0`.
-    pub deformation_gradient: Matrix3<f64>,
-    /// Pulled-back first Piola–Kirchhoff stress `P̃`.
-    pub stress: Matrix3<f64>,
-    /// Pulled-back tangent `Ã` (9×9, flattened index [`idx`]). Only the formulation's
-    /// active components ([`active_components`]: the in-plane ones in 2D, with the hoop
-    /// component for axisymmetry) enter the element; for plane stress those entries have
-    /// `F33` condensed out: `Ã_cd − Ã_c,33 Ã_33,d / Ã_33,33`.
-    pub tangent: Tangent,
-    /// Cauchy stress `σ = P Fᵀ / J`.
-    pub cauchy: Matrix3<f64>,
-}
-
 /// Flattened components of `F` that vary with the nodal unknowns, per formulation.
 const ACTIVE_2D: [usize; 5] = [idx(0, 0), idx(0, 1), idx(1, 0), idx(1, 1), idx(2, 2)];
 const ACTIVE_3D: [usize; 9] = [0, 1, 2, 3, 4, 5, 6, 7, 8];
@@ -167,48 +182,54 @@ pub fn active_components(formulation: Formulation) -> &'static [usize] {
 
 /// `P̃ = J0⁻¹ P F0ᵀ` and `Ã_iJkM = J0⁻¹ A_iKkL F0_JK F0_ML` (see the module doc), in place,
 /// over the rows and columns `components` of the tangent (`F0` is block diagonal with respect
-/// to them, so the sums over `K` and `L` stay inside them too).
+/// to them, so the sums over `K` and `L` stay inside them too; entries outside them are
+/// neither read nor written).
 fn pull_back(f0: &Matrix3<f64>, p: &mut Matrix3<f64>, a: &mut Tangent, components: &[usize]) {
     if *f0 == Matrix3::identity() {
         return;
     }
     let inv_j0 = 1.0 / f0.determinant();
     *p = *p * f0.transpose() * inv_j0;
-    // right-multiply the second index pair: A F0 over (L→M) then over (K→J)
-    let mut tmp = Tangent::zeros();
+    // `line` holds one row (then one column) of the tangent over `components`, zero elsewhere
+    let mut line = [0.0; 9];
+    // right-multiply the second index pair, row by row: A_iJkM ← Σ_L A_iJkL F0_ML
     for &row in components {
+        for &c in components {
+            line[c] = a[(row, c)];
+        }
         for &col in components {
             let (k, m) = (col / 3, col % 3);
-            let mut v = 0.0;
-            for l in 0..3 {
-                v += a[(row, idx(k, l))] * f0[(m, l)];
-            }
-            tmp[(row, col)] = v;
+            a[(row, col)] = (0..3).map(|l| line[idx(k, l)] * f0[(m, l)]).sum();
         }
     }
-    for &row in components {
-        let (i, j) = (row / 3, row % 3);
-        for &col in components {
-            let mut v = 0.0;
-            for kk in 0..3 {
-                v += tmp[(idx(i, kk), col)] * f0[(j, kk)];
-            }
-            a[(row, col)] = v * inv_j0;
+    // then the first, column by column: Ã_iJkM = J0⁻¹ Σ_K A_iKkM F0_JK
+    for &col in components {
+        for &r in components {
+            line[r] = a[(r, col)];
+        }
+        for &row in components {
+            let (i, j) = (row / 3, row % 3);
+            a[(row, col)] = inv_j0 * (0..3).map(|kk| line[idx(i, kk)] * f0[(j, kk)]).sum::<f64>();
         }
     }
 }
 
 /// Evaluates the law at one point for nodal displacements `disp` (from the step reference
-/// configuration) and returns the pulled-back stress and, if `with_tangent`, the tangent
-/// over the [`active_components`] (plane stress always forms them, for its `P̃33 = 0`
-/// iteration); without it the law is asked for the stress alone.
+/// configuration). Returns `F`, the Cauchy stress and the pulled-back stress `P̃`, and leaves
+/// in `response.tangent`, if `with_tangent`, the pulled-back tangent `Ã` over the
+/// [`active_components`] (the only entries that enter the element: the in-plane ones in 2D,
+/// with the hoop component for axisymmetry; for plane stress with `F33` condensed out,
+/// `Ã_cd − Ã_c,33 Ã_33,d / Ã_33,33`, as its `P̃33 = 0` iteration always forms them). Without
+/// it the law is asked for the stress alone. `response` is scratch storage the caller keeps
+/// for all its points (see [`ConstitutiveLaw::update`]).
 pub fn evaluate_point(
     ctx: &KernelContext<'_>,
     geometry: &PointGeometry,
     disp: &[[f64; 3]],
     state: PointState<'_>,
     with_tangent: bool,
-) -> Result<PointResponse, LawError> {
+    response: &mut StressResponse,
+) -> Result<PointOutput, LawError> {
     let nn = ctx.element.num_nodes();
     let dim = ctx.element.dim();
     let mut delta_f = Matrix3::<f64>::identity();
@@ -241,9 +262,10 @@ pub fn evaluate_point(
         let c33 = idx(2, 2);
         for it in 0..30 {
             kin.deformation_gradient = delta_f * state.f0;
-            let StressResponse { first_piola, tangent: mut a } = ctx.law.update(&kin, state.committed, state.trial)?;
-            let mut p = first_piola;
-            pull_back(state.f0, &mut p, &mut a, components);
+            ctx.law.update(&kin, state.committed, state.trial, response)?;
+            let mut p = response.first_piola;
+            let a = &mut response.tangent;
+            pull_back(state.f0, &mut p, a, components);
             let scale = p.amax().max(1e-300);
             if p[(2, 2)].abs() <= 1e-12 * scale || it == 29 {
                 if p[(2, 2)].abs() > 1e-8 * scale {
@@ -255,13 +277,8 @@ pub fn evaluate_point(
                         a[(ic, id)] -= a[(ic, c33)] * a[(c33, id)] / a[(c33, c33)];
                     }
                 }
-                let cauchy = cauchy_stress(&first_piola, &kin.deformation_gradient);
-                return Ok(PointResponse {
-                    deformation_gradient: kin.deformation_gradient,
-                    stress: p,
-                    tangent: a,
-                    cauchy,
-                });
+                let cauchy = cauchy_stress(&response.first_piola, &kin.deformation_gradient);
+                return Ok(PointOutput { deformation_gradient: kin.deformation_gradient, stress: p, cauchy });
             }
             delta_f[(2, 2)] -= p[(2, 2)] / a[(c33, c33)];
             if delta_f[(2, 2)] <= 0.0 {
@@ -270,16 +287,11 @@ pub fn evaluate_point(
         }
         unreachable!("plane-stress loop returns by its last iteration");
     }
-    // matched in place: `?` would first move the 9×9 tangent out of the `Result`
-    let mut response = ctx.law.update(&kin, state.committed, state.trial);
-    let r = match response {
-        Ok(ref mut r) => r,
-        Err(e) => return Err(e),
-    };
-    let mut p = r.first_piola;
-    pull_back(state.f0, &mut p, &mut r.tangent, components);
-    let cauchy = cauchy_stress(&r.first_piola, &kin.deformation_gradient);
-    Ok(PointResponse { deformation_gradient: kin.deformation_gradient, stress: p, tangent: r.tangent, cauchy })
+    ctx.law.update(&kin, state.committed, state.trial, response)?;
+    let mut p = response.first_piola;
+    pull_back(state.f0, &mut p, &mut response.tangent, components);
+    let cauchy = cauchy_stress(&response.first_piola, &kin.deformation_gradient);
+    Ok(PointOutput { deformation_gradient: kin.deformation_gradient, stress: p, cauchy })
 }
 
 /// Cauchy stress `σ = P Fᵀ / det F`.
@@ -362,6 +374,7 @@ fn element_tensor<const D: usize, const NN: usize>(
     let stride = ctx.law.state_len();
     let mut f = [[0.0; D]; NN];
     let mut k = [[[[0.0; D]; NN]; D]; NN];
+    let mut response = StressResponse::default();
     for (p, g) in geometry.iter().enumerate() {
         let state = PointState {
             f0: &f0[p],
@@ -369,16 +382,16 @@ fn element_tensor<const D: usize, const NN: usize>(
             committed: &committed[p * stride..(p + 1) * stride],
             trial: &mut trial[p * stride..(p + 1) * stride],
         };
-        let r = evaluate_point(ctx, g, disp, state, stiffness.is_some())
+        let out = evaluate_point(ctx, g, disp, state, stiffness.is_some(), &mut response)
             .map_err(|source| KernelError::Law { point: p, source })?;
-        point_out[p] = PointOutput { deformation_gradient: r.deformation_gradient, cauchy: r.cauchy, stress: r.stress };
+        point_out[p] = out;
         let w = g.weight;
         for a in 0..NN {
             let ga = &g.gradient[a];
             for i in 0..D {
                 let mut v = 0.0;
                 for j in 0..D {
-                    v += r.stress[(i, j)] * ga[j];
+                    v += out.stress[(i, j)] * ga[j];
                 }
                 f[a][i] += w * v;
             }
@@ -395,7 +408,7 @@ fn element_tensor<const D: usize, const NN: usize>(
                     for l in 0..D {
                         let mut v = 0.0;
                         for j in 0..D {
-                            v += ga[j] * r.tangent[(idx(i, j), idx(kk, l))];
+                            v += ga[j] * response.tangent[(idx(i, j), idx(kk, l))];
                         }
                         bt[a][i][kk][l] = w * v;
                     }
@@ -481,6 +494,7 @@ fn element_general(
     let mut b = [[0.0; 9]; MAX_DOFS];
     let mut bt_a = [[0.0; 9]; MAX_DOFS];
     let active = active_components(ctx.formulation);
+    let mut response = StressResponse::default();
     for (p, g) in geometry.iter().enumerate() {
         let state = PointState {
             f0: &f0[p],
@@ -488,15 +502,15 @@ fn element_general(
             committed: &committed[p * stride..(p + 1) * stride],
             trial: &mut trial[p * stride..(p + 1) * stride],
         };
-        let r = evaluate_point(ctx, g, disp, state, stiffness.is_some())
+        let out = evaluate_point(ctx, g, disp, state, stiffness.is_some(), &mut response)
             .map_err(|source| KernelError::Law { point: p, source })?;
-        point_out[p] = PointOutput { deformation_gradient: r.deformation_gradient, cauchy: r.cauchy, stress: r.stress };
+        point_out[p] = out;
         let nc = gradient_operator(ctx.formulation, ctx.element, g, &mut b);
         let w = g.weight;
         for r_ in 0..ndof {
             let mut v = 0.0;
             for c in 0..nc {
-                v += r.stress[(active[c] / 3, active[c] % 3)] * b[r_][c];
+                v += out.stress[(active[c] / 3, active[c] % 3)] * b[r_][c];
             }
             f_int[r_] += w * v;
         }
@@ -505,7 +519,7 @@ fn element_general(
                 for d in 0..nc {
                     let mut v = 0.0;
                     for c in 0..nc {
-                        v += b[r_][c] * r.tangent[(active[c], active[d])];
+                        v += b[r_][c] * response.tangent[(active[c], active[d])];
                     }
                     bt_a[r_][d] = w * v;
                 }

@@ -9,7 +9,7 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use loam_laws::multiplicative::hencky_strain;
-use loam_laws::{ConstitutiveLaw, Kinematics, MaterialSpec, TangentRequest};
+use loam_laws::{ConstitutiveLaw, Kinematics, MaterialSpec, StressResponse, TangentRequest};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use serde_json::json;
 
@@ -23,17 +23,20 @@ fn rate(law: &dyn ConstitutiveLaw, kin: &Kinematics) -> (f64, bool) {
     let mut committed = vec![0.0; law.state_len()];
     law.initialise_state(&mut committed);
     let mut trial = committed.clone();
-    law.update(kin, &committed, &mut trial).expect("benchmark state must be valid");
+    let mut response = StressResponse::default();
+    law.update(kin, &committed, &mut trial, &mut response).expect("benchmark state must be valid");
     let mut out = vec![0.0; law.state_variables().len()];
     law.state_output(&trial, &mut out);
     let plastic = law.state_variables().iter().position(|n| *n == "yield_flag").is_some_and(|i| out[i] == 1.0);
     for _ in 0..1000 {
-        black_box(law.update(black_box(kin), &committed, &mut trial).unwrap());
+        law.update(black_box(kin), &committed, &mut trial, &mut response).unwrap();
+        black_box(&response);
     }
     let (mut n, start) = (0u64, Instant::now());
     while start.elapsed() < Duration::from_millis(300) {
         for _ in 0..1000 {
-            black_box(law.update(black_box(kin), &committed, &mut trial).unwrap());
+            law.update(black_box(kin), &committed, &mut trial, &mut response).unwrap();
+            black_box(&response);
         }
         n += 1000;
     }

@@ -34,8 +34,8 @@ impl Kinematics {
 }
 
 /// The part of the consistent tangent `A = ∂P/∂F` a caller needs. A law may always return
-/// more (the full tangent is correct for every request); entries outside the request may be
-/// left zero. The finite-element kernel asks for the in-plane components in 2D and for no
+/// more (the full tangent is correct for every request); entries outside the request are
+/// unspecified. The finite-element kernel asks for the in-plane components in 2D and for no
 /// tangent at all when it assembles a residual alone, which lets the elasto-plastic laws skip
 /// most of their work (the derivative of the spectral decomposition).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,13 +62,19 @@ impl TangentRequest {
     }
 }
 
-/// Stress and consistent tangent returned by a law.
+/// Stress and consistent tangent written by a law.
 #[derive(Debug, Clone, Copy)]
 pub struct StressResponse {
     /// First Piola–Kirchhoff stress `P = τ F^{-T}` in Pa.
     pub first_piola: Matrix3<f64>,
     /// Consistent tangent `A = ∂P/∂F` (9×9, see the module doc for the index convention).
     pub tangent: Tangent,
+}
+
+impl Default for StressResponse {
+    fn default() -> Self {
+        Self { first_piola: Matrix3::zeros(), tangent: Tangent::zeros() }
+    }
 }
 
 /// A constitutive law: stress, consistent tangent and history at finite strain.
@@ -118,8 +124,31 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     /// Evaluates stress and consistent tangent at `kinematics`, starting from the committed
     /// history `committed` and writing the updated (trial) history into `trial`.
     /// Neither the law nor this call commits anything.
-    fn update(&self, kinematics: &Kinematics, committed: &[f64], trial: &mut [f64])
-        -> Result<StressResponse, LawError>;
+    ///
+    /// Writes `response.first_piola` and the entries of `response.tangent` that
+    /// `kinematics.tangent` requests; the other entries are unspecified on return (they may
+    /// hold intermediate values or an earlier point's) and must not be read. Writing into the
+    /// caller's storage keeps the 9×9 tangent from being copied on its way out.
+    fn update(
+        &self,
+        kinematics: &Kinematics,
+        committed: &[f64],
+        trial: &mut [f64],
+        response: &mut StressResponse,
+    ) -> Result<(), LawError>;
+
+    /// [`ConstitutiveLaw::update`] into a fresh response, returned by value (drivers and
+    /// tests; the element kernel keeps its own storage).
+    fn stress_response(
+        &self,
+        kinematics: &Kinematics,
+        committed: &[f64],
+        trial: &mut [f64],
+    ) -> Result<StressResponse, LawError> {
+        let mut response = StressResponse::default();
+        self.update(kinematics, committed, trial, &mut response)?;
+        Ok(response)
+    }
 
     /// Small-strain elastic constants `(λ, μ)` at the reference state, used for time-step
     /// estimates and penalty scaling.

@@ -12,7 +12,7 @@
 
 use nalgebra::Matrix3;
 
-use crate::{idx, ConstitutiveLaw, Kinematics, LawError, StressResponse, Tangent};
+use crate::{idx, ConstitutiveLaw, Kinematics, LawError, StressResponse};
 
 /// Small-strain isotropic linear elasticity with Lamé constants `λ`, `μ` (Pa).
 #[derive(Debug, Clone, Copy)]
@@ -51,14 +51,15 @@ impl ConstitutiveLaw for LinearElastic {
         kinematics: &Kinematics,
         _committed: &[f64],
         _trial: &mut [f64],
-    ) -> Result<StressResponse, LawError> {
+        response: &mut StressResponse,
+    ) -> Result<(), LawError> {
         let f = &kinematics.deformation_gradient;
         if !f.iter().all(|v| v.is_finite()) {
             return Err(LawError::InvertedDeformation { det_f: f64::NAN });
         }
         let eps = 0.5 * (f + f.transpose()) - Matrix3::identity();
         let first_piola = Matrix3::identity() * (self.lambda * eps.trace()) + 2.0 * self.mu * eps;
-        let mut tangent = Tangent::zeros();
+        let tangent = &mut response.tangent;
         for i in 0..3 {
             for j in 0..3 {
                 for k in 0..3 {
@@ -70,7 +71,8 @@ impl ConstitutiveLaw for LinearElastic {
                 }
             }
         }
-        Ok(StressResponse { first_piola, tangent })
+        response.first_piola = first_piola;
+        Ok(())
     }
 }
 

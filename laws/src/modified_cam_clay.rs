@@ -285,7 +285,7 @@ mod tests {
             law.initialise_state(&mut state);
             let f = rot * Matrix3::from_diagonal(&eps.map(f64::exp).into()) * rot.transpose();
             let mut trial = state.clone();
-            law.update(&Kinematics::at(f), &state, &mut trial).unwrap();
+            law.stress_response(&Kinematics::at(f), &state, &mut trial).unwrap();
             let err = tangent_relative_error(&law, &Kinematics::at(f), &state).unwrap();
             let mut out = [0.0; 4];
             law.state_output(&trial, &mut out);

@@ -81,25 +81,24 @@ pub fn write_sym(m: &Matrix3<f64>, s: &mut [f64]) {
     s[5] = 0.5 * (m[(0, 2)] + m[(2, 0)]);
 }
 
-/// Kirchhoff stress, its derivative `dτ/dF` and the updated elastic `b_e`.
+/// Kirchhoff stress and the updated elastic `b_e`.
 #[derive(Debug, Clone)]
 pub struct KirchhoffUpdate {
     /// Kirchhoff stress τ in Pa.
     pub tau: Matrix3<f64>,
-    /// `∂τ_ij/∂F_kL` (9×9, entry `(3i+j, 3k+L)`).
-    pub dtau_df: Tangent,
     /// Updated elastic left Cauchy–Green tensor `b_e`.
     pub b_e: Matrix3<f64>,
 }
 
 /// Steps 2–6 of the module doc for a given `F` and `Cp⁻¹` with the principal return
-/// `principal_return(ε_tr)`. Only the columns `components` of `dτ/dF` are formed (all
-/// rows of each); the others stay zero.
+/// `principal_return(ε_tr)`. Writes the columns `components` of `dτ/dF` (`∂τ_ij/∂F_kL` at
+/// `(3i+j, 3k+L)`, all rows of each) into `dtau_df`; other entries are left as they were.
 #[inline(always)]
 pub fn kirchhoff_update(
     F: &Matrix3<f64>,
     cp_inv: &Matrix3<f64>,
     components: &[usize],
+    dtau_df: &mut Tangent,
     principal_return: impl FnOnce([f64; 3]) -> Result<PrincipalResponse, LawError>,
 ) -> Result<KirchhoffUpdate, LawError> {
     let G = F * cp_inv;
@@ -113,7 +112,6 @@ pub fn kirchhoff_update(
     }
     let eps_tr = x.map(|v| 0.5 * v.ln());
     let r = principal_return(eps_tr)?;
-    let mut dtau_df = Tangent::zeros();
     if !components.is_empty() {
         let dydx = Matrix3::from_fn(|a, c| r.dtau_deps[(a, c)] / (2.0 * x[c]));
         let theta = isotropic_theta(x, r.tau, &dydx);
@@ -132,7 +130,7 @@ pub fn kirchhoff_update(
             }
         }
     }
-    Ok(KirchhoffUpdate { tau: spec.compose(r.tau), dtau_df, b_e: spec.compose(r.eps_e.map(|e| (2.0 * e).exp())) })
+    Ok(KirchhoffUpdate { tau: spec.compose(r.tau), b_e: spec.compose(r.eps_e.map(|e| (2.0 * e).exp())) })
 }
 
 /// Inverse of `F` with the inversion check used by every law.
@@ -150,18 +148,19 @@ pub fn update<M: PrincipalModel + ?Sized>(
     kinematics: &Kinematics,
     committed: &[f64],
     trial: &mut [f64],
-) -> Result<StressResponse, LawError> {
+    response: &mut StressResponse,
+) -> Result<(), LawError> {
     let F = &kinematics.deformation_gradient;
     let f_inv = checked_inverse(F)?;
     let cp_inv = read_sym(&committed[..CP_INV_LEN]);
     let (trial_cp, trial_internal) = trial.split_at_mut(CP_INV_LEN);
     let components = kinematics.tangent.components();
-    let ku = kirchhoff_update(F, &cp_inv, components, |eps_tr| {
+    let ku = kirchhoff_update(F, &cp_inv, components, &mut response.tangent, |eps_tr| {
         model.principal_update(eps_tr, &committed[CP_INV_LEN..], trial_internal)
     })?;
     write_sym(&(f_inv * ku.b_e * f_inv.transpose()), trial_cp);
-    let (first_piola, tangent) = piola_from_kirchhoff(&f_inv, &ku.tau, &ku.dtau_df, components);
-    Ok(StressResponse { first_piola, tangent })
+    response.first_piola = piola_from_kirchhoff(&f_inv, &ku.tau, &mut response.tangent, components);
+    Ok(())
 }
 
 /// Virgin history: `Cp⁻¹ = I` and the model's virgin internal variables.
@@ -285,8 +284,9 @@ macro_rules! impl_principal_law {
                 kinematics: &$crate::Kinematics,
                 committed: &[f64],
                 trial: &mut [f64],
-            ) -> Result<$crate::StressResponse, $crate::LawError> {
-                $crate::multiplicative::update(self, kinematics, committed, trial)
+                response: &mut $crate::StressResponse,
+            ) -> Result<(), $crate::LawError> {
+                $crate::multiplicative::update(self, kinematics, committed, trial, response)
             }
 
             fn elastic_lame(&self) -> (f64, f64) {

@@ -12,7 +12,7 @@
 
 use nalgebra::Matrix3;
 
-use crate::{ConstitutiveLaw, Kinematics, LawError, StressResponse, Tangent};
+use crate::{ConstitutiveLaw, Kinematics, LawError, StressResponse};
 
 /// Compressible Neo-Hookean solid with Lamé constants `λ`, `μ` (Pa) and density ρ (kg/m³).
 #[derive(Debug, Clone, Copy)]
@@ -51,7 +51,8 @@ impl ConstitutiveLaw for NeoHookean {
         kinematics: &Kinematics,
         _committed: &[f64],
         _trial: &mut [f64],
-    ) -> Result<StressResponse, LawError> {
+        response: &mut StressResponse,
+    ) -> Result<(), LawError> {
         let f = &kinematics.deformation_gradient;
         let det_f = f.determinant();
         if det_f <= 0.0 || !det_f.is_finite() {
@@ -60,8 +61,8 @@ impl ConstitutiveLaw for NeoHookean {
         let f_inv: Matrix3<f64> = f.try_inverse().ok_or(LawError::InvertedDeformation { det_f })?;
         let ln_j = det_f.ln();
         let c = self.lambda * ln_j - self.mu;
-        let first_piola = self.mu * f + c * f_inv.transpose();
-        let mut tangent = Tangent::zeros();
+        response.first_piola = self.mu * f + c * f_inv.transpose();
+        let tangent = &mut response.tangent;
         let components = kinematics.tangent.components();
         for &row in components {
             let (i, jj) = (row / 3, row % 3);
@@ -74,7 +75,7 @@ impl ConstitutiveLaw for NeoHookean {
                 tangent[(row, col)] = v;
             }
         }
-        Ok(StressResponse { first_piola, tangent })
+        Ok(())
     }
 }
 
@@ -87,9 +88,10 @@ mod tests {
     fn tangent_matches_central_differences() {
         let law = NeoHookean::new(1000.0, 9.0e7, 0.3);
         let f = Matrix3::new(1.1, 0.2, 0.05, -0.1, 0.95, 0.02, 0.03, 0.01, 1.05);
-        let r = law.update(&Kinematics::at(f), &[], &mut []).unwrap();
-        let fd =
-            finite_difference_tangent(&f, 1e-6, |g| law.update(&Kinematics::at(*g), &[], &mut []).unwrap().first_piola);
+        let r = law.stress_response(&Kinematics::at(f), &[], &mut []).unwrap();
+        let fd = finite_difference_tangent(&f, 1e-6, |g| {
+            law.stress_response(&Kinematics::at(*g), &[], &mut []).unwrap().first_piola
+        });
         let err = (r.tangent - fd).amax() / r.tangent.amax();
         println!("neo-Hookean tangent: relative error vs central FD {err:.2e} (tolerance 1e-6)");
         assert!(err < 1e-6);
@@ -98,7 +100,7 @@ mod tests {
     #[test]
     fn stress_free_in_reference_state() {
         let law = NeoHookean::new(1000.0, 9.0e7, 0.3);
-        let r = law.update(&Kinematics::at(Matrix3::identity()), &[], &mut []).unwrap();
+        let r = law.stress_response(&Kinematics::at(Matrix3::identity()), &[], &mut []).unwrap();
         assert!(r.first_piola.amax() < 1e-6);
     }
 }

@@ -21,7 +21,7 @@ use nalgebra::Matrix3;
 
 use crate::multiplicative::checked_inverse;
 use crate::tensor::piola_from_kirchhoff;
-use crate::{idx, ConstitutiveLaw, Kinematics, LawError, StressResponse, Tangent};
+use crate::{idx, ConstitutiveLaw, Kinematics, LawError, StressResponse};
 
 /// Newtonian fluid with viscosity η (Pa·s) and bulk modulus K (Pa).
 #[derive(Debug, Clone, Copy)]
@@ -57,7 +57,8 @@ impl ConstitutiveLaw for NewtonianFluid {
         kinematics: &Kinematics,
         _committed: &[f64],
         _trial: &mut [f64],
-    ) -> Result<StressResponse, LawError> {
+        response: &mut StressResponse,
+    ) -> Result<(), LawError> {
         let f = &kinematics.deformation_gradient;
         let f_inv = checked_inverse(f)?;
         let j = f.determinant();
@@ -68,7 +69,7 @@ impl ConstitutiveLaw for NewtonianFluid {
         let l = (Matrix3::identity() - fnfi) * rate;
         let dev_d = dev(&(0.5 * (l + l.transpose())));
         let tau = Matrix3::identity() * (self.bulk_modulus * j.ln()) + dev_d * (2.0 * visc * j);
-        let mut dtau_df = Tangent::zeros();
+        let dtau_df = &mut response.tangent;
         let components = kinematics.tangent.components();
         for &col in components {
             let (k, ll) = (col / 3, col % 3);
@@ -83,8 +84,8 @@ impl ConstitutiveLaw for NewtonianFluid {
                 }
             }
         }
-        let (first_piola, tangent) = piola_from_kirchhoff(&f_inv, &tau, &dtau_df, components);
-        Ok(StressResponse { first_piola, tangent })
+        response.first_piola = piola_from_kirchhoff(&f_inv, &tau, &mut response.tangent, components);
+        Ok(())
     }
 }
 
@@ -125,7 +126,7 @@ mod tests {
             time_step: dt,
             tangent: TangentRequest::Full,
         };
-        let r = law.update(&kin, &[], &mut []).unwrap();
+        let r = law.stress_response(&kin, &[], &mut []).unwrap();
         let sigma = r.first_piola * f.transpose() / f.determinant();
         println!(
             "newtonian_fluid: σ_xy = {:.6} Pa, η γ̇ = {:.6} Pa (tolerance 1e-4 relative)",

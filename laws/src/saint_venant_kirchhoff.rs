@@ -13,7 +13,7 @@
 
 use nalgebra::Matrix3;
 
-use crate::{idx, ConstitutiveLaw, Kinematics, LawError, StressResponse, Tangent};
+use crate::{idx, ConstitutiveLaw, Kinematics, LawError, StressResponse};
 
 /// St Venant–Kirchhoff solid with Lamé constants `λ`, `μ` (Pa) and density ρ (kg/m³).
 #[derive(Debug, Clone, Copy)]
@@ -52,14 +52,15 @@ impl ConstitutiveLaw for SaintVenantKirchhoff {
         kinematics: &Kinematics,
         _committed: &[f64],
         _trial: &mut [f64],
-    ) -> Result<StressResponse, LawError> {
+        response: &mut StressResponse,
+    ) -> Result<(), LawError> {
         let f = &kinematics.deformation_gradient;
         crate::multiplicative::checked_inverse(f)?;
         let e = 0.5 * (f.transpose() * f - Matrix3::identity());
         let s = Matrix3::identity() * (self.lambda * e.trace()) + 2.0 * self.mu * e;
         let first_piola = f * s;
         let ffT = f * f.transpose();
-        let mut tangent = Tangent::zeros();
+        let tangent = &mut response.tangent;
         for i in 0..3 {
             for jj in 0..3 {
                 for k in 0..3 {
@@ -76,7 +77,8 @@ impl ConstitutiveLaw for SaintVenantKirchhoff {
                 }
             }
         }
-        Ok(StressResponse { first_piola, tangent })
+        response.first_piola = first_piola;
+        Ok(())
     }
 }
 

@@ -19,29 +19,30 @@ pub const fn idx(i: usize, j: usize) -> usize {
 /// `∂P_iJ/∂F_mN = Σ_k ∂τ_ik/∂F_mN F^{-1}_Jk − F^{-1}_Jm P_iN`
 /// (using `∂F^{-1}_Jk/∂F_mN = −F^{-1}_Jm F^{-1}_Nk`).
 ///
-/// Only the rows and columns of `components` are formed (the others stay zero); they read
-/// the columns `components` of `dτ/dF`.
+/// In place: `tangent` holds `dτ/dF` on entry (the columns `components`, all nine rows of
+/// each) and `A` on return, in the rows and columns `components` (other entries unspecified).
 #[inline(always)]
 pub fn piola_from_kirchhoff(
     f_inv: &Matrix3<f64>,
     tau: &Matrix3<f64>,
-    dtau_df: &Tangent,
+    tangent: &mut Tangent,
     components: &[usize],
-) -> (Matrix3<f64>, Tangent) {
+) -> Matrix3<f64> {
     let p = tau * f_inv.transpose();
-    let mut a = Tangent::zeros();
     for &col in components {
         let (m, n) = (col / 3, col % 3);
+        // column `col` of ∂τ/∂F (all nine rows), overwritten below by that of A
+        let dtau: [f64; 9] = std::array::from_fn(|r| tangent[(r, col)]);
         for &row in components {
             let (i, jj) = (row / 3, row % 3);
             let mut v = -f_inv[(jj, m)] * p[(i, n)];
             for k in 0..3 {
-                v += dtau_df[(idx(i, k), col)] * f_inv[(jj, k)];
+                v += dtau[idx(i, k)] * f_inv[(jj, k)];
             }
-            a[(row, col)] = v;
+            tangent[(row, col)] = v;
         }
     }
-    (p, a)
+    p
 }
 
 /// Central finite-difference tangent `∂P/∂F` of `stress` at `f` with step `h` (for tests of
@@ -82,11 +83,11 @@ pub fn tangent_relative_error(
     committed: &[f64],
 ) -> Result<f64, crate::LawError> {
     let mut trial = committed.to_vec();
-    let r = law.update(kinematics, committed, &mut trial)?;
+    let r = law.stress_response(kinematics, committed, &mut trial)?;
     let mut failure = None;
     let mut stress = |g: &Matrix3<f64>| {
         let kin = crate::Kinematics { deformation_gradient: *g, ..*kinematics };
-        match law.update(&kin, committed, &mut trial) {
+        match law.stress_response(&kin, committed, &mut trial) {
             Ok(s) => s.first_piola,
             Err(e) => {
                 failure = Some(e);

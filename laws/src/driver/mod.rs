@@ -225,7 +225,7 @@ impl Point<'_> {
         };
         let response = self
             .law
-            .update(&kin, &self.committed, &mut self.trial)
+            .stress_response(&kin, &self.committed, &mut self.trial)
             .map_err(|source| DriverError::Law { step, source })?;
         let sigma = cauchy(&response.first_piola, F);
         let residual: Vec<f64> = groups
