@@ -4,11 +4,17 @@
 //! bounding box lists the cells whose bounding boxes overlap each bin, and a point is tested
 //! only against the cells of its bin.
 //!
-//! The grid keeps its node coordinates as data (a [`Mesh`]), so a later coupling can move
-//! interface nodes; local coordinates come from the element's inverse map.
+//! The grid keeps its node coordinates as data (a [`Mesh`]); local coordinates come from the
+//! element's inverse map, or, in cells whose isoparametric map is affine (every tri3 and tet4
+//! cell, and the rectangles of structured quad grids), from that map's inverse `ξ = J⁻¹(x − x₀)`,
+//! kept per cell with `det J` when the grid is built (the cells do not move afterwards): one
+//! 3×3 product per located point instead of a Newton solve, and the shape-function gradients
+//! of every point in the cell from the same `J⁻¹`.
 
 use loam_fem::element::{ElementType, MAX_NODES};
+use loam_fem::kernel::CellMap;
 use loam_fem::mesh::Mesh;
+use nalgebra::{Matrix3, Vector3};
 
 /// How a grid finds the cell that holds a point.
 #[derive(Debug, Clone)]
@@ -25,12 +31,22 @@ enum Locator {
     Bins { lower: [f64; 3], size: [f64; 3], bins: [usize; 3], start: Vec<usize>, cells: Vec<u32> },
 }
 
+/// The isoparametric map of an affine cell, `x = x₀ + J ξ`.
+#[derive(Debug, Clone, Copy)]
+struct AffineCell {
+    /// `x₀ = x(ξ = 0)`.
+    origin: [f64; 3],
+    map: CellMap,
+}
+
 /// An MPM background grid.
 #[derive(Debug, Clone)]
 pub struct Grid {
     /// The grid as a mesh (node coordinates and cells).
     pub mesh: Mesh,
     locator: Locator,
+    /// Per cell, its affine map (`None` where the map is not affine).
+    affine: Vec<Option<AffineCell>>,
 }
 
 impl Grid {
@@ -42,7 +58,7 @@ impl Grid {
         };
         let cells = if element.dim() == 2 { [cells[0], cells[1], 1] } else { cells };
         let spacing = [size[0] / cells[0] as f64, size[1] / cells[1] as f64, size[2] / cells[2] as f64];
-        Self { mesh, locator: Locator::Lattice { origin, spacing, cells, rotation: (1.0, 0.0) } }
+        Self::with_locator(mesh, Locator::Lattice { origin, spacing, cells, rotation: (1.0, 0.0) })
     }
 
     /// A grid on any mesh, located by bins about one cell in size.
@@ -94,7 +110,7 @@ impl Grid {
             start[b + 1] += start[b];
         }
         let cells = lists.into_iter().map(|(_, c)| c).collect();
-        Self { mesh, locator: Locator::Bins { lower, size, bins, start, cells } }
+        Self::with_locator(mesh, Locator::Bins { lower, size, bins, start, cells })
     }
 
     /// A 2D grid as [`Grid::new`], rotated counter-clockwise by `angle` (radians)
@@ -110,7 +126,35 @@ impl Grid {
         if let Locator::Lattice { rotation, .. } = &mut g.locator {
             *rotation = (c, s);
         }
-        g
+        Self::with_locator(g.mesh, g.locator)
+    }
+
+    fn with_locator(mesh: Mesh, locator: Locator) -> Self {
+        let affine = (0..mesh.num_cells()).map(|c| affine_cell(&mesh, c)).collect();
+        Self { mesh, locator, affine }
+    }
+
+    /// Local coordinates of `x` in `cell` (possibly outside the reference element), or `None`
+    /// if the cell's map is singular.
+    pub fn local_coordinates(&self, cell: usize, x: &[f64; 3]) -> Option<[f64; 3]> {
+        match &self.affine[cell] {
+            Some(a) => {
+                let d = Vector3::new(x[0] - a.origin[0], x[1] - a.origin[1], x[2] - a.origin[2]);
+                let xi = a.map.jacobian_inverse * d;
+                let mut out = [0.0; 3];
+                out[..self.mesh.element.dim()].copy_from_slice(&xi.as_slice()[..self.mesh.element.dim()]);
+                Some(out)
+            }
+            None => {
+                let coords = self.cell_coords(cell);
+                self.mesh.element.inverse_map(&coords[..self.mesh.element.num_nodes()], x)
+            }
+        }
+    }
+
+    /// The constant map of `cell` if it is affine (see the module doc).
+    pub fn cell_map(&self, cell: usize) -> Option<&CellMap> {
+        self.affine[cell].as_ref().map(|a| &a.map)
     }
 
     /// Node coordinates of `cell` (the first `num_nodes` entries), without allocating.
@@ -139,10 +183,8 @@ impl Grid {
     pub fn locate(&self, x: &[f64; 3]) -> Option<(usize, [f64; 3])> {
         let element = self.mesh.element;
         let dim = element.dim();
-        let nn = element.num_nodes();
         let test = |cell: usize| {
-            let coords = self.cell_coords(cell);
-            element.inverse_map(&coords[..nn], x).filter(|xi| element.contains_local(xi, 1e-9)).map(|xi| (cell, xi))
+            self.local_coordinates(cell, x).filter(|xi| element.contains_local(xi, 1e-9)).map(|xi| (cell, xi))
         };
         let (origin, spacing, cells, rotation) = match &self.locator {
             Locator::Lattice { origin, spacing, cells, rotation } => (origin, spacing, cells, rotation),
@@ -175,16 +217,48 @@ impl Grid {
             ElementType::Tri3 => &[2 * lattice, 2 * lattice + 1],
             _ => &[lattice],
         };
-        for &cell in candidates {
-            let coords = self.cell_coords(cell);
-            if let Some(xi) = element.inverse_map(&coords[..nn], x) {
-                if element.contains_local(&xi, 1e-9) {
-                    return Some((cell, xi));
-                }
+        candidates.iter().find_map(|&cell| test(cell))
+    }
+}
+
+/// The map of `cell` if affine: its Jacobian (at the reference centroid) reproduces every
+/// node, `x_a = x₀ + J ξ_a`, to round-off of the cell size.
+fn affine_cell(mesh: &Mesh, cell: usize) -> Option<AffineCell> {
+    let element = mesh.element;
+    let (dim, nn) = (element.dim(), element.num_nodes());
+    let nodes = mesh.cell(cell);
+    let centroid = element.centroid_local();
+    let mut dn = [[0.0; 3]; MAX_NODES];
+    let mut n = [0.0; MAX_NODES];
+    element.shape_gradients(&centroid, &mut dn);
+    element.shape_functions(&[0.0; 3], &mut n);
+    let mut jac = Matrix3::<f64>::identity();
+    let mut origin = [0.0; 3];
+    for d in 0..dim {
+        jac[(d, d)] = 0.0;
+    }
+    for (a, &node) in nodes.iter().enumerate().take(nn) {
+        let x = mesh.coords[node];
+        for d in 0..dim {
+            origin[d] += n[a] * x[d];
+            for e in 0..dim {
+                jac[(d, e)] += x[d] * dn[a][e];
             }
         }
-        None
     }
+    let det_j = jac.determinant();
+    let jacobian_inverse = jac.try_inverse().filter(|_| det_j > 0.0 && det_j.is_finite())?;
+    let size = (0..dim).map(|d| jac.column(d).norm()).fold(0.0, f64::max);
+    for (a, &node) in nodes.iter().enumerate().take(nn) {
+        let xi = element.node_local(a);
+        for d in 0..dim {
+            let mapped = origin[d] + (0..dim).map(|e| jac[(d, e)] * xi[e]).sum::<f64>();
+            if (mapped - mesh.coords[node][d]).abs() > 1e-10 * size {
+                return None;
+            }
+        }
+    }
+    Some(AffineCell { origin, map: CellMap { jacobian_inverse, det_j } })
 }
 
 #[cfg(test)]
@@ -231,5 +305,35 @@ mod tests {
         let (cell, xi) = g.locate(&[0.75, 0.25, 0.6]).unwrap();
         assert_eq!(cell, 4 + 1);
         assert!((xi[0] - 0.0).abs() < 1e-12 && (xi[2] + 0.6).abs() < 1e-12);
+    }
+
+    /// The per-cell affine maps give the local coordinates and `J⁻¹` of the Newton inverse
+    /// map, and a cell whose map is not affine (a trapezoid) keeps the Newton path.
+    #[test]
+    fn affine_cells_match_the_inverse_map() {
+        let mut trapezoid = Mesh::rectangle([0.0, 0.0], [2.0, 1.0], [2, 1], ElementType::Quad4);
+        trapezoid.coords[2][0] += 0.3; // the lower right corner: the second cell becomes a trapezoid
+        let grids = [
+            Grid::rotated([1.0, 0.0, 0.0], [2.0, 1.0, 0.0], [4, 2, 1], ElementType::Quad4, 0.5),
+            Grid::new([0.0; 3], [2.0, 1.0, 0.0], [4, 2, 1], ElementType::Tri3),
+            Grid::new([0.0; 3], [1.0, 1.0, 1.0], [2, 2, 2], ElementType::Hex8),
+            Grid::unstructured(Mesh::cuboid([0.0; 3], [1.0; 3], [3, 2, 2], ElementType::Tet4)),
+            Grid::unstructured(trapezoid),
+        ];
+        let x = [0.93, 0.41, 0.37];
+        for g in &grids {
+            let element = g.mesh.element;
+            for cell in 0..g.mesh.num_cells() {
+                let coords = g.cell_coords(cell);
+                let newton = element.inverse_map(&coords[..element.num_nodes()], &x).unwrap();
+                let local = g.local_coordinates(cell, &x).unwrap();
+                for d in 0..element.dim() {
+                    assert!((local[d] - newton[d]).abs() < 1e-12, "{element:?} cell {cell}: {local:?} vs {newton:?}");
+                }
+                let trapezoid_cell =
+                    element == ElementType::Quad4 && g.mesh.coords.len() == 6 && g.mesh.cell(cell).contains(&2);
+                assert_eq!(g.cell_map(cell).is_none(), trapezoid_cell, "{element:?} cell {cell}");
+            }
+        }
     }
 }
