@@ -22,7 +22,10 @@
 //! with the hoop term `F33 = 1 + u_r/R` added for axisymmetry and `F33` condensed out by
 //! `P̃33 = 0` for plane stress.
 
-use loam_laws::{idx, ConstitutiveLaw, Kinematics, LawError, StressResponse, Tangent, TangentRequest};
+use loam_laws::{
+    idx, ConstitutiveLaw, Kinematics, LawError, StressResponse, Tangent, TangentRequest, ALL_COMPONENTS, IN_PLANE,
+    IN_PLANE_AND_ZZ,
+};
 use nalgebra::Matrix3;
 
 use crate::element::{ElementType, MAX_NODES};
@@ -167,29 +170,25 @@ pub struct PointState<'a> {
 }
 
 /// Flattened components of `F` that vary with the nodal unknowns, per formulation.
-const ACTIVE_2D: [usize; 5] = [idx(0, 0), idx(0, 1), idx(1, 0), idx(1, 1), idx(2, 2)];
-const ACTIVE_3D: [usize; 9] = [0, 1, 2, 3, 4, 5, 6, 7, 8];
+const ACTIVE_2D: [usize; 5] = IN_PLANE_AND_ZZ;
+const ACTIVE_3D: [usize; 9] = ALL_COMPONENTS;
 
 /// Flattened components of `F` that vary with the nodal unknowns: 4 in plane strain and
 /// plane stress, 5 in axisymmetry (with `F33`), 9 in 3D.
 pub fn active_components(formulation: Formulation) -> &'static [usize] {
     match formulation {
-        Formulation::PlaneStrain | Formulation::PlaneStress => &ACTIVE_2D[..4],
+        Formulation::PlaneStrain | Formulation::PlaneStress => &IN_PLANE,
         Formulation::Axisymmetric => &ACTIVE_2D,
         Formulation::ThreeD => &ACTIVE_3D,
     }
 }
 
-/// `P̃ = J0⁻¹ P F0ᵀ` and `Ã_iJkM = J0⁻¹ A_iKkL F0_JK F0_ML` (see the module doc), in place,
-/// over the rows and columns `components` of the tangent (`F0` is block diagonal with respect
+/// The tangent's pull-back `Ã_iJkM = J0⁻¹ A_iKkL F0_JK F0_ML` (see the module doc), in place,
+/// over its rows and columns `components` (`F0` is block diagonal with respect
 /// to them, so the sums over `K` and `L` stay inside them too; entries outside them are
 /// neither read nor written).
-fn pull_back(f0: &Matrix3<f64>, p: &mut Matrix3<f64>, a: &mut Tangent, components: &[usize]) {
-    if *f0 == Matrix3::identity() {
-        return;
-    }
-    let inv_j0 = 1.0 / f0.determinant();
-    *p = *p * f0.transpose() * inv_j0;
+#[inline(always)]
+fn pull_back(f0: &Matrix3<f64>, inv_j0: f64, a: &mut Tangent, components: &[usize]) {
     // `line` holds one row (then one column) of the tangent over `components`, zero elsewhere
     let mut line = [0.0; 9];
     // right-multiply the second index pair, row by row: A_iJkM ← Σ_L A_iJkL F0_ML
@@ -211,6 +210,19 @@ fn pull_back(f0: &Matrix3<f64>, p: &mut Matrix3<f64>, a: &mut Tangent, component
             let (i, j) = (row / 3, row % 3);
             a[(row, col)] = inv_j0 * (0..3).map(|kk| line[idx(i, kk)] * f0[(j, kk)]).sum::<f64>();
         }
+    }
+}
+
+/// The stress' pull-back `P̃ = J0⁻¹ P F0ᵀ` and the tangent's ([`pull_back`]) over `components`
+/// (none for a residual).
+fn pull_back_response(f0: &Matrix3<f64>, p: &mut Matrix3<f64>, a: &mut Tangent, components: &[usize]) {
+    if *f0 == Matrix3::identity() {
+        return;
+    }
+    let inv_j0 = 1.0 / f0.determinant();
+    *p = *p * f0.transpose() * inv_j0;
+    if !components.is_empty() {
+        loam_laws::with_components!(components, |c| pull_back(f0, inv_j0, a, c));
     }
 }
 
@@ -265,7 +277,7 @@ pub fn evaluate_point(
             ctx.law.update(&kin, state.committed, state.trial, response)?;
             let mut p = response.first_piola;
             let a = &mut response.tangent;
-            pull_back(state.f0, &mut p, a, components);
+            pull_back_response(state.f0, &mut p, a, components);
             let scale = p.amax().max(1e-300);
             if p[(2, 2)].abs() <= 1e-12 * scale || it == 29 {
                 if p[(2, 2)].abs() > 1e-8 * scale {
@@ -289,7 +301,7 @@ pub fn evaluate_point(
     }
     ctx.law.update(&kin, state.committed, state.trial, response)?;
     let mut p = response.first_piola;
-    pull_back(state.f0, &mut p, &mut response.tangent, components);
+    pull_back_response(state.f0, &mut p, &mut response.tangent, components);
     let cauchy = cauchy_stress(&response.first_piola, &kin.deformation_gradient);
     Ok(PointOutput { deformation_gradient: kin.deformation_gradient, stress: p, cauchy })
 }

@@ -50,12 +50,42 @@ pub enum TangentRequest {
     None,
 }
 
+/// The in-plane components `xx, xy, yx, yy` of `F` (plane strain).
+pub const IN_PLANE: [usize; 4] = [0, 1, 3, 4];
+/// The in-plane components and `zz` (axisymmetry, plane stress).
+pub const IN_PLANE_AND_ZZ: [usize; 5] = [0, 1, 3, 4, 8];
+/// All nine components.
+pub const ALL_COMPONENTS: [usize; 9] = [0, 1, 2, 3, 4, 5, 6, 7, 8];
+
+/// Evaluates `$body` with `$c` bound to the components `$components` (a `&[usize]`): to one
+/// of the constant sets [`IN_PLANE`], [`IN_PLANE_AND_ZZ`], [`ALL_COMPONENTS`] when they are
+/// equal to it, so that loops over `$c` unroll with their indices known, and to the slice
+/// otherwise. `$body` is compiled once per set.
+#[macro_export]
+macro_rules! with_components {
+    ($components:expr, |$c:ident| $body:expr) => {{
+        let components: &[usize] = $components;
+        if components == &$crate::law::IN_PLANE[..] {
+            let $c = &$crate::law::IN_PLANE;
+            $body
+        } else if components == &$crate::law::IN_PLANE_AND_ZZ[..] {
+            let $c = &$crate::law::IN_PLANE_AND_ZZ;
+            $body
+        } else if components == &$crate::law::ALL_COMPONENTS[..] {
+            let $c = &$crate::law::ALL_COMPONENTS;
+            $body
+        } else {
+            let $c = components;
+            $body
+        }
+    }};
+}
+
 impl TangentRequest {
     /// The flattened components whose rows and columns are needed (empty for `None`).
     pub fn components(self) -> &'static [usize] {
-        const ALL: [usize; 9] = [0, 1, 2, 3, 4, 5, 6, 7, 8];
         match self {
-            Self::Full => &ALL,
+            Self::Full => &ALL_COMPONENTS,
             Self::Components(c) => c,
             Self::None => &[],
         }

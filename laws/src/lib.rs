@@ -42,6 +42,6 @@ pub mod spectral;
 pub mod tensor;
 
 pub use error::{LawError, ParameterError};
-pub use law::{ConstitutiveLaw, Kinematics, StressResponse, TangentRequest};
+pub use law::{ConstitutiveLaw, Kinematics, StressResponse, TangentRequest, ALL_COMPONENTS, IN_PLANE, IN_PLANE_AND_ZZ};
 pub use material::MaterialSpec;
 pub use tensor::{idx, Tangent};

@@ -63,18 +63,19 @@ impl ConstitutiveLaw for NeoHookean {
         let c = self.lambda * ln_j - self.mu;
         response.first_piola = self.mu * f + c * f_inv.transpose();
         let tangent = &mut response.tangent;
-        let components = kinematics.tangent.components();
-        for &row in components {
-            let (i, jj) = (row / 3, row % 3);
-            for &col in components {
-                let (k, l) = (col / 3, col % 3);
-                let mut v = self.lambda * f_inv[(jj, i)] * f_inv[(l, k)] - c * f_inv[(jj, k)] * f_inv[(l, i)];
-                if i == k && jj == l {
-                    v += self.mu;
+        crate::with_components!(kinematics.tangent.components(), |components| {
+            for &row in components {
+                let (i, jj) = (row / 3, row % 3);
+                for &col in components {
+                    let (k, l) = (col / 3, col % 3);
+                    let mut v = self.lambda * f_inv[(jj, i)] * f_inv[(l, k)] - c * f_inv[(jj, k)] * f_inv[(l, i)];
+                    if i == k && jj == l {
+                        v += self.mu;
+                    }
+                    tangent[(row, col)] = v;
                 }
-                tangent[(row, col)] = v;
             }
-        }
+        });
         Ok(())
     }
 }

@@ -29,19 +29,21 @@ pub fn piola_from_kirchhoff(
     components: &[usize],
 ) -> Matrix3<f64> {
     let p = tau * f_inv.transpose();
-    for &col in components {
-        let (m, n) = (col / 3, col % 3);
-        // column `col` of ∂τ/∂F (all nine rows), overwritten below by that of A
-        let dtau: [f64; 9] = std::array::from_fn(|r| tangent[(r, col)]);
-        for &row in components {
-            let (i, jj) = (row / 3, row % 3);
-            let mut v = -f_inv[(jj, m)] * p[(i, n)];
-            for k in 0..3 {
-                v += dtau[idx(i, k)] * f_inv[(jj, k)];
+    crate::with_components!(components, |components| {
+        for &col in components {
+            let (m, n) = (col / 3, col % 3);
+            // column `col` of ∂τ/∂F (all nine rows), overwritten below by that of A
+            let dtau: [f64; 9] = std::array::from_fn(|r| tangent[(r, col)]);
+            for &row in components {
+                let (i, jj) = (row / 3, row % 3);
+                let mut v = -f_inv[(jj, m)] * p[(i, n)];
+                for k in 0..3 {
+                    v += dtau[idx(i, k)] * f_inv[(jj, k)];
+                }
+                tangent[(row, col)] = v;
             }
-            tangent[(row, col)] = v;
         }
-    }
+    });
     p
 }
 
