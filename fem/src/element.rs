@@ -200,21 +200,6 @@ impl ElementType {
         }
     }
 
-    /// Local coordinates of node `a` of the reference element.
-    pub fn node_local(self, a: usize) -> [f64; 3] {
-        match self {
-            ElementType::Tri3 | ElementType::Tet4 => {
-                let mut xi = [0.0; 3];
-                if a > 0 {
-                    xi[a - 1] = 1.0;
-                }
-                xi
-            }
-            ElementType::Quad4 => [QUAD_NODES[a][0], QUAD_NODES[a][1], 0.0],
-            ElementType::Hex8 => HEX_NODES[a],
-        }
-    }
-
     /// Centre of the reference element.
     pub fn centroid_local(self) -> [f64; 3] {
         match self {
