@@ -181,7 +181,10 @@ impl Instance {
             );
         }
         let before = (self.sim.stats.steps, self.sim.stats.iterations);
-        match self.sim.advance_to(t + h) {
+        // the steps run on a thread of rayon's pool, where the parallel loops inside them run
+        // without waking a worker and sleeping on each (the host calls from its own thread)
+        let sim = &mut self.sim;
+        match rayon::scope(|_| sim.advance_to(t + h)) {
             Ok(()) => {
                 self.logger.log(
                     Status::Ok,
