@@ -19,6 +19,8 @@
 //!   `collapse_bui2008_quad`) run twice until at rest, with Kratos' fixed step Δt = 5e-5 s
 //!   and with the case's adaptive steps; prints both wall times and the RMS vertical distance
 //!   between the two final surfaces (sampled every millimetre from the wall to 0.5 m).
+//! - **repeat** (`LOAM_BENCH_COLLAPSE=repeat`): the same with two identical adaptive runs,
+//!   which measures how far round-off (parallel sums) alone moves the final surface.
 //!
 //! Choose cases with `LOAM_BENCH_CASES=collapse_bui2008_quad,collapse_bui2008_tri_h2`.
 //! Run: `cargo bench --bench mpm_collapse`. Nothing is asserted about times.
@@ -94,8 +96,9 @@ fn run_whole(case: Case, threads: usize) -> (Simulation, f64) {
     (sim, t.elapsed().as_secs_f64())
 }
 
-fn small_step_comparison(name: &str, threads: usize) {
-    let runs = [("Δt = 5e-5 s", Steps::FixedToRest(KRATOS_TIME_STEP)), ("adaptive", Steps::AsCase)];
+/// Runs `name` twice until at rest, as `runs` say, and prints both runs and the RMS vertical
+/// distance between their final surfaces.
+fn surface_comparison(name: &str, threads: usize, runs: [(&str, Steps); 2]) {
     let mut surfaces = Vec::new();
     println!("\n{name}, {threads} thread(s), until at rest:\n");
     println!("| steps | count | end time (s) | wall (s) | s per step | runout (m) | height at wall (m) |");
@@ -125,10 +128,16 @@ fn small_step_comparison(name: &str, threads: usize) {
 
 fn main() {
     faer::set_global_parallelism(faer::Par::Seq);
-    if std::env::var("LOAM_BENCH_COLLAPSE").is_ok_and(|v| v == "small_step") {
+    let mode = std::env::var("LOAM_BENCH_COLLAPSE").unwrap_or_default();
+    if mode == "small_step" || mode == "repeat" {
         let name = env_list("LOAM_BENCH_CASES").and_then(|v| v.first().cloned());
         let threads = env_list("LOAM_BENCH_THREADS").and_then(|v| v.first().and_then(|s| s.parse().ok()));
-        small_step_comparison(name.as_deref().unwrap_or("collapse_bui2008_quad"), threads.unwrap_or(2));
+        let runs = if mode == "repeat" {
+            [("adaptive, first run", Steps::AsCase), ("adaptive, second run", Steps::AsCase)]
+        } else {
+            [("Δt = 5e-5 s", Steps::FixedToRest(KRATOS_TIME_STEP)), ("adaptive", Steps::AsCase)]
+        };
+        surface_comparison(name.as_deref().unwrap_or("collapse_bui2008_quad"), threads.unwrap_or(2), runs);
         return;
     }
     let full = std::env::var("LOAM_BENCH_COLLAPSE").is_ok_and(|v| v == "full");
