@@ -200,6 +200,25 @@ impl ElementType {
         }
     }
 
+    /// Jacobian `J_de = Σ_a x_a,d ∂N_a/∂ξ_e` of the isoparametric map of an element with
+    /// node coordinates `coords`, from the local gradients `dn` at a point
+    /// ([`ElementType::shape_gradients`]); 1 on the unused diagonal entry of 2D elements.
+    pub fn jacobian(self, coords: &[[f64; 3]], dn: &[[f64; 3]]) -> nalgebra::Matrix3<f64> {
+        let dim = self.dim();
+        let mut jac = nalgebra::Matrix3::<f64>::identity();
+        for d in 0..dim {
+            jac[(d, d)] = 0.0;
+        }
+        for a in 0..self.num_nodes() {
+            for d in 0..dim {
+                for e in 0..dim {
+                    jac[(d, e)] += coords[a][d] * dn[a][e];
+                }
+            }
+        }
+        jac
+    }
+
     /// Centre of the reference element.
     pub fn centroid_local(self) -> [f64; 3] {
         match self {
@@ -223,22 +242,13 @@ impl ElementType {
             self.shape_functions(&xi, &mut n);
             self.shape_gradients(&xi, &mut dn);
             let mut r = [0.0; 3];
-            let mut jac = nalgebra::Matrix3::<f64>::identity();
-            for d in 0..dim {
-                r[d] = x[d];
-                for e in 0..dim {
-                    jac[(d, e)] = 0.0;
-                }
-            }
+            r[..dim].copy_from_slice(&x[..dim]);
             for a in 0..nn {
                 for d in 0..dim {
                     r[d] -= n[a] * coords[a][d];
-                    for e in 0..dim {
-                        jac[(d, e)] += coords[a][d] * dn[a][e];
-                    }
                 }
             }
-            let inv = jac.try_inverse()?;
+            let inv = self.jacobian(coords, &dn).try_inverse()?;
             let step = inv * nalgebra::Vector3::new(r[0], r[1], r[2]);
             let mut norm = 0.0f64;
             for d in 0..dim {

@@ -78,21 +78,9 @@ pub fn point_geometry(
     xi: &[f64; 3],
     gauss_weight: f64,
 ) -> Result<PointGeometry, KernelError> {
-    let nn = element.num_nodes();
-    let dim = element.dim();
     let mut dn = [[0.0; 3]; MAX_NODES];
     element.shape_gradients(xi, &mut dn);
-    let mut jac = Matrix3::<f64>::identity();
-    for d in 0..dim {
-        jac[(d, d)] = 0.0;
-    }
-    for a in 0..nn {
-        for d in 0..dim {
-            for e in 0..dim {
-                jac[(d, e)] += coords[a][d] * dn[a][e];
-            }
-        }
-    }
+    let jac = element.jacobian(coords, &dn);
     let det_j = jac.determinant();
     if det_j <= 0.0 || !det_j.is_finite() {
         return Err(KernelError::InvertedElement { det_j });

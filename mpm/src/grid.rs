@@ -17,7 +17,7 @@
 use loam_fem::element::{ElementType, MAX_NODES};
 use loam_fem::kernel::CellMap;
 use loam_fem::mesh::Mesh;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 /// How a grid finds the cell that holds a point.
 #[derive(Debug, Clone)]
@@ -230,27 +230,12 @@ fn affine_cell(mesh: &Mesh, cell: usize) -> Option<AffineCell> {
     if !matches!(element, ElementType::Tri3 | ElementType::Tet4) {
         return None;
     }
-    let (dim, nn) = (element.dim(), element.num_nodes());
-    let nodes = mesh.cell(cell);
-    let centroid = element.centroid_local();
+    let coords: Vec<[f64; 3]> = mesh.cell(cell).iter().map(|&a| mesh.coords[a]).collect();
     let mut dn = [[0.0; 3]; MAX_NODES];
-    let mut n = [0.0; MAX_NODES];
-    element.shape_gradients(&centroid, &mut dn);
-    element.shape_functions(&[0.0; 3], &mut n);
-    let mut jac = Matrix3::<f64>::identity();
-    let mut origin = [0.0; 3];
-    for d in 0..dim {
-        jac[(d, d)] = 0.0;
-    }
-    for (a, &node) in nodes.iter().enumerate().take(nn) {
-        let x = mesh.coords[node];
-        for d in 0..dim {
-            origin[d] += n[a] * x[d];
-            for e in 0..dim {
-                jac[(d, e)] += x[d] * dn[a][e];
-            }
-        }
-    }
+    element.shape_gradients(&element.centroid_local(), &mut dn);
+    let jac = element.jacobian(&coords, &dn);
+    // ξ = 0 is node 0 of a simplex
+    let origin = coords[0];
     let det_j = jac.determinant();
     let jacobian_inverse = jac.try_inverse().filter(|_| det_j > 0.0 && det_j.is_finite())?;
     Some(AffineCell { origin, map: CellMap { jacobian_inverse, det_j } })
