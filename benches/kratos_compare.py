@@ -65,26 +65,32 @@ def loam_case(n, end):
     }
 
 
-def run_kratos(python, case_dir, threads, steps):
+def kratos_summary(python, case_dir, threads, steps, dt):
+    """Kratos' RUN_SUMMARY (benches/kratos/run_case.py) of `steps` steps of `dt` in `case_dir`."""
     # Kratos advances while t < end_time: end half a step early to take exactly `steps` steps
-    env = dict(os.environ, OMP_NUM_THREADS=str(threads), KRATOS_END_TIME=repr((steps - 0.5) * DT))
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads), KRATOS_END_TIME=repr((steps - 0.5) * dt))
     out = subprocess.run([python, os.path.join(HERE, "kratos", "run_case.py")], cwd=case_dir, env=env,
                          capture_output=True, text=True)
     for line in out.stdout.splitlines():
         if line.startswith("RUN_SUMMARY "):
-            s = json.loads(line[len("RUN_SUMMARY "):])
-            tip = next((k["value"] for k in s["key_results"] if "MP_DISPLACEMENT_Y" in k["label"]), float("nan"))
-            return {"per_step": s["time_per_step_s"], "steps": s["steps"],
-                    "iters": s["nonlinear_iterations_total"] / max(s["steps"], 1), "tip": tip,
-                    "points": s["material_points_initial"]}
+            return json.loads(line[len("RUN_SUMMARY "):])
     sys.exit("Kratos failed:\n" + out.stdout[-2000:] + out.stderr[-2000:])
 
 
-def loam_once(loam, n, steps, out_dir, threads):
+def run_kratos(python, case_dir, threads, steps):
+    s = kratos_summary(python, case_dir, threads, steps, DT)
+    tip = next((k["value"] for k in s["key_results"] if "MP_DISPLACEMENT_Y" in k["label"]), float("nan"))
+    return {"per_step": s["time_per_step_s"], "steps": s["steps"],
+            "iters": s["nonlinear_iterations_total"] / max(s["steps"], 1), "tip": tip,
+            "points": s["material_points_initial"]}
+
+
+def loam_run_case(loam, case, out_dir, threads):
+    """Wall seconds, steps and Newton iterations of `loam run` on the case dict `case`."""
     os.makedirs(out_dir, exist_ok=True)
     case_path = os.path.join(out_dir, "loam.json")
     with open(case_path, "w") as f:
-        json.dump(loam_case(n, steps * DT), f, indent=1)
+        json.dump(case, f, indent=1)
     t0 = time.perf_counter()
     out = subprocess.run([loam, "run", case_path, "--out", out_dir, "--threads", str(threads), "--quiet"],
                          capture_output=True, text=True)
@@ -92,9 +98,14 @@ def loam_once(loam, n, steps, out_dir, threads):
     m = re.search(r"(\d+) steps, (\d+) Newton iterations", out.stdout)
     if out.returncode != 0 or not m:
         sys.exit("Loam failed:\n" + out.stdout[-2000:] + out.stderr[-2000:])
+    return wall, int(m.group(1)), int(m.group(2))
+
+
+def loam_once(loam, n, steps, out_dir, threads):
+    wall, nsteps, iters = loam_run_case(loam, loam_case(n, steps * DT), out_dir, threads)
     with open(os.path.join(out_dir, "monitors.csv")) as f:
         rows = list(csv.DictReader(f))
-    return wall, int(m.group(1)), int(m.group(2)), float(rows[-1]["tip_uy"])
+    return wall, nsteps, iters, float(rows[-1]["tip_uy"])
 
 
 def run_loam(loam, n, case_dir, threads, steps):

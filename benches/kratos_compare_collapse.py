@@ -23,11 +23,11 @@ Not part of the test suite (Kratos takes about 1 s per step here).
 import argparse
 import json
 import os
-import re
 import shutil
 import subprocess
 import sys
-import time
+
+from kratos_compare import kratos_summary, loam_run_case
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -36,14 +36,8 @@ DT = 5e-5
 
 def kratos_loop(python, case_dir, threads, steps):
     """Kratos' solution-loop seconds, steps and Newton iterations for `steps` steps."""
-    env = dict(os.environ, OMP_NUM_THREADS=str(threads), KRATOS_END_TIME=repr((steps - 0.5) * DT))
-    out = subprocess.run([python, os.path.join(HERE, "kratos", "run_case.py")], cwd=case_dir, env=env,
-                         capture_output=True, text=True)
-    for line in out.stdout.splitlines():
-        if line.startswith("RUN_SUMMARY "):
-            s = json.loads(line[len("RUN_SUMMARY "):])
-            return s["time_solution_loop_s"], s["steps"], s["nonlinear_iterations_total"]
-    sys.exit("Kratos failed:\n" + out.stdout[-2000:] + out.stderr[-2000:])
+    s = kratos_summary(python, case_dir, threads, steps, DT)
+    return s["time_solution_loop_s"], s["steps"], s["nonlinear_iterations_total"]
 
 
 def loam_run(loam, out_dir, steps, threads):
@@ -56,18 +50,7 @@ def loam_run(loam, out_dir, steps, threads):
     analysis["time_step"] = DT
     analysis["end_time"] = steps * DT
     case["output"] = {"interval": 0, "vtk": False}
-    os.makedirs(out_dir, exist_ok=True)
-    path = os.path.join(out_dir, "loam.json")
-    with open(path, "w") as f:
-        json.dump(case, f, indent=1)
-    t0 = time.perf_counter()
-    out = subprocess.run([loam, "run", path, "--out", out_dir, "--threads", str(threads), "--quiet"],
-                         capture_output=True, text=True)
-    wall = time.perf_counter() - t0
-    m = re.search(r"(\d+) steps, (\d+) Newton iterations", out.stdout)
-    if out.returncode != 0 or not m:
-        sys.exit("Loam failed:\n" + out.stdout[-2000:] + out.stderr[-2000:])
-    return wall, int(m.group(1)), int(m.group(2))
+    return loam_run_case(loam, case, out_dir, threads)
 
 
 def main():

@@ -67,32 +67,9 @@ pub enum KernelError {
     },
 }
 
-/// Computes [`PointGeometry`] at local coordinates `xi` of an element whose nodes sit at
-/// `coords` in the step reference configuration. `measure` multiplies the reference-element
-/// weight (Gauss weight); the thickness or `2πR` factor of the formulation is applied here.
-pub fn point_geometry(
-    element: ElementType,
-    formulation: Formulation,
-    thickness: f64,
-    coords: &[[f64; 3]],
-    xi: &[f64; 3],
-    gauss_weight: f64,
-) -> Result<PointGeometry, KernelError> {
-    let mut dn = [[0.0; 3]; MAX_NODES];
-    element.shape_gradients(xi, &mut dn);
-    let jac = element.jacobian(coords, &dn);
-    let det_j = jac.determinant();
-    if det_j <= 0.0 || !det_j.is_finite() {
-        return Err(KernelError::InvertedElement { det_j });
-    }
-    let jacobian_inverse = jac.try_inverse().ok_or(KernelError::InvertedElement { det_j })?;
-    let map = CellMap { jacobian_inverse, det_j };
-    Ok(point_geometry_in_map(element, formulation, thickness, coords, xi, gauss_weight, &map))
-}
-
 /// The Jacobian `J = ∂x/∂ξ` of an element's isoparametric map at a point, inverted, with
-/// its determinant (> 0). Constant over an affine cell (tri3, tet4, parallelogram quad4),
-/// which lets an MPM grid keep one per cell.
+/// its determinant (> 0). Constant over an affine cell (tri3, tet4), which lets an MPM grid
+/// keep one per cell.
 #[derive(Debug, Clone, Copy)]
 pub struct CellMap {
     /// `J⁻¹ = ∂ξ/∂x`.
@@ -101,24 +78,47 @@ pub struct CellMap {
     pub det_j: f64,
 }
 
-/// [`point_geometry`] with the Jacobian at `xi` already known: `∂N_a/∂x = J⁻ᵀ ∂N_a/∂ξ`,
-/// weight `gauss_weight · det J` times the formulation's measure factor. `coords` is read
-/// for the radius of axisymmetric points only.
-pub fn point_geometry_in_map(
+impl CellMap {
+    /// The map of an element with node coordinates `coords` at the point where its local
+    /// shape gradients are `dn`; fails if `det J ≤ 0`.
+    pub fn at(element: ElementType, coords: &[[f64; 3]], dn: &[[f64; 3]]) -> Result<Self, KernelError> {
+        let jac = element.jacobian(coords, dn);
+        let det_j = jac.determinant();
+        if det_j <= 0.0 || !det_j.is_finite() {
+            return Err(KernelError::InvertedElement { det_j });
+        }
+        let jacobian_inverse = jac.try_inverse().ok_or(KernelError::InvertedElement { det_j })?;
+        Ok(Self { jacobian_inverse, det_j })
+    }
+}
+
+/// Computes [`PointGeometry`] at local coordinates `xi` of an element whose nodes sit at
+/// `coords` in the step reference configuration: `∂N_a/∂x = J⁻ᵀ ∂N_a/∂ξ`, weight
+/// `gauss_weight · det J` times the formulation's thickness or `2πR` factor. `map` is the
+/// Jacobian at `xi` when the caller knows it (an affine cell), else it is formed from `coords`.
+pub fn point_geometry(
     element: ElementType,
     formulation: Formulation,
     thickness: f64,
     coords: &[[f64; 3]],
     xi: &[f64; 3],
     gauss_weight: f64,
-    map: &CellMap,
-) -> PointGeometry {
+    map: Option<&CellMap>,
+) -> Result<PointGeometry, KernelError> {
     let nn = element.num_nodes();
     let dim = element.dim();
     let mut g = PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
     let mut dn = [[0.0; 3]; MAX_NODES];
     element.shape_functions(xi, &mut g.shape);
     element.shape_gradients(xi, &mut dn);
+    let formed;
+    let map = match map {
+        Some(map) => map,
+        None => {
+            formed = CellMap::at(element, coords, &dn)?;
+            &formed
+        }
+    };
     let jinv = &map.jacobian_inverse;
     for a in 0..nn {
         for d in 0..dim {
@@ -129,7 +129,7 @@ pub fn point_geometry_in_map(
         g.radius = (0..nn).map(|a| g.shape[a] * coords[a][0]).sum();
     }
     g.weight = gauss_weight * map.det_j * formulation.measure_factor(thickness, g.radius);
-    g
+    Ok(g)
 }
 
 /// Inputs shared by all points of one kernel call.
@@ -595,7 +595,7 @@ mod tests {
             let geometry: Vec<PointGeometry> = element
                 .gauss_points()
                 .iter()
-                .map(|g| point_geometry(element, formulation, 1.0, &coords, &g.xi, g.weight).unwrap())
+                .map(|g| point_geometry(element, formulation, 1.0, &coords, &g.xi, g.weight, None).unwrap())
                 .collect();
             let np = geometry.len();
             let mut f0 = Matrix3::new(1.05, 0.03, 0.0, -0.02, 0.97, 0.0, 0.0, 0.0, 1.0);
@@ -679,7 +679,7 @@ mod tests {
             let geometry: Vec<PointGeometry> = element
                 .gauss_points()
                 .iter()
-                .map(|g| point_geometry(element, formulation, 1.0, &coords, &g.xi, g.weight).unwrap())
+                .map(|g| point_geometry(element, formulation, 1.0, &coords, &g.xi, g.weight, None).unwrap())
                 .collect();
             let np = geometry.len();
             let f0s = vec![Matrix3::new(1.05, 0.03, 0.0, -0.02, 0.97, 0.0, 0.0, 0.0, 1.0); np];

@@ -69,12 +69,14 @@ impl FemDomain {
                 message: format!("{err} (check the node ordering: counter-clockwise in 2D)"),
             };
             for gp in &rule {
-                geometry
-                    .push(point_geometry(element, formulation, thickness, &coords, &gp.xi, gp.weight).map_err(fail)?);
+                geometry.push(
+                    point_geometry(element, formulation, thickness, &coords, &gp.xi, gp.weight, None).map_err(fail)?,
+                );
             }
             let me = &mut mass[e * nn * nn..(e + 1) * nn * nn];
             for gp in &mass_rule {
-                let g = point_geometry(element, formulation, thickness, &coords, &gp.xi, gp.weight).map_err(fail)?;
+                let g =
+                    point_geometry(element, formulation, thickness, &coords, &gp.xi, gp.weight, None).map_err(fail)?;
                 for a in 0..nn {
                     for b in 0..nn {
                         me[a * nn + b] += rho * g.weight * g.shape[a] * g.shape[b];

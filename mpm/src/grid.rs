@@ -233,12 +233,10 @@ fn affine_cell(mesh: &Mesh, cell: usize) -> Option<AffineCell> {
     let coords: Vec<[f64; 3]> = mesh.cell(cell).iter().map(|&a| mesh.coords[a]).collect();
     let mut dn = [[0.0; 3]; MAX_NODES];
     element.shape_gradients(&element.centroid_local(), &mut dn);
-    let jac = element.jacobian(&coords, &dn);
+    let map = CellMap::at(element, &coords, &dn).ok()?;
     // ξ = 0 is node 0 of a simplex
     let origin = coords[0];
-    let det_j = jac.determinant();
-    let jacobian_inverse = jac.try_inverse().filter(|_| det_j > 0.0 && det_j.is_finite())?;
-    Some(AffineCell { origin, map: CellMap { jacobian_inverse, det_j } })
+    Some(AffineCell { origin, map })
 }
 
 #[cfg(test)]

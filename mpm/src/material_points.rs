@@ -161,7 +161,7 @@ pub fn from_mesh(
     for e in 0..mesh.num_cells() {
         let coords: Vec<[f64; 3]> = mesh.cell(e).iter().map(|&a| mesh.coords[a]).collect();
         for gp in &rule {
-            let g = point_geometry(mesh.element, formulation, thickness, &coords, &gp.xi, gp.weight)
+            let g = point_geometry(mesh.element, formulation, thickness, &coords, &gp.xi, gp.weight, None)
                 .map_err(|err| format!("body cell {e}: {err}"))?;
             let mut x = [0.0; 3];
             for (a, c) in coords.iter().enumerate() {

@@ -9,9 +9,7 @@ use loam_fem::domain::{
 };
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
-use loam_fem::kernel::{
-    point_geometry, point_geometry_in_map, solid_element, KernelContext, PointGeometry, PointOutput,
-};
+use loam_fem::kernel::{point_geometry, solid_element, KernelContext, PointGeometry, PointOutput};
 use loam_laws::ConstitutiveLaw;
 use nalgebra::Matrix3;
 use rayon::prelude::*;
@@ -289,11 +287,9 @@ impl Domain for MpmDomain {
             .map(|(&p, &volume)| {
                 let (cell, xi) = located[p].expect("kept points are located");
                 let coords = grid.cell_coords(cell);
-                let mut g = match grid.cell_map(cell) {
-                    Some(map) => point_geometry_in_map(element, formulation, thickness, &coords[..nn], &xi, 1.0, map),
-                    None => point_geometry(element, formulation, thickness, &coords[..nn], &xi, 1.0)
-                        .expect("located points lie in cells that are not inverted"),
-                };
+                let mut g =
+                    point_geometry(element, formulation, thickness, &coords[..nn], &xi, 1.0, grid.cell_map(cell))
+                        .expect("located points lie in cells that are not inverted");
                 g.weight = volume;
                 g
             })
