@@ -22,6 +22,15 @@
 //! - **repeat** (`LOAM_BENCH_COLLAPSE=repeat`): the same with two identical adaptive runs,
 //!   which measures how far round-off (parallel sums) alone moves the final surface.
 //!
+//!
+//! In the last two modes the material points of each final state (position, size, initial size: the
+//! surface) are written to `target/mpm_collapse/<case>_<k>.csv`;
+//! `LOAM_BENCH_REFERENCE=<file>` takes the first run's surface from such a file instead of
+//! running it, and `LOAM_BENCH_OVERRIDE='{"analysis":{"adaptive":{"max_time_step":0.002}}}'`
+//! merges a JSON patch into the case for the last run: variants of the step control are
+//! compared with one small-step run, and a perturbation at round-off level (e.g. gravity
+//! −9.81 (1 + 1e-12)) in repeat mode measures how far the final surface moves under it.
+//!
 //! Choose cases with `LOAM_BENCH_CASES=collapse_bui2008_quad,collapse_bui2008_tri_h2`.
 //! Run: `cargo bench --bench mpm_collapse`. Nothing is asserted about times.
 
@@ -34,6 +43,7 @@ use common::{print_table, time_steps, StepTiming};
 use loam::case::Case;
 use loam::monitor::point_extents;
 use loam::simulation::Simulation;
+use loam_fem::domain::PointExtent;
 use loam_mpm::surface::SurfaceProfile;
 
 /// Kratos' MPM application on `collapse_bui2008_tri_h2`'s discretisation at Δt = 5e-5 s,
@@ -46,6 +56,8 @@ const KRATOS_TIME_STEP: f64 = 5e-5;
 enum Steps {
     /// As in the case file.
     AsCase,
+    /// As in the case file with the JSON patch of `LOAM_BENCH_OVERRIDE` (if any) merged in.
+    Patched,
     /// `n` fixed steps of length `dt` (no adaptivity, no rest criterion).
     Fixed(f64, usize),
     /// Fixed steps of length `dt` until at rest (the case's rest criterion).
@@ -57,9 +69,15 @@ fn load(name: &str, steps: Steps) -> Case {
     let mut json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).expect("case file")).expect("case JSON");
     json["output"] = serde_json::json!({ "interval": 0, "vtk": false });
+    if matches!(steps, Steps::Patched) {
+        if let Ok(text) = std::env::var("LOAM_BENCH_OVERRIDE") {
+            let patch: serde_json::Value = serde_json::from_str(&text).expect("LOAM_BENCH_OVERRIDE is JSON");
+            merge(&mut json, &patch);
+        }
+    }
     let analysis = json["analysis"].as_object_mut().expect("analysis");
     match steps {
-        Steps::AsCase => {}
+        Steps::AsCase | Steps::Patched => {}
         Steps::Fixed(dt, n) => {
             analysis.remove("adaptive");
             analysis.remove("stop_at_rest");
@@ -72,6 +90,18 @@ fn load(name: &str, steps: Steps) -> Case {
         }
     }
     Case::parse(&json.to_string()).expect("case parses")
+}
+
+/// Merges the JSON object `patch` into `target` (objects key by key, anything else replaced).
+fn merge(target: &mut serde_json::Value, patch: &serde_json::Value) {
+    match (target, patch) {
+        (serde_json::Value::Object(t), serde_json::Value::Object(p)) => {
+            for (key, value) in p {
+                merge(t.entry(key.clone()).or_insert(serde_json::Value::Null), value);
+            }
+        }
+        (t, p) => *t = p.clone(),
+    }
 }
 
 fn point_count(sim: &Simulation) -> usize {
@@ -96,14 +126,80 @@ fn run_whole(case: Case, threads: usize) -> (Simulation, f64) {
     (sim, t.elapsed().as_secs_f64())
 }
 
-/// Runs `name` twice until at rest, as `runs` say, and prints both runs and the RMS vertical
-/// distance between their final surfaces.
-fn surface_comparison(name: &str, threads: usize, runs: [(&str, Steps); 2]) {
+/// Prints the `n` material points with the largest volume ratio J = det F (position, J),
+/// which single out points whose volume, and so their square on the surface, has grown.
+fn print_most_dilated(sim: &Simulation, n: usize) {
+    let mut points: Vec<([f64; 3], f64, [f64; 4])> = Vec::new();
+    for d in &sim.model.domains {
+        let out = d.output(&sim.model.committed);
+        let Some(f) = out.point_fields.iter().find(|f| f.name == "deformation_gradient") else { continue };
+        for (p, x) in out.points.iter().enumerate() {
+            let m = nalgebra::Matrix3::from_fn(|i, j| f.values[9 * p + 3 * i + j]);
+            points.push((*x, m.determinant(), [m[(0, 0)], m[(0, 1)], m[(1, 0)], m[(1, 1)]]));
+        }
+    }
+    points.sort_by(|a, b| b.1.total_cmp(&a.1));
+    for (x, j, f) in points.iter().take(n) {
+        println!("|   point at ({:.4}, {:.4}) m: J = {j:.3}, F = {f:.3?} | | | | | | |", x[0], x[1]);
+    }
+}
+
+/// Writes the material points' extents (the final surface) as `x,y,z,size,initial_size`
+/// lines, with all digits.
+fn write_points(path: &Path, points: &[PointExtent]) {
+    let text: String = points
+        .iter()
+        .map(|p| {
+            let [x, y, z] = p.position;
+            format!("{x:e},{y:e},{z:e},{:e},{:e}\n", p.size, p.initial_size)
+        })
+        .collect();
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).expect("surface directory");
+    }
+    std::fs::write(path, format!("x,y,z,size,initial_size\n{text}")).expect("points file written");
+}
+
+/// Reads points written by [`write_points`].
+fn read_points(path: &Path) -> Vec<PointExtent> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    text.lines()
+        .skip(1)
+        .map(|line| {
+            let v: Vec<f64> = line.split(',').map(|s| s.parse().expect("a number")).collect();
+            PointExtent { position: [v[0], v[1], v[2]], size: v[3], initial_size: v[4] }
+        })
+        .collect()
+}
+
+/// RMS vertical distance between the surfaces of two sets of points, sampled every
+/// millimetre from the wall to 0.5 m.
+fn rms_between(a: &[PointExtent], b: &[PointExtent]) -> f64 {
+    let samples: Vec<(f64, f64)> =
+        (0..=500).map(|k| 1e-3 * k as f64).map(|x| (x, SurfaceProfile::new(a, 0.0).height_at(x))).collect();
+    SurfaceProfile::new(b, 0.0).rms_distance(&samples)
+}
+
+/// Runs `name` until at rest as each of `runs` says, writes each final state's point
+/// extents to `target/mpm_collapse/<name>_<k>.csv`, and prints the runs and the RMS vertical distance of
+/// each later surface from the first. With `LOAM_BENCH_REFERENCE=<file>` the first run is
+/// replaced by the points in that file (written by an earlier run), so that
+/// variants of the adaptive run can be compared with one small-step run.
+fn surface_comparison(name: &str, threads: usize, runs: Vec<(&str, Steps)>) {
+    let out_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target").join("mpm_collapse");
+    let reference = std::env::var("LOAM_BENCH_REFERENCE").ok();
     let mut surfaces = Vec::new();
     println!("\n{name}, {threads} thread(s), until at rest:\n");
     println!("| steps | count | end time (s) | wall (s) | s per step | runout (m) | height at wall (m) |");
     println!("|---|---:|---:|---:|---:|---:|---:|");
-    for (label, steps) in runs {
+    for (k, (label, steps)) in runs.into_iter().enumerate() {
+        if k == 0 {
+            if let Some(file) = &reference {
+                println!("| {label} | read from {file} | | | | | |");
+                surfaces.push(read_points(Path::new(file)));
+                continue;
+            }
+        }
         let (sim, wall) = run_whole(load(name, steps), threads);
         let value = |m: &str| {
             let k = sim.monitor_names().iter().position(|n| *n == m).expect("monitor");
@@ -118,12 +214,20 @@ fn surface_comparison(name: &str, threads: usize, runs: [(&str, Steps); 2]) {
             value("runout"),
             value("height_at_wall")
         );
-        surfaces.push(point_extents(&sim.model));
+        print_most_dilated(&sim, 3);
+        let surface = point_extents(&sim.model);
+        let file = out_dir.join(format!("{name}_{k}.csv"));
+        write_points(&file, &surface);
+        println!("|   (final surface written to {}) | | | | | | |", file.display());
+        surfaces.push(surface);
     }
-    let reference = SurfaceProfile::new(&surfaces[0], 0.0);
-    let samples: Vec<(f64, f64)> = (0..=500).map(|k| 1e-3 * k as f64).map(|x| (x, reference.height_at(x))).collect();
-    let rms = SurfaceProfile::new(&surfaces[1], 0.0).rms_distance(&samples);
-    println!("\nRMS vertical distance between the final surfaces (x = 0 … 0.5 m every 1 mm): {:.2} mm", rms * 1e3);
+    println!();
+    for (k, surface) in surfaces.iter().enumerate().skip(1) {
+        println!(
+            "RMS vertical distance of surface {k} from surface 0 (x = 0 … 0.5 m every 1 mm): {:.2} mm",
+            rms_between(&surfaces[0], surface) * 1e3
+        );
+    }
 }
 
 fn main() {
@@ -133,9 +237,9 @@ fn main() {
         let name = env_list("LOAM_BENCH_CASES").and_then(|v| v.first().cloned());
         let threads = env_list("LOAM_BENCH_THREADS").and_then(|v| v.first().and_then(|s| s.parse().ok()));
         let runs = if mode == "repeat" {
-            [("adaptive, first run", Steps::AsCase), ("adaptive, second run", Steps::AsCase)]
+            vec![("adaptive, first run", Steps::AsCase), ("adaptive, second run", Steps::Patched)]
         } else {
-            [("Δt = 5e-5 s", Steps::FixedToRest(KRATOS_TIME_STEP)), ("adaptive", Steps::AsCase)]
+            vec![("Δt = 5e-5 s", Steps::FixedToRest(KRATOS_TIME_STEP)), ("adaptive", Steps::Patched)]
         };
         surface_comparison(name.as_deref().unwrap_or("collapse_bui2008_quad"), threads.unwrap_or(2), runs);
         return;

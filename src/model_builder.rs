@@ -704,11 +704,7 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
             let wall = build_penalty_wall(case, k, spec, &mpm_grids)?;
             model.domains.push(Box::new(wall));
             constraint_of_bc.push(model.constraints.len());
-            model.constraints.push(Constraint {
-                dofs: Vec::new(),
-                values: Vec::new(),
-                amplitude: bc.amplitude.clone(),
-            });
+            model.constraints.push(Constraint::without_dofs(bc.amplitude.clone()));
             continue;
         }
         if bc.region.is_empty() {
@@ -741,16 +737,12 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
             }
             model.slips.extend(nodes.iter().map(|&node| Slip { node, normal }));
             constraint_of_bc.push(model.constraints.len());
-            model.constraints.push(Constraint {
-                dofs: Vec::new(),
-                values: Vec::new(),
-                amplitude: bc.amplitude.clone(),
-            });
+            model.constraints.push(Constraint::without_dofs(bc.amplitude.clone()));
             continue;
         }
         check_len(&format!("boundary_conditions[{k}].displacement"), &bc.displacement, dim)?;
         bc.amplitude.check().map_err(|m| CaseError::new(format!("boundary_conditions[{k}].amplitude"), m))?;
-        let mut c = Constraint { dofs: Vec::new(), values: Vec::new(), amplitude: bc.amplitude.clone() };
+        let mut c = Constraint::without_dofs(bc.amplitude.clone());
         for &n in nodes {
             for (i, v) in bc.displacement.iter().enumerate() {
                 if let Some(v) = v {

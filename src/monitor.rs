@@ -1,6 +1,6 @@
 //! Monitors: named scalar time histories, evaluated on the committed state.
 
-use loam_fem::domain::{PointQuantity, PointTensor};
+use loam_fem::domain::{PointExtent, PointQuantity, PointTensor};
 use loam_fem::model::Model;
 use loam_mpm::surface::SurfaceProfile;
 
@@ -176,7 +176,7 @@ impl Monitor {
 }
 
 /// Positions and sizes of the material points of every domain.
-pub fn point_extents(model: &Model) -> Vec<([f64; 3], f64)> {
+pub fn point_extents(model: &Model) -> Vec<PointExtent> {
     model.domains.iter().flat_map(|d| d.point_extents()).collect()
 }
 

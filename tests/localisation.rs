@@ -55,17 +55,11 @@ fn stretched(mut c: Case) -> Case {
     c
 }
 
-/// Mohr–Coulomb strain softening (φ 30° → 20°, c 20 → 5 kPa, ψ 5° → 0°): the peak axial
-/// stress is the unconfined strength 2c cos φ/(1 − sin φ) = 69.28 kPa (within 10 %; the
-/// weak corner lowers it), the force then falls below 70 % of the peak but stays above the
-/// residual strength 14.28 kPa; κ_max ≥ 5 κ_mean with the band (κ > κ_max/2) under 15 % of
-/// the specimen; the band angle lies within 5° of Roscoe's range 45°–47.5° (ψ from 0° to
-/// 5°), well below Coulomb's 55°–60° — and stays there on a mesh whose element diagonals
-/// lie at 55.6° instead of 45°, so it is not the mesh's diagonal.
+/// Mohr–Coulomb strain softening ([`common::check_mc_softening`]) — and the band stays
+/// near Roscoe's angle on a mesh whose element diagonals lie at 55.6° instead of 45°, so it
+/// is not the mesh's diagonal.
 #[test]
 fn mohr_coulomb_softening_band() {
-    let ucs = |c: f64, phi: f64| 2.0 * c * phi.to_radians().cos() / (1.0 - phi.to_radians().sin());
-    let (peak_strength, residual_strength) = (ucs(20e3, 30.0), ucs(5e3, 20.0));
     for (label, c) in [
         ("square cells (diagonal 45°)", case("biaxial_mc_softening.json")),
         ("stretched cells (diagonal 55.6°)", stretched(case("biaxial_mc_softening.json"))),
@@ -73,30 +67,7 @@ fn mohr_coulomb_softening_band() {
         let mut c = c;
         c.output.vtk = false;
         let (sim, h) = run(c);
-        let (peak, end, interior) = force_history(&sim, &h);
-        let (max, mean, share, angle) = localisation(&sim);
-        println!("MC softening, {label}:");
-        println!(
-            "  peak axial stress {:.2} kPa (unconfined strength {:.2} kPa, {:+.1} %); at 50 mm {:.2} kPa = {:.0} % of \
-             the peak (residual strength {:.2} kPa)",
-            peak / 1e3,
-            peak_strength / 1e3,
-            100.0 * (peak / peak_strength - 1.0),
-            end / 1e3,
-            100.0 * end / peak,
-            residual_strength / 1e3
-        );
-        println!(
-            "  κ max {max:.3}, mean {mean:.4} (ratio {:.1}); band (κ > κ_max/2) {:.1} % of the cells; band angle \
-             {angle:.1}° (Roscoe 45°–47.5°, Coulomb 55°–60°)",
-            max / mean,
-            100.0 * share
-        );
-        assert!(interior, "the force peaks before the end");
-        assert!((peak / peak_strength - 1.0).abs() < 0.1, "peak near the unconfined strength");
-        assert!(end < 0.7 * peak && end > residual_strength, "softening towards, not below, the residual");
-        assert!(max >= 5.0 * mean && share < 0.15, "the strain localises");
-        assert!((40.0..=52.5).contains(&angle), "band angle {angle}° outside Roscoe ± 5°");
+        common::check_mc_softening(label, force_history(&sim, &h), localisation(&sim), "cells");
     }
 }
 

@@ -90,6 +90,41 @@ pub struct DomainOutput {
     pub cell_fields: Vec<Field>,
 }
 
+/// Where a tracked point's material lies: its current position and two sizes, the sides of
+/// the squares (2D, per unit thickness or per radian-ring length) or cubes (3D) of its
+/// current volume `V = J V₀` and of its initial volume `V₀`.
+///
+/// The current size is how far the point's material reaches sideways (contact walls, the
+/// joining of a surface's stretch). How high it stands above its centre is half the
+/// smaller of the two ([`PointExtent::half_height`]): a point whose volume has grown stands
+/// no higher than its material packed. In the cohesionless, non-dilatant soils that flow
+/// and heap, volume growth is spreading — the thin toe of a flow stretched into a layer
+/// thinner than a point, points dragged along a rough base, whose deformation gradients
+/// can become degenerate (J in the hundreds to thousands in the toe of the Bui collapse on
+/// triangles) — not material rising: counted by its current volume such a point stood as a
+/// column several centimetres tall over the toe of a settled heap.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointExtent {
+    /// Current position.
+    pub position: [f64; 3],
+    /// Side of the square (cube) of the current volume.
+    pub size: f64,
+    /// Side of the square (cube) of the initial volume.
+    pub initial_size: f64,
+}
+
+impl PointExtent {
+    /// A point whose volume has not changed.
+    pub fn new(position: [f64; 3], size: f64) -> Self {
+        Self { position, size, initial_size: size }
+    }
+
+    /// Height of the top of the point's material above its centre: `min(s, s₀) / 2`.
+    pub fn half_height(&self) -> f64 {
+        0.5 * self.size.min(self.initial_size)
+    }
+}
+
 /// Point-to-grid projection of one step, summed over the particle domains:
 /// `m_I = Σ_p N_I m_p`, `(m v)_I = Σ_p N_I m_p v_p`, `(m a)_I = Σ_p N_I m_p a_p`.
 #[derive(Debug, Clone, PartialEq)]
@@ -106,7 +141,7 @@ pub struct Projection {
     pub inertia: Vec<f64>,
     /// Position and size of every projected particle (see [`Domain::point_extents`]), for
     /// conditions that act where the material is (penalty contact walls).
-    pub points: Vec<([f64; 3], f64)>,
+    pub points: Vec<PointExtent>,
 }
 
 impl Projection {
@@ -199,10 +234,9 @@ pub trait Domain: Send + Sync {
         None
     }
 
-    /// Current position and size of every tracked point (material point): the size is the
-    /// side of the square (2D, per unit thickness or per radian-ring length) or cube (3D)
-    /// of the point's current volume. Mesh domains have none.
-    fn point_extents(&self) -> Vec<([f64; 3], f64)> {
+    /// Current position and sizes of every tracked point (material point), see
+    /// [`PointExtent`]. Mesh domains have none.
+    fn point_extents(&self) -> Vec<PointExtent> {
         Vec::new()
     }
 

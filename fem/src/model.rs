@@ -89,6 +89,15 @@ pub struct Constraint {
     pub amplitude: Amplitude,
 }
 
+impl Constraint {
+    /// A constraint on no DOF yet, following `amplitude`: the slot of a boundary condition
+    /// enforced by other means (a penalty wall, slip nodes), so that every boundary condition
+    /// owns an amplitude slot that an input can drive.
+    pub fn without_dofs(amplitude: Amplitude) -> Self {
+        Constraint { dofs: Vec::new(), values: Vec::new(), amplitude }
+    }
+}
+
 /// External nodal forces `f = forces · amplitude(t)`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Load {

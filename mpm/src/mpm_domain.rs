@@ -4,8 +4,8 @@ use std::sync::Arc;
 
 use loam_fem::assembly::BlockLayout;
 use loam_fem::domain::{
-    AssemblyInput, Domain, DomainError, DomainOutput, Field, NodalState, PointLoad, PointQuantity, PointTensor,
-    Projection,
+    AssemblyInput, Domain, DomainError, DomainOutput, Field, NodalState, PointExtent, PointLoad, PointQuantity,
+    PointTensor, Projection,
 };
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
@@ -591,18 +591,17 @@ impl Domain for MpmDomain {
             .map(|p| (self.points.id[p], d2(&self.points.position[p]).sqrt()))
     }
 
-    fn point_extents(&self) -> Vec<([f64; 3], f64)> {
+    fn point_extents(&self) -> Vec<PointExtent> {
         let pts = &self.points;
         (0..pts.len())
             .map(|p| {
                 let x = pts.position[p];
-                let v = pts.volume[p];
-                let size = match self.formulation {
+                let size = |v: f64| match self.formulation {
                     Formulation::ThreeD => v.cbrt(),
                     Formulation::Axisymmetric => (v / (2.0 * std::f64::consts::PI * x[0].max(1e-300))).sqrt(),
                     _ => (v / self.thickness).sqrt(),
                 };
-                (x, size)
+                PointExtent { position: x, size: size(pts.volume[p]), initial_size: size(pts.initial_volume[p]) }
             })
             .collect()
     }

@@ -83,7 +83,7 @@
 
 use loam_fem::amplitude::Amplitude;
 use loam_fem::assembly::BlockLayout;
-use loam_fem::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NodalState, Projection};
+use loam_fem::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NodalState, PointExtent, Projection};
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
 
@@ -379,7 +379,7 @@ impl Domain for PenaltyBoundary {
         let mut points = Vec::new();
         if self.settings.contact {
             let segs = segments(&self.vertices);
-            for &(x, size) in &projection.points {
+            for &PointExtent { position: x, size, .. } in &projection.points {
                 let r = 0.5 * size;
                 // the nearest segment on whose span the point lies
                 let near = segs
@@ -577,7 +577,7 @@ mod tests {
         let n = [-0.4472135954999579, 0.8944271909999159];
         for (s, d) in [(0.6, 0.05), (1.2, 0.1), (1.8, 0.25)] {
             let x = [WALL[0][0] + s * 0.8944271909999159 + d * n[0], WALL[0][1] + s * 0.4472135954999579 + d * n[1]];
-            projection.points.push(([x[0], x[1], 0.0], 0.2));
+            projection.points.push(PointExtent::new([x[0], x[1], 0.0], 0.2));
         }
         (wall, projection)
     }

@@ -3,13 +3,16 @@
 //! column-collapse experiments report (Bui et al. 2008; Lube et al. 2005).
 //!
 //! Each point `p` at `(x_p, y_p)` with size `s_p` (side of the square of its current
-//! volume) covers `[x_p − s_p/2, x_p + s_p/2] × [y_p − s_p/2, y_p + s_p/2]`. The surface
-//! height above the base `y_b` at `x` is `h(x) = max_p (y_p + s_p/2) − y_b` over the points
-//! whose square covers `x`.
+//! volume) and initial size `s₀_p` covers `[x_p − s_p/2, x_p + s_p/2]` and stands up to
+//! `y_p + min(s_p, s₀_p)/2` (a point whose volume has grown spreads, it does not rise:
+//! [`PointExtent`]). The surface height above the base `y_b` at `x` is
+//! `h(x) = max_p (y_p + min(s_p, s₀_p)/2) − y_b` over the points that cover `x`.
 //!
 //! The inclination of a heap's flank ([`SurfaceProfile::slope_fit`]) is the least-squares
 //! line through `h(x)` sampled over the part of the flank between two fractions of the heap
 //! height, which leaves out the rounded crest and the toe.
+
+use loam_fem::domain::PointExtent;
 
 /// A straight line fitted to the free surface: `h(x) ≈ intercept + slope · x`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,13 +36,13 @@ pub struct SlopeFit {
 /// Material points as seen by the surface: positions and sizes.
 #[derive(Debug, Clone, Copy)]
 pub struct SurfaceProfile<'a> {
-    points: &'a [([f64; 3], f64)],
+    points: &'a [PointExtent],
     base: f64,
 }
 
 impl<'a> SurfaceProfile<'a> {
-    /// The surface of `points` (position, size) above the base line `y = base`.
-    pub fn new(points: &'a [([f64; 3], f64)], base: f64) -> Self {
+    /// The surface of `points` above the base line `y = base`.
+    pub fn new(points: &'a [PointExtent], base: f64) -> Self {
         Self { points, base }
     }
 
@@ -49,8 +52,8 @@ impl<'a> SurfaceProfile<'a> {
     pub fn height_at(&self, x: f64) -> f64 {
         self.points
             .iter()
-            .filter(|(p, s)| (p[0] - x).abs() <= 0.6 * s)
-            .map(|(p, s)| p[1] + 0.5 * s - self.base)
+            .filter(|p| (p.position[0] - x).abs() <= 0.6 * p.size)
+            .map(|p| p.position[1] + p.half_height() - self.base)
             .fold(0.0, f64::max)
     }
 
@@ -62,8 +65,8 @@ impl<'a> SurfaceProfile<'a> {
         let mut spans: Vec<(f64, f64, f64)> = self
             .points
             .iter()
-            .filter(|(p, s)| p[1] + 0.5 * s - self.base >= threshold && p[0] + 0.5 * s > wall)
-            .map(|(p, s)| (p[0] - 0.5 * s, p[0] + 0.5 * s, *s))
+            .filter(|p| p.position[1] + p.half_height() - self.base >= threshold && p.position[0] + 0.5 * p.size > wall)
+            .map(|p| (p.position[0] - 0.5 * p.size, p.position[0] + 0.5 * p.size, p.size))
             .collect();
         spans.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut reach = wall;
@@ -142,26 +145,38 @@ impl<'a> SurfaceProfile<'a> {
 mod tests {
     use super::*;
 
+    /// Unit points in columns i = 0..10 at x = 0.5 + i, 10 − i points high.
+    fn staircase() -> Vec<PointExtent> {
+        (0..10)
+            .flat_map(|i| (0..10 - i).map(move |j| PointExtent::new([0.5 + i as f64, 0.5 + j as f64, 0.0], 1.0)))
+            .collect()
+    }
+
     /// A triangle heap of unit-spaced points: height and runout are those of the staircase.
     #[test]
     fn staircase_heap() {
-        // columns i = 0..10 at x = 0.5 + i, heights 10 − i points
-        let mut pts = Vec::new();
-        for i in 0..10 {
-            for j in 0..(10 - i) {
-                pts.push(([0.5 + i as f64, 0.5 + j as f64, 0.0], 1.0));
-            }
-        }
+        let mut pts = staircase();
         let s = SurfaceProfile::new(&pts, 0.0);
         assert_eq!(s.height_at(0.0), 10.0);
         assert_eq!(s.height_at(3.5), 7.0);
         assert_eq!(s.runout(0.0, 0.5), 10.0);
         assert_eq!(s.runout(0.0, 3.0), 8.0);
         // a detached point far ahead does not extend the runout
-        pts.push(([20.5, 0.5, 0.0], 1.0));
+        pts.push(PointExtent::new([20.5, 0.5, 0.0], 1.0));
         assert_eq!(SurfaceProfile::new(&pts, 0.0).runout(0.0, 0.5), 10.0);
         let reference = [(2.5, 8.0), (4.5, 6.0)];
         assert!(SurfaceProfile::new(&pts, 0.0).rms_distance(&reference) < 1e-12);
+    }
+
+    /// A point whose volume has grown a hundredfold (size 10, initial size 1) at the toe of
+    /// a unit layer covers its current width but stands no higher than its packed size.
+    #[test]
+    fn dilated_point_spreads_without_rising() {
+        let mut pts: Vec<PointExtent> = (0..5).map(|i| PointExtent::new([0.5 + i as f64, 0.5, 0.0], 1.0)).collect();
+        pts.push(PointExtent { position: [10.0, 0.5, 0.0], size: 10.0, initial_size: 1.0 });
+        let s = SurfaceProfile::new(&pts, 0.0);
+        assert_eq!(s.height_at(8.0), 1.0);
+        assert_eq!(s.runout(0.0, 0.5), 15.0);
     }
 
     /// Points on a fine lattice filling a heap with a flat crest (height 1 for x < 1) and a
@@ -176,7 +191,7 @@ mod tests {
             let x = (i as f64 + 0.5) * s;
             let top = if x < 1.0 { 1.0 } else { (toe - x) * beta.tan() };
             for j in 0..(top / s).round() as usize {
-                pts.push(([x, (j as f64 + 0.5) * s, 0.0], s));
+                pts.push(PointExtent::new([x, (j as f64 + 0.5) * s, 0.0], s));
             }
         }
         let fit = SurfaceProfile::new(&pts, 0.0).slope_fit([0.0, toe + 0.1], 0.001, [0.2, 0.8]).expect("a flank");
@@ -187,12 +202,7 @@ mod tests {
         assert!((fit.x_span[0] - (1.0 + 0.2 / beta.tan())).abs() < 2.0 * s, "span {:?}", fit.x_span);
         assert!(fit.rms_residual < s, "residual {}", fit.rms_residual);
 
-        let mut stairs = Vec::new();
-        for i in 0..10 {
-            for j in 0..(10 - i) {
-                stairs.push(([0.5 + i as f64, 0.5 + j as f64, 0.0], 1.0));
-            }
-        }
+        let stairs = staircase();
         let fit = SurfaceProfile::new(&stairs, 0.0).slope_fit([0.0, 11.0], 0.01, [0.2, 0.8]).expect("a flank");
         assert!((fit.angle - 45.0).abs() < 1.0, "staircase angle {}", fit.angle);
         // nothing to fit on a bare base

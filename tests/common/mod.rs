@@ -96,3 +96,41 @@ pub fn force_history(sim: &Simulation, h: &History, name: &str) -> (f64, f64, bo
     let (i_peak, peak) = forces.iter().enumerate().fold((0, 0.0), |b, (i, &f)| if f > b.1 { (i, f) } else { b });
     (peak, *forces.last().unwrap(), i_peak < forces.len() * 9 / 10)
 }
+
+/// The checks of the Mohr–Coulomb strain-softening biaxial test (φ 30° → 20°, c 20 → 5 kPa,
+/// ψ 5° → 0°, unconfined), shared by the FEM and MPM runs: from the platen force history
+/// (`peak`, `end`, whether the peak is `interior`) and the [`localisation`] measures over
+/// the specimen's `unit`s (cells or points), prints the measured values against the
+/// references and asserts: the peak axial stress is the unconfined strength
+/// 2c cos φ/(1 − sin φ) = 69.28 kPa within 10 % (the weak corner lowers it); the force
+/// falls below 70 % of the peak but stays above the residual strength 14.28 kPa;
+/// κ_max ≥ 5 κ_mean with the band (κ > κ_max/2) under 15 % of the specimen; the band angle
+/// within 5° of Roscoe's range 45°–47.5°, below Coulomb's 55°–60°.
+pub fn check_mc_softening(label: &str, force: (f64, f64, bool), measures: (f64, f64, f64, f64), unit: &str) {
+    let ucs = |c: f64, phi: f64| 2.0 * c * phi.to_radians().cos() / (1.0 - phi.to_radians().sin());
+    let (peak_strength, residual_strength) = (ucs(20e3, 30.0), ucs(5e3, 20.0));
+    let (peak, end, interior) = force;
+    let (max, mean, share, angle) = measures;
+    println!("MC softening, {label}:");
+    println!(
+        "  peak axial stress {:.2} kPa (unconfined strength {:.2} kPa, {:+.1} %); at 50 mm {:.2} kPa = {:.0} % of \
+         the peak (residual strength {:.2} kPa)",
+        peak / 1e3,
+        peak_strength / 1e3,
+        100.0 * (peak / peak_strength - 1.0),
+        end / 1e3,
+        100.0 * end / peak,
+        residual_strength / 1e3
+    );
+    println!(
+        "  κ max {max:.3}, mean {mean:.4} (ratio {:.1}); band (κ > κ_max/2) {:.1} % of the {unit}; band angle \
+         {angle:.1}° (Roscoe 45°–47.5°, Coulomb 55°–60°)",
+        max / mean,
+        100.0 * share
+    );
+    assert!(interior, "the force peaks before the end");
+    assert!((peak / peak_strength - 1.0).abs() < 0.1, "peak near the unconfined strength");
+    assert!(end < 0.7 * peak && end > residual_strength, "softening towards, not below, the residual");
+    assert!(max >= 5.0 * mean && share < 0.15, "the strain localises");
+    assert!((40.0..=52.5).contains(&angle), "band angle {angle}° outside Roscoe ± 5°");
+}
