@@ -130,8 +130,8 @@ fn run_whole(case: Case, threads: usize) -> (Simulation, f64) {
 /// which single out points whose volume, and so their square on the surface, has grown.
 fn print_most_dilated(sim: &Simulation, n: usize) {
     let mut points: Vec<([f64; 3], f64, [f64; 4])> = Vec::new();
-    for d in &sim.model.domains {
-        let out = d.output(&sim.model.committed);
+    for named in sim.model.outputs(false) {
+        let out = named.output;
         let Some(f) = out.point_fields.iter().find(|f| f.name == "deformation_gradient") else { continue };
         for (p, x) in out.points.iter().enumerate() {
             let m = nalgebra::Matrix3::from_fn(|i, j| f.values[9 * p + 3 * i + j]);

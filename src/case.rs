@@ -46,8 +46,13 @@ pub struct Case {
     pub thickness: f64,
     /// Materials by name.
     pub materials: BTreeMap<String, MaterialSpec>,
-    /// Domains (FEM meshes); nodes at the same position are shared between domains.
+    /// Domains: FEM meshes (nodes at the same position are shared between FEM domains) and
+    /// MPM bodies (domains with identical grids share one grid).
     pub domains: Vec<DomainSpec>,
+    /// Interfaces between an MPM domain's grid (soil) and an FEM domain (structure), solved
+    /// in one Newton system with them; without one, an FEM mesh must not touch a grid.
+    #[serde(default)]
+    pub interfaces: Vec<InterfaceSpec>,
     /// Named node sets.
     #[serde(default)]
     pub regions: BTreeMap<String, RegionSpec>,
@@ -182,7 +187,7 @@ impl InitialVelocity {
 }
 
 /// A structured MPM background grid.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GridSpec {
     /// Lowest corner (m), one entry per coordinate.
@@ -240,7 +245,7 @@ pub enum MassMatrix {
 }
 
 /// A mesh: generated or read from a Gmsh file.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum MeshSpec {
     /// Structured rectangle.
@@ -293,12 +298,43 @@ pub enum RegionSpec {
         /// End point.
         to: Vec<f64>,
     },
+    /// Nodes on a polyline (points in order, each one entry per coordinate), e.g. the faces
+    /// of a structure that the soil touches.
+    Polyline(Vec<Vec<f64>>),
     /// The single node nearest to a point.
     Nearest(Vec<f64>),
     /// A Gmsh physical group by name.
     Group(String),
     /// Every node.
     All(bool),
+}
+
+/// An interface between soil (an MPM domain's grid) and a structure (an FEM domain):
+/// the boundary facets of the structure's mesh whose nodes all lie in `region`. The grid
+/// must have a node at every node of the interface (its cells inside the structure are
+/// removed); those nodes are shared (tied: soil and structure move together) or paired
+/// (slip: only the normal component is shared, the soil slides freely along the
+/// structure). At each step the grid follows the structure: interface nodes sit on it,
+/// grid nodes within `band` of it move by the harmonic extension of its displacement,
+/// the grid farther away stays in place.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InterfaceSpec {
+    /// Name (messages, `interface_force` monitors).
+    pub name: String,
+    /// The MPM domain whose grid is the soil side (every body on that grid is coupled).
+    pub soil: String,
+    /// The FEM domain on the structure side.
+    pub structure: String,
+    /// Region (a key of `regions`) selecting the structure's interface nodes.
+    pub region: String,
+    /// Frictionless: share only the normal component (default false: tied, no slip).
+    #[serde(default)]
+    pub slip: bool,
+    /// Width (m) of the band of grid nodes that moves with the structure (default 20 grid
+    /// cells).
+    #[serde(default)]
+    pub band: Option<f64>,
 }
 
 /// Prescribed displacement on a region.
@@ -767,15 +803,34 @@ pub enum MonitorSpec {
         #[serde(default, rename = "box")]
         within: Option<PointBox>,
     },
-    /// Total kinetic energy (J).
+    /// The force (N) that the soil exerts on the structure across an interface: minus the
+    /// soil's residual (internal force, weight and inertia of the soil's cells) summed over
+    /// the interface nodes. At rest it balances the structure's reactions and loads.
+    InterfaceForce {
+        /// Column name.
+        name: String,
+        /// Interface name.
+        interface: String,
+        /// Component.
+        component: Component,
+    },
+    /// Total kinetic energy (J), of every domain or of the domain (FEM domain or MPM body)
+    /// named `domain`.
     KineticEnergy {
         /// Column name.
         name: String,
+        /// Domain or body (default: all).
+        #[serde(default)]
+        domain: Option<String>,
     },
-    /// Total stored work of internal forces (J): the strain energy for elastic laws.
+    /// Total stored work of internal forces (J): the strain energy for elastic laws; of
+    /// every domain or of the domain (FEM domain or MPM body) named `domain`.
     StrainEnergy {
         /// Column name.
         name: String,
+        /// Domain or body (default: all).
+        #[serde(default)]
+        domain: Option<String>,
     },
 }
 
@@ -795,8 +850,9 @@ impl MonitorSpec {
             | MonitorSpec::WallForce { name, .. }
             | MonitorSpec::MaterialVolume { name, .. }
             | MonitorSpec::MaterialMass { name, .. }
-            | MonitorSpec::KineticEnergy { name }
-            | MonitorSpec::StrainEnergy { name } => name,
+            | MonitorSpec::InterfaceForce { name, .. }
+            | MonitorSpec::KineticEnergy { name, .. }
+            | MonitorSpec::StrainEnergy { name, .. } => name,
         }
     }
 }

@@ -78,6 +78,18 @@ fn main() -> ExitCode {
                     sim.total_steps(),
                     sim.monitor_names().join(", ")
                 );
+                let measure = if sim.model.dim == 2 { ("length", "m") } else { ("area", "m²") };
+                for i in &sim.interfaces {
+                    println!(
+                        "  interface '{}': {}, {} nodes, {} {:.6} {}",
+                        i.name,
+                        if i.slip { "frictionless slip" } else { "tied" },
+                        i.nodes,
+                        measure.0,
+                        i.measure,
+                        measure.1
+                    );
+                }
                 ExitCode::SUCCESS
             }
             Err(e) => bad_input(&e),
@@ -166,8 +178,17 @@ fn run_case(case: &std::path::Path, out: Option<PathBuf>, quiet: bool) -> ExitCo
             } else {
                 String::new()
             };
+            let blocks = if sim.is_coupled() {
+                let b = sim.stats.max_block_residuals;
+                format!(
+                    "; largest converged residual per block: soil {:.2e}, interface {:.2e}, structure {:.2e}",
+                    b.soil, b.interface, b.structure
+                )
+            } else {
+                String::new()
+            };
             let summary = format!(
-                "{} steps, {} Newton iterations, {} step cuts, wall time {:.2} s (assembly {:.2} s, factorisation {:.2} s, solve {:.2} s{gmres})",
+                "{} steps, {} Newton iterations, {} step cuts, wall time {:.2} s (assembly {:.2} s, factorisation {:.2} s, solve {:.2} s{gmres}){blocks}",
                 sim.stats.steps, sim.stats.iterations, sim.stats.cuts, wall, t.assembly, t.factorisation, t.solve
             );
             match end {

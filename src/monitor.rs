@@ -73,8 +73,19 @@ pub enum MonitorKind {
     },
     /// Sum of the forces a penalty wall exerts on the bodies.
     WallForce {
-        /// Index of the wall's domain.
+        /// Index of the domain (grid) holding the wall.
         domain: usize,
+        /// The wall's name.
+        wall: String,
+        /// Component index.
+        component: Option<usize>,
+    },
+    /// Force of the soil on the structure across an interface: the model's soil forces
+    /// summed over the interface's nodes.
+    InterfaceForce {
+        /// Global nodes where the soil's force acts (the shared nodes, or the soil's
+        /// partners of a slip interface).
+        nodes: Vec<usize>,
         /// Component index.
         component: Option<usize>,
     },
@@ -92,10 +103,16 @@ pub enum MonitorKind {
         /// Upper corner of the box.
         max: Vec<f64>,
     },
-    /// Total kinetic energy.
-    KineticEnergy,
-    /// Total stored work of internal forces.
-    StrainEnergy,
+    /// Kinetic energy, total or of one domain (index, name of the domain or body).
+    KineticEnergy {
+        /// `None`: every domain.
+        domain: Option<(usize, String)>,
+    },
+    /// Stored work of internal forces, total or of one domain.
+    StrainEnergy {
+        /// `None`: every domain.
+        domain: Option<(usize, String)>,
+    },
 }
 
 /// A named monitor.
@@ -159,9 +176,18 @@ impl Monitor {
                     f64::NAN // every point left the grid and was erased
                 }
             }
-            MonitorKind::WallForce { domain, component } => {
-                let f = model.domains[*domain].wall_force().unwrap_or([f64::NAN; 3]);
+            MonitorKind::WallForce { domain, wall, component } => {
+                let f = model.domains[*domain].wall_force(wall).unwrap_or([f64::NAN; 3]);
                 pick(&f, dim, 0, *component)
+            }
+            MonitorKind::InterfaceForce { nodes, component } => {
+                let mut sum = [0.0; 3];
+                for &n in nodes {
+                    for (c, v) in sum.iter_mut().enumerate().take(dim) {
+                        *v += model.soil_forces[n * dim + c];
+                    }
+                }
+                pick(&sum, dim, 0, *component)
             }
             MonitorKind::MaterialVolume { min, max } => {
                 model.domains.iter().map(|d| d.points_volume_mass(min, max).0).sum()
@@ -169,8 +195,14 @@ impl Monitor {
             MonitorKind::MaterialMass { min, max } => {
                 model.domains.iter().map(|d| d.points_volume_mass(min, max).1).sum()
             }
-            MonitorKind::KineticEnergy => model.kinetic_energy(),
-            MonitorKind::StrainEnergy => model.strain_energy(),
+            MonitorKind::KineticEnergy { domain: None } => model.kinetic_energy(),
+            MonitorKind::StrainEnergy { domain: None } => model.strain_energy(),
+            MonitorKind::KineticEnergy { domain: Some((k, name)) } => {
+                model.domains[*k].energies(name, &model.committed.v).map_or(f64::NAN, |e| e.0)
+            }
+            MonitorKind::StrainEnergy { domain: Some((k, name)) } => {
+                model.domains[*k].energies(name, &model.committed.v).map_or(f64::NAN, |e| e.1)
+            }
         }
     }
 }

@@ -44,8 +44,14 @@ pub fn run(sim: &mut Simulation, out_dir: &Path, progress: bool) -> std::io::Res
                 } else {
                     sim.step as u64
                 });
+                let blocks = if sim.is_coupled() {
+                    let b = s.block_residual;
+                    format!(" (soil {:.1e}, interface {:.1e}, structure {:.1e})", b.soil, b.interface, b.structure)
+                } else {
+                    String::new()
+                };
                 bar.set_message(format!(
-                    "t = {:.4e} s  Δt {:.2e}  Newton {}{}  residual {:.2e}",
+                    "t = {:.4e} s  Δt {:.2e}  Newton {}{}  residual {:.2e}{blocks}",
                     sim.time(),
                     s.last_time_step,
                     s.iterations,

@@ -6,7 +6,9 @@
 
 use std::path::Path;
 
+use loam_coupling::interface::InterfaceSummary;
 use loam_fem::amplitude::Amplitude;
+use loam_fem::convergence::BlockNorms;
 use loam_fem::model::{Model, PhaseTimings, StepError};
 
 use crate::case::{Case, CaseError};
@@ -61,6 +63,8 @@ pub struct RunStats {
     pub cuts: usize,
     /// Accumulated phase timings.
     pub timings: PhaseTimings,
+    /// Largest converged residual per block (soil, interface, structure) over the run.
+    pub max_block_residuals: BlockNorms,
 }
 
 /// What one call to [`Simulation::step`] did.
@@ -76,6 +80,8 @@ pub struct StepSummary {
     pub last_iterations: usize,
     /// Length of the last sub-step (s).
     pub last_time_step: f64,
+    /// Converged residual per block (soil, interface, structure) of the last sub-step.
+    pub block_residual: BlockNorms,
 }
 
 /// A case being run.
@@ -99,6 +105,8 @@ pub struct Simulation {
     pub input_values: Vec<Option<f64>>,
     /// Named outputs (`fmu.outputs`, or every monitor) in declaration order.
     pub outputs: Vec<ModelOutput>,
+    /// The interfaces between soil and structures.
+    pub interfaces: Vec<InterfaceSummary>,
     /// Length of the next step taken by [`Simulation::step`] (the case's `time_step`, or
     /// what adaptive step control made of it).
     pub time_step: f64,
@@ -130,6 +138,7 @@ impl Simulation {
             input_values: vec![None; built.inputs.len()],
             inputs: built.inputs,
             outputs: built.outputs,
+            interfaces: built.interfaces,
             time_step: case_time_step,
             peak_kinetic_energy: 0.0,
             rest_since: None,
@@ -218,6 +227,11 @@ impl Simulation {
         (self.end_time() / self.case.analysis.time_step - 1e-9).ceil() as usize
     }
 
+    /// Whether the model couples soil and structures (its Newton log has several blocks).
+    pub fn is_coupled(&self) -> bool {
+        !self.interfaces.is_empty()
+    }
+
     /// Monitor names, in column order.
     pub fn monitor_names(&self) -> Vec<&str> {
         self.monitors.iter().map(|m| m.name.as_str()).collect()
@@ -301,16 +315,20 @@ impl Simulation {
                     summary.residual = report.residuals.last().copied().unwrap_or(0.0);
                     summary.last_iterations = report.iterations;
                     summary.last_time_step = h;
+                    summary.block_residual = report.block_residuals.last().copied().unwrap_or_default();
+                    self.stats.max_block_residuals = self.stats.max_block_residuals.max(summary.block_residual);
                     self.stats.steps += 1;
                     self.stats.iterations += report.iterations;
                     self.stats.timings += report.timings;
                 }
                 Err(source) => {
-                    // fixed steps: at most `max_step_cuts` halvings; adaptive: down to `min_time_step`
-                    let exhausted = match self.case.analysis.adaptive {
-                        Some(a) => h / 2.0 < a.min_time_step * (1.0 - 1e-9),
-                        None => cuts >= self.case.analysis.max_step_cuts,
-                    };
+                    // fixed steps: at most `max_step_cuts` halvings; adaptive: down to
+                    // `min_time_step`; none where a shorter step cannot help
+                    let exhausted = !source.is_retryable()
+                        || match self.case.analysis.adaptive {
+                            Some(a) => h / 2.0 < a.min_time_step * (1.0 - 1e-9),
+                            None => cuts >= self.case.analysis.max_step_cuts,
+                        };
                     if exhausted {
                         return Err(RunError { step: self.step + 1, time: self.time(), time_step: h, cuts, source });
                     }

@@ -19,7 +19,7 @@ use loam::simulation::Simulation;
 /// Per cell of domain `k`: centre (reference configuration) and the values of cell field
 /// `name` (`components` per cell).
 fn cell_field(sim: &Simulation, k: usize, name: &str) -> (Vec<[f64; 2]>, Vec<f64>) {
-    let out = sim.model.domains[k].output(&sim.model.committed);
+    let out = sim.model.output(&sim.case.domains[k].name).expect("the domain's output");
     let (element, conn) = out.cells.as_ref().expect("a mesh");
     let nn = element.num_nodes();
     let centres = conn

@@ -22,7 +22,7 @@ use loam::simulation::Simulation;
 /// Reference positions `X = x − u` of the material points of domain `k` and the values of
 /// their field `name` (`components` per point).
 fn point_field(sim: &Simulation, k: usize, name: &str) -> (Vec<[f64; 2]>, Vec<f64>) {
-    let out = sim.model.domains[k].output(&sim.model.committed);
+    let out = sim.model.output(&sim.case.domains[k].name).expect("the domain's output");
     let field =
         |n: &str| &out.point_fields.iter().find(|f| f.name == n).unwrap_or_else(|| panic!("point field {n}")).values;
     let u = field("displacement");

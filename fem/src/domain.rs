@@ -125,53 +125,6 @@ impl PointExtent {
     }
 }
 
-/// Point-to-grid projection of one step, summed over the particle domains:
-/// `m_I = Σ_p N_I m_p`, `(m v)_I = Σ_p N_I m_p v_p`, `(m a)_I = Σ_p N_I m_p a_p`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Projection {
-    /// Components per node.
-    pub dim: usize,
-    /// Whether the node is a grid node (reset to its reference position every step).
-    pub reset: Vec<bool>,
-    /// Nodal mass.
-    pub mass: Vec<f64>,
-    /// Nodal momentum (per DOF).
-    pub momentum: Vec<f64>,
-    /// Nodal mass-weighted acceleration (per DOF).
-    pub inertia: Vec<f64>,
-    /// Position and size of every projected particle (see [`Domain::point_extents`]), for
-    /// conditions that act where the material is (penalty contact walls).
-    pub points: Vec<PointExtent>,
-}
-
-impl Projection {
-    /// Empty projection for `num_nodes` nodes.
-    pub fn new(num_nodes: usize, dim: usize) -> Self {
-        Self {
-            dim,
-            reset: vec![false; num_nodes],
-            mass: vec![0.0; num_nodes],
-            momentum: vec![0.0; num_nodes * dim],
-            inertia: vec![0.0; num_nodes * dim],
-            points: Vec::new(),
-        }
-    }
-
-    /// Grid reset: for every marked node `u = 0`, `v = (m v)/m`, `a = (m a)/m` (0 where no
-    /// mass was projected).
-    pub fn apply(&self, committed: &mut NodalState) {
-        for (n, _) in self.reset.iter().enumerate().filter(|(_, r)| **r) {
-            for i in 0..self.dim {
-                let dof = n * self.dim + i;
-                let m = self.mass[n];
-                committed.u[dof] = 0.0;
-                committed.v[dof] = if m > 0.0 { self.momentum[dof] / m } else { 0.0 };
-                committed.a[dof] = if m > 0.0 { self.inertia[dof] / m } else { 0.0 };
-            }
-        }
-    }
-}
-
 /// Vector quantities of tracked points.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PointQuantity {
@@ -207,6 +160,15 @@ pub struct PointLoad {
     pub amplitude: crate::amplitude::Amplitude,
 }
 
+/// One output of a domain for VTK files, written as `<name>.pvd` / `<name>_<step>.vtu`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NamedOutput {
+    /// File stem: the domain's (or body's, wall's) name; `<domain>_grid` for a background grid.
+    pub name: String,
+    /// Geometry and fields.
+    pub output: DomainOutput,
+}
+
 /// A contributor of element blocks to the global system.
 pub trait Domain: Send + Sync {
     /// The domain's name from the case file.
@@ -215,22 +177,35 @@ pub trait Domain: Send + Sync {
     /// Kinematic formulation (all domains of a model share one).
     fn formulation(&self) -> Formulation;
 
-    /// Initialisation phase of a step, before any assembly: particle domains locate their
-    /// points, mark their grid nodes for reset and add their points' mass, momentum and
-    /// mass-weighted acceleration to `projection` (summed over all domains sharing a grid),
-    /// and return `true` if their element blocks changed (which rebuilds the sparsity
-    /// pattern). Mesh domains do nothing.
-    fn begin_step(&mut self, _projection: &mut Projection) -> bool {
-        false
+    /// Out-of-plane thickness (plane problems; 1 otherwise).
+    fn thickness(&self) -> f64;
+
+    /// Initialisation phase of a step, before any assembly. Particle domains move their
+    /// background grid with the structure attached to it, reset their grid nodes in
+    /// `committed` (displacement to the grid's own motion, velocity and acceleration
+    /// projected from the material points; interface nodes keep the structure's state),
+    /// locate and project their points, and return `true` if their element blocks changed
+    /// (which rebuilds the sparsity pattern). Mesh domains do nothing. An error here is not
+    /// cured by a shorter step (the committed state decides it).
+    fn begin_step(&mut self, _committed: &mut NodalState) -> Result<bool, DomainError> {
+        Ok(false)
     }
 
-    /// After every domain's [`Domain::begin_step`], before any assembly: the projection
-    /// summed over all domains (e.g. the nodal mass of every body on a shared grid).
-    fn end_projection(&mut self, _projection: &Projection) {}
+    /// Whether this domain is soil (material points on a background grid): its residual at
+    /// interface nodes is the force the soil exerts on the structure.
+    fn is_soil(&self) -> bool {
+        false
+    }
 
     /// The tracked point (material point) nearest to `x`: its id and distance. Mesh
     /// domains have none.
     fn nearest_point(&self, _x: &[f64]) -> Option<(usize, f64)> {
+        None
+    }
+
+    /// Ids of the tracked points of the body named `name` in this domain (a contiguous
+    /// range), if it has one.
+    fn point_set(&self, _name: &str) -> Option<std::ops::Range<usize>> {
         None
     }
 
@@ -270,15 +245,9 @@ pub trait Domain: Send + Sync {
         false
     }
 
-    /// Sum of the forces (N) a wall (a penalty boundary) exerted on the bodies in the last
-    /// converged step; `None` for domains that are not walls.
-    fn wall_force(&self) -> Option<[f64; 3]> {
-        None
-    }
-
-    /// The background grid for output at the committed state (particle domains; `None`
-    /// for meshes, whose output is already the mesh).
-    fn grid_output(&self, _committed: &NodalState) -> Option<DomainOutput> {
+    /// Sum of the forces (N) that the wall (a penalty boundary) named `wall` exerted on the
+    /// bodies in the last converged step; `None` if this domain has no such wall.
+    fn wall_force(&self, _wall: &str) -> Option<[f64; 3]> {
         None
     }
 
@@ -304,17 +273,22 @@ pub trait Domain: Send + Sync {
     /// Stored work of the internal forces (strain energy for elastic laws), committed.
     fn strain_energy(&self) -> f64;
 
+    /// Kinetic and stored energy of the part of this domain named `name` (the domain
+    /// itself, or one of its bodies), if it has one.
+    fn energies(&self, name: &str, v: &[f64]) -> Option<(f64, f64)> {
+        (name == self.name()).then(|| (self.kinetic_energy(v), self.strain_energy()))
+    }
+
     /// Boundary facets (global node ids, outward orientation) for surface loads.
     fn boundary_facets(&self) -> Vec<Vec<usize>>;
-
-    /// Out-of-plane thickness (plane problems; 1 otherwise).
-    fn thickness(&self) -> f64;
 
     /// Receives the consistent initial acceleration `a₀` (full DOF vector) computed by
     /// [`crate::model::Model::initialise_acceleration`]; particle domains interpolate it to
     /// their points. Mesh domains need nothing (the model holds nodal accelerations).
     fn accept_initial_acceleration(&mut self, _a: &[f64]) {}
 
-    /// Geometry and fields for output at the committed state.
-    fn output(&self, committed: &NodalState) -> DomainOutput;
+    /// Geometry and fields for output at the committed state: the mesh of an FEM domain;
+    /// the material points of each body, the points of each penalty wall and, with
+    /// `with_grid`, the background grid of a particle domain.
+    fn outputs(&self, committed: &NodalState, with_grid: bool) -> Vec<NamedOutput>;
 }

@@ -219,6 +219,29 @@ impl ElementType {
         jac
     }
 
+    /// Local coordinates of node `a` of the reference element.
+    pub fn node_local(self, a: usize) -> [f64; 3] {
+        match self {
+            ElementType::Tri3 => [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]][a],
+            ElementType::Tet4 => [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]][a],
+            ElementType::Quad4 => [QUAD_NODES[a][0], QUAD_NODES[a][1], 0.0],
+            ElementType::Hex8 => HEX_NODES[a],
+        }
+    }
+
+    /// The smallest `det J` of the isoparametric map at the element's nodes: positive for a
+    /// cell that is not inverted (for the multilinear quad and hex, positive at the corners
+    /// means positive throughout the 2D cell, and is the usual practical test in 3D).
+    pub fn min_corner_det_j(self, coords: &[[f64; 3]]) -> f64 {
+        let mut dn = [[0.0; 3]; MAX_NODES];
+        (0..self.num_nodes())
+            .map(|a| {
+                self.shape_gradients(&self.node_local(a), &mut dn);
+                self.jacobian(coords, &dn).determinant()
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// Centre of the reference element.
     pub fn centroid_local(self) -> [f64; 3] {
         match self {

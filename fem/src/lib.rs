@@ -4,13 +4,15 @@
 //! kernels that do not know who owns their integration points. An FEM mesh passes Gauss
 //! points to [`kernel::solid_element`], an MPM grid passes material points; both fill
 //! element blocks that one lock-free gather ([`assembly`]) adds into one sparse system
-//! solved by one Newton loop ([`model::Model::solve_step`]). Coupling MPM and FEM is then
+//! solved by one Newton loop ([`newton::NewtonStrategy`], driven by [`model::Model::solve_step`]). Coupling MPM and FEM is then
 //! assembly over shared nodes, not a special solver.
 
 #![allow(non_snake_case)]
 
 pub mod amplitude;
+pub mod assembler;
 pub mod assembly;
+pub mod convergence;
 pub mod dofs;
 pub mod domain;
 pub mod element;
@@ -22,6 +24,7 @@ pub mod linear_solver;
 pub mod loads;
 pub mod mesh;
 pub mod model;
+pub mod newton;
 pub mod scheme;
 pub mod slip;
 pub mod solid_domain;

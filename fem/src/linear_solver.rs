@@ -308,6 +308,37 @@ impl LinearSolver {
     }
 }
 
+/// A Cholesky factorisation kept for repeated solves with one symmetric positive definite
+/// matrix (e.g. the graph Laplacian of a grid's mesh motion, factorised once per grid).
+pub struct CholeskyFactor {
+    state: CholeskyState,
+}
+
+impl CholeskyFactor {
+    /// Factorises the matrix with nonzeros `values` on `pattern` (its lower triangle is read).
+    pub fn new(pattern: &AssemblyPattern, values: &[f64]) -> Result<Self, LinearSolverError> {
+        let mut solver = LinearSolver::new(LinearSolverKind::Cholesky);
+        if pattern.num_equations() == 0 {
+            return Err(LinearSolverError::Factorisation("no equation".into()));
+        }
+        if !solver.factorise_cholesky(pattern, values)? {
+            return Err(LinearSolverError::Factorisation("Cholesky failed: matrix not positive definite".into()));
+        }
+        Ok(Self { state: solver.llt.take().expect("factorised") })
+    }
+
+    /// Overwrites `x` with `A⁻¹ x`.
+    pub fn solve_in_place(&mut self, x: &mut [f64]) {
+        self.state.solve_in_place(x);
+    }
+}
+
+impl std::fmt::Debug for CholeskyFactor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CholeskyFactor").finish_non_exhaustive()
+    }
+}
+
 /// Supernodal Cholesky unless `LOAM_CHOLESKY=simplicial` (or `auto`: faer's flop-ratio
 /// heuristic). faer's heuristic picks the simplicial factorisation for these 2D FEM/MPM
 /// matrices, which was 1.4–2.3× slower than the supernodal one from about 1 000

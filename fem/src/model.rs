@@ -1,82 +1,34 @@
 //! A model: nodes, domains, constraints and loads on one DOF map, and the implicit step.
 //!
-//! One step from `t_n` to `t_{n+1} = t_n + Δt` (Newton–Raphson, as in Kratos' residual-based
-//! Newton strategy): displacement predictor `u = u_n` with prescribed values at `t_{n+1}`;
-//! then repeat — every domain fills its element blocks, the gather forms
-//! `R = f_int − f_body + M ã − f_ext` and the tangent `K_t + c_M M`, the sparse system
-//! `K δu = −R` is solved, `u ← u + δu` and the scheme updates `v`, `a` — until the
-//! convergence criterion holds. Only then do domains commit their histories.
+//! One step from `t_n` to `t_{n+1} = t_n + Δt` ([`Model::solve_step`]) is the seed's three
+//! phases, each in one place:
+//!
+//! 1. **initialisation** ([`Model::begin_step`]): every domain prepares the step; particle
+//!    domains move their grid with any structure attached to it, locate their material
+//!    points, project them to the grid and reset its nodes (the node roles of the DOF map
+//!    say which nodes are reset); a changed set of element blocks rebuilds the
+//!    [`Assembler`];
+//! 2. **updated-Lagrangian phase**: the predictor `u = u_n` with prescribed values at
+//!    `t_{n+1}` and the time scheme's `v`, `a`; then the [`NewtonStrategy`] iterates with the
+//!    assembler and the convergence criteria until `R(u) = 0`;
+//! 3. **convective phase** ([`Model::commit_step`]): reactions and the soil's forces on the
+//!    structure are recorded and every domain commits its histories (material points move).
+//!
+//! A failed step leaves the committed state as it was.
 
 use std::time::Instant;
 
-use serde::Deserialize;
-
 use crate::amplitude::Amplitude;
-use crate::assembly::{AssemblyPattern, BlockLayout};
-use crate::dofs::{DofMap, CONSTRAINED};
-use crate::domain::{AssemblyInput, Domain, DomainError, NodalState, Projection};
-use crate::linear_solver::{LinearSolver, LinearSolverError, LinearSolverKind, SolverTimings};
+use crate::assembler::{Assembler, SystemLayout};
+use crate::convergence::BlockNorms;
+pub use crate::convergence::ConvergenceCriterion;
+use crate::dofs::{DofTie, NodeRole};
+use crate::domain::{AssemblyInput, Domain, DomainError, NamedOutput, NodalState};
+use crate::linear_solver::{LinearSolverError, SolverTimings};
+pub use crate::newton::NewtonSettings;
+use crate::newton::{assembly_input, NewtonStrategy, StepProblem};
 use crate::scheme::TimeScheme;
-use crate::slip::{Slip, SlipRotations};
-
-/// Which norms decide convergence.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ConvergenceCriterion {
-    /// Residual only.
-    Residual,
-    /// Displacement increment only.
-    Displacement,
-    /// Both (the default).
-    #[default]
-    And,
-    /// Either.
-    Or,
-}
-
-/// Newton–Raphson settings, as in the case file's `solver` object.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct NewtonSettings {
-    /// Largest number of iterations per step (default 20).
-    pub max_iterations: usize,
-    /// `‖R_k‖ / ‖R_0‖` below which the residual has converged (default 1e-6).
-    pub residual_relative_tolerance: f64,
-    /// `‖R_k‖` (N) below which the residual has converged (default 1e-9).
-    pub residual_absolute_tolerance: f64,
-    /// `‖δu‖ / ‖Δu‖` (increment of this iteration vs of the step) (default 1e-6).
-    pub displacement_relative_tolerance: f64,
-    /// `‖δu‖` (m) below which the displacement has converged (default 1e-12).
-    pub displacement_absolute_tolerance: f64,
-    /// Combination of the two criteria (default `and`).
-    pub convergence_criterion: ConvergenceCriterion,
-    /// Direct solver (default `auto`: Cholesky if symmetric, else LU).
-    pub linear_solver: LinearSolverKind,
-    /// Backtracking line search (default off): when an iteration raises the residual norm
-    /// above the previous one, the Newton correction is halved, up to
-    /// `line_search_max_cuts` times, until the residual falls (Armijo-type backtracking on
-    /// `‖R‖`, e.g. Wriggers, *Nonlinear Finite Element Methods*, §5.1.3). Cures the
-    /// two-state cycling of non-smooth returns (Mohr–Coulomb edges and apex).
-    pub line_search: bool,
-    /// Halvings tried per iteration by the line search (default 4).
-    pub line_search_max_cuts: u32,
-}
-
-impl Default for NewtonSettings {
-    fn default() -> Self {
-        Self {
-            max_iterations: 20,
-            residual_relative_tolerance: 1e-6,
-            residual_absolute_tolerance: 1e-9,
-            displacement_relative_tolerance: 1e-6,
-            displacement_absolute_tolerance: 1e-12,
-            convergence_criterion: ConvergenceCriterion::And,
-            linear_solver: LinearSolverKind::Auto,
-            line_search: false,
-            line_search_max_cuts: 4,
-        }
-    }
-}
+use crate::slip::Slip;
 
 /// Prescribed displacements `u = value · amplitude(t)` on a set of DOFs.
 #[derive(Debug, Clone, PartialEq)]
@@ -107,6 +59,13 @@ pub struct Load {
     pub amplitude: Amplitude,
 }
 
+impl StepError {
+    /// Whether a shorter step may succeed where this one failed.
+    pub fn is_retryable(&self) -> bool {
+        !matches!(self, StepError::StepStart(_))
+    }
+}
+
 /// Why a step failed.
 #[derive(Debug, Clone, thiserror::Error, PartialEq)]
 pub enum StepError {
@@ -121,6 +80,10 @@ pub enum StepError {
     /// An element failed (e.g. inverted).
     #[error(transparent)]
     Domain(#[from] DomainError),
+    /// The initialisation phase failed (e.g. the motion of a grid attached to a structure
+    /// inverts a cell): a shorter step does not help, the committed state decides it.
+    #[error("at the start of the step: {0}")]
+    StepStart(DomainError),
     /// The linear solve failed.
     #[error(transparent)]
     LinearSolver(#[from] LinearSolverError),
@@ -186,44 +149,12 @@ pub struct StepReport {
     pub iterations: usize,
     /// Free-DOF residual norm at each iteration, the last one converged.
     pub residuals: Vec<f64>,
+    /// Residual norms per block (soil, interface, structure) at each iteration.
+    pub block_residuals: Vec<BlockNorms>,
+    /// Correction norms `‖δu‖` per block at each solve.
+    pub block_corrections: Vec<BlockNorms>,
     /// Phase timings of this step.
     pub timings: PhaseTimings,
-}
-
-struct Workspace {
-    dofs: DofMap,
-    pattern: AssemblyPattern,
-    domain_matrix: Vec<usize>,
-    domain_vector: Vec<usize>,
-    matrices: Vec<f64>,
-    vectors: Vec<f64>,
-    values: Vec<f64>,
-    residual: Vec<f64>,
-    rhs: Vec<f64>,
-    delta: Vec<f64>,
-    slip: SlipRotations,
-    solver: LinearSolver,
-}
-
-impl Workspace {
-    /// Every domain fills its part of the element buffers.
-    fn assemble_domains(
-        &mut self,
-        domains: &mut [Box<dyn Domain>],
-        input: &AssemblyInput<'_>,
-    ) -> Result<(), DomainError> {
-        let mut mats = self.matrices.as_mut_slice();
-        let mut vecs = self.vectors.as_mut_slice();
-        for (k, d) in domains.iter_mut().enumerate() {
-            let (m, rest_m) = mats.split_at_mut(self.domain_matrix[k + 1] - self.domain_matrix[k]);
-            let (v, rest_v) = vecs.split_at_mut(self.domain_vector[k + 1] - self.domain_vector[k]);
-            d.assemble(input, m, v)?;
-            mats = rest_m;
-            vecs = rest_v;
-        }
-        self.slip.rotate_blocks(&mut self.matrices, &mut self.vectors);
-        Ok(())
-    }
 }
 
 /// Seconds of one [`Model::assemble_only`], by half.
@@ -241,6 +172,8 @@ pub struct Model {
     pub dim: usize,
     /// Reference coordinates of the global nodes.
     pub coords: Vec<[f64; 3]>,
+    /// Role of every node (grid, structure, interface).
+    pub roles: Vec<NodeRole>,
     /// Domains on the shared node set.
     pub domains: Vec<Box<dyn Domain>>,
     /// Prescribed displacements.
@@ -249,6 +182,10 @@ pub struct Model {
     pub loads: Vec<Load>,
     /// Frictionless slip conditions (local rotation of the nodal DOFs).
     pub slips: Vec<Slip>,
+    /// Local frames without constraint (the nodes of slip interfaces).
+    pub frames: Vec<Slip>,
+    /// DOFs that share one equation (the normal components of slip-interface pairs).
+    pub ties: Vec<DofTie>,
     /// Gravity (m/s²) and its time function.
     pub gravity: ([f64; 3], Amplitude),
     /// Time scheme.
@@ -263,24 +200,26 @@ pub struct Model {
     pub time: f64,
     /// Reactions (full DOF vector; nonzero at constrained DOFs) of the committed state.
     pub reactions: Vec<f64>,
-    workspace: Option<Workspace>,
-}
-
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+    /// Force (N) that the soil domains exert on the nodes they share with a structure, at
+    /// the committed state (full DOF vector, global frame; 0 at nodes only the soil has).
+    pub soil_forces: Vec<f64>,
+    assembler: Option<Assembler>,
 }
 
 impl Model {
-    /// A model over `coords` with `dim` DOFs per node and no domains yet.
+    /// A model over `coords` with `dim` DOFs per node, all structure nodes, and no domains yet.
     pub fn new(dim: usize, coords: Vec<[f64; 3]>, scheme: TimeScheme, settings: NewtonSettings) -> Self {
         let n = coords.len() * dim;
         Self {
             dim,
+            roles: vec![NodeRole::Structure; coords.len()],
             coords,
             domains: Vec::new(),
             constraints: Vec::new(),
             loads: Vec::new(),
             slips: Vec::new(),
+            frames: Vec::new(),
+            ties: Vec::new(),
             gravity: ([0.0; 3], Amplitude::default()),
             scheme,
             settings,
@@ -288,7 +227,8 @@ impl Model {
             committed: NodalState::zeros(n),
             time: 0.0,
             reactions: vec![0.0; n],
-            workspace: None,
+            soil_forces: vec![0.0; n],
+            assembler: None,
         }
     }
 
@@ -299,75 +239,91 @@ impl Model {
 
     /// Number of equations (after [`Model::prepare`]).
     pub fn num_equations(&self) -> usize {
-        self.workspace.as_ref().map_or(0, |w| w.dofs.num_equations())
+        self.assembler.as_ref().map_or(0, |a| a.dofs().num_equations())
     }
 
     /// Number of nonzeros of the global matrix (after [`Model::prepare`]).
     pub fn nnz(&self) -> usize {
-        self.workspace.as_ref().map_or(0, |w| w.pattern.nnz())
+        self.assembler.as_ref().map_or(0, |a| a.nnz())
     }
 
     /// Forgets the sparsity pattern (after a change of domains or constraints).
     pub fn invalidate_pattern(&mut self) {
-        self.workspace = None;
+        self.assembler = None;
     }
 
-    /// Builds the DOF map, the element-buffer layout and the sparsity pattern, if needed.
+    /// Builds the assembler (DOF map, element-buffer layout, sparsity pattern), if needed.
     pub fn prepare(&mut self) {
-        if self.workspace.is_some() {
+        if self.assembler.is_some() {
             return;
         }
-        let mut constrained = vec![false; self.num_dofs()];
+        let mut prescribed = vec![false; self.num_dofs()];
         for c in &self.constraints {
             for &d in &c.dofs {
-                constrained[d] = true;
+                prescribed[d] = true;
             }
         }
-        let mut layout = BlockLayout::default();
-        let mut domain_matrix = vec![0];
-        let mut domain_vector = vec![0];
-        for d in &self.domains {
-            d.blocks(&mut layout);
-            domain_matrix.push(layout.matrix_len());
-            domain_vector.push(layout.vector_len());
-        }
-        // nodes no block touches carry no equation
-        let mut touched = vec![false; self.num_dofs()];
-        for &g in &layout.dofs {
-            touched[g] = true;
-        }
-        for (c, t) in constrained.iter_mut().zip(&touched) {
-            *c |= !t;
-        }
-        let dirichlet = constrained.clone();
-        let dim = self.dim;
-        let slip = SlipRotations::new(dim, &self.slips, &layout, |n| (0..dim).any(|i| dirichlet[n * dim + i]));
-        for d in slip.normal_dofs() {
-            constrained[d] = true;
-        }
-        let dofs = DofMap::new(self.dim, &constrained);
-        let pattern = AssemblyPattern::new(&dofs, &layout);
-        let n_eq = dofs.num_equations();
-        self.workspace = Some(Workspace {
-            matrices: vec![0.0; layout.matrix_len()],
-            vectors: vec![0.0; layout.vector_len()],
-            values: vec![0.0; pattern.nnz()],
-            residual: vec![0.0; self.num_dofs()],
-            rhs: vec![0.0; n_eq],
-            delta: vec![0.0; self.num_dofs()],
-            slip,
-            solver: LinearSolver::new(self.settings.linear_solver),
-            dofs,
-            pattern,
-            domain_matrix,
-            domain_vector,
-        });
+        let system = SystemLayout {
+            dim: self.dim,
+            roles: &self.roles,
+            prescribed: &prescribed,
+            slips: &self.slips,
+            frames: &self.frames,
+            ties: &self.ties,
+            solver: self.settings.linear_solver,
+        };
+        self.assembler = Some(Assembler::new(&system, &self.domains));
     }
 
     /// Accumulated times of the linear solver (symbolic analyses, numeric factorisations,
     /// solves) since the pattern was built.
     pub fn solver_timings(&self) -> SolverTimings {
-        self.workspace.as_ref().map_or_else(SolverTimings::default, |w| w.solver.timings)
+        self.assembler.as_ref().map_or_else(SolverTimings::default, |a| a.solver_timings())
+    }
+
+    /// Gravity at time `t`.
+    fn gravity_at(&self, t: f64) -> [f64; 3] {
+        let f = self.gravity.1.at(t);
+        self.gravity.0.map(|g| g * f)
+    }
+
+    /// External nodal forces at time `t` (full DOF vector, global frame).
+    fn external_forces(&self, t: f64) -> Vec<f64> {
+        let mut f_ext = vec![0.0; self.num_dofs()];
+        for l in &self.loads {
+            let f = l.amplitude.at(t);
+            for &(d, v) in &l.forces {
+                f_ext[d] += v * f;
+            }
+        }
+        f_ext
+    }
+
+    /// Phase 1, initialisation: every domain prepares the step on the committed state
+    /// (particle domains: grid motion, location, projection, grid reset); the assembler is
+    /// rebuilt if a domain's element blocks changed.
+    pub fn begin_step(&mut self) -> Result<(), StepError> {
+        let mut changed = false;
+        for d in self.domains.iter_mut() {
+            changed |= d.begin_step(&mut self.committed).map_err(StepError::StepStart)?;
+        }
+        if changed {
+            self.invalidate_pattern();
+        }
+        Ok(())
+    }
+
+    /// The predictor of a step to `t`: `u = u_n` with the prescribed values at `t`, and the
+    /// time scheme's `v`, `a` for it.
+    fn predict(&mut self, t: f64, dt: f64) {
+        self.state.clone_from(&self.committed);
+        for c in &self.constraints {
+            let f = c.amplitude.at(t);
+            for (&d, &v) in c.dofs.iter().zip(&c.values) {
+                self.state.u[d] = v * f;
+            }
+        }
+        self.scheme.update_kinematics(dt, &mut self.state, &self.committed);
     }
 
     /// Consistent initial acceleration for a dynamic analysis: solves
@@ -375,40 +331,21 @@ impl Model {
     /// `a = 0`) and hands `a₀` to the domains. Without it, a load applied suddenly at
     /// `t = 0` loses `Δt/2 · a₀` of velocity in the first step. No-op for static schemes.
     pub fn initialise_acceleration(&mut self) -> Result<(), StepError> {
-        if self.scheme.coefficients().is_none() {
+        if !self.scheme.is_dynamic() {
             return Ok(());
         }
-        let mut projection = Projection::new(self.coords.len(), self.dim);
-        let mut changed = false;
-        for d in self.domains.iter_mut() {
-            changed |= d.begin_step(&mut projection);
-        }
-        for d in self.domains.iter_mut() {
-            d.end_projection(&projection);
-        }
-        projection.apply(&mut self.committed);
-        if changed {
-            self.invalidate_pattern();
-        }
+        self.begin_step()?;
         self.prepare();
         self.state.clone_from(&self.committed);
-        let n = self.num_dofs();
-        let mut f_ext = vec![0.0; n];
-        for l in &self.loads {
-            let f = l.amplitude.at(self.time);
-            for &(d, v) in &l.forces {
-                f_ext[d] += v * f;
-            }
-        }
-        let mut ws = self.workspace.take().expect("prepared");
-        ws.slip.to_local(&mut f_ext);
-        let gf = self.gravity.1.at(self.time);
+        let mut f_ext = self.external_forces(self.time);
+        let mut assembler = self.assembler.take().expect("prepared");
+        assembler.to_local(&mut f_ext);
         let input = AssemblyInput {
             state: &self.state,
             committed: &self.committed,
             inertial_acceleration: None,
             mass_coefficient: 1.0,
-            gravity: self.gravity.0.map(|g| g * gf),
+            gravity: self.gravity_at(self.time),
             time_step: 0.0,
             gamma: 0.5,
             time: self.time,
@@ -416,27 +353,19 @@ impl Model {
             stiffness: false,
         };
         let result = (|| {
-            ws.assemble_domains(&mut self.domains, &input)?;
-            ws.pattern.gather_vector(&ws.vectors, &mut ws.residual);
-            ws.pattern.gather_matrix(&ws.matrices, &mut ws.values);
-            for (g, &e) in ws.dofs.equations().iter().enumerate() {
-                if e != CONSTRAINED {
-                    ws.rhs[e] = f_ext[g] - ws.residual[g];
-                }
-            }
-            ws.solver.solve(&ws.pattern, &ws.values, &mut ws.rhs)?;
-            for (g, &e) in ws.dofs.equations().iter().enumerate() {
-                ws.delta[g] = if e != CONSTRAINED { ws.rhs[e] } else { 0.0 };
-            }
-            ws.slip.to_global(&mut ws.delta);
+            assembler.assemble(&mut self.domains, &input)?;
+            assembler.residual(&f_ext);
+            assembler.tangent();
+            assembler.solve()?;
             Ok::<(), StepError>(())
         })();
-        self.committed.a.copy_from_slice(&ws.delta);
-        self.state.a.copy_from_slice(&ws.delta);
+        let a0 = assembler.correction();
+        self.committed.a.copy_from_slice(a0);
+        self.state.a.copy_from_slice(a0);
         for d in self.domains.iter_mut() {
-            d.accept_initial_acceleration(&ws.delta);
+            d.accept_initial_acceleration(a0);
         }
-        self.workspace = Some(ws);
+        self.assembler = Some(assembler);
         result
     }
 
@@ -446,258 +375,85 @@ impl Model {
     /// committed state and the domains' histories are not changed.
     pub fn assemble_only(&mut self) -> Result<AssemblyTimings, StepError> {
         self.prepare();
-        let gf = self.gravity.1.at(self.time);
-        let input = AssemblyInput {
-            state: &self.state,
-            committed: &self.committed,
-            inertial_acceleration: None,
-            mass_coefficient: 0.0,
-            gravity: self.gravity.0.map(|g| g * gf),
-            time_step: 0.0,
-            gamma: 0.5,
-            time: self.time,
-            with_tangent: true,
-            stiffness: true,
-        };
-        let ws = self.workspace.as_mut().expect("prepared");
+        let gravity = self.gravity_at(self.time);
+        let f_ext = vec![0.0; self.num_dofs()];
+        let assembler = self.assembler.as_mut().expect("prepared");
+        let input =
+            assembly_input(TimeScheme::Static, &self.state, &self.committed, &[], 0.0, self.time, gravity, true);
         let t = Instant::now();
-        ws.assemble_domains(&mut self.domains, &input)?;
+        assembler.assemble(&mut self.domains, &input)?;
         let kernels = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        ws.pattern.gather_vector(&ws.vectors, &mut ws.residual);
-        ws.pattern.gather_matrix(&ws.matrices, &mut ws.values);
+        assembler.residual(&f_ext);
+        assembler.tangent();
         Ok(AssemblyTimings { kernels, gather: t.elapsed().as_secs_f64() })
     }
 
-    /// Advances from the committed state by `dt`. On success the new state is committed
-    /// and `time` advanced; on failure nothing committed changes (call again with a
-    /// smaller step).
+    /// Advances from the committed state by `dt` (see the module doc). On success the new
+    /// state is committed and `time` advanced; on failure nothing committed changes but the
+    /// reset of grid nodes (call again with a smaller step, unless the error says a shorter
+    /// step cannot help: [`StepError::is_retryable`]).
     pub fn solve_step(&mut self, dt: f64) -> Result<StepReport, StepError> {
         let mut report = StepReport::default();
-        let t0 = Instant::now();
-        // initialisation phase of particle domains (locate, project); a changed set of
-        // element blocks invalidates the sparsity pattern
-        let mut topology_changed = false;
-        let mut projection = Projection::new(self.coords.len(), self.dim);
-        for d in self.domains.iter_mut() {
-            topology_changed |= d.begin_step(&mut projection);
-        }
-        for d in self.domains.iter_mut() {
-            d.end_projection(&projection);
-        }
-        projection.apply(&mut self.committed);
-        if topology_changed {
-            self.invalidate_pattern();
-        }
-        report.timings.search += t0.elapsed().as_secs_f64();
-        let t0 = Instant::now();
-        if self.workspace.is_none() {
+        // phase 1: initialisation
+        let t = Instant::now();
+        self.begin_step()?;
+        report.timings.search += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        if self.assembler.is_none() {
             report.timings.pattern_builds += 1;
         }
         self.prepare();
-        report.timings.pattern += t0.elapsed().as_secs_f64();
+        report.timings.pattern += t.elapsed().as_secs_f64();
+        // phase 2: updated-Lagrangian phase
         let t_new = self.time + dt;
-        let scheme = self.scheme;
-        let settings = self.settings;
-        let n = self.num_dofs();
-        self.state.clone_from(&self.committed);
-        for c in &self.constraints {
-            let f = c.amplitude.at(t_new);
-            for (&d, &v) in c.dofs.iter().zip(&c.values) {
-                self.state.u[d] = v * f;
-            }
+        self.predict(t_new, dt);
+        let mut f_ext = self.external_forces(t_new);
+        let mut assembler = self.assembler.take().expect("prepared");
+        assembler.to_local(&mut f_ext);
+        let gravity = self.gravity_at(t_new);
+        let mut problem = StepProblem {
+            domains: &mut self.domains,
+            assembler: &mut assembler,
+            state: &mut self.state,
+            committed: &self.committed,
+            scheme: self.scheme,
+            dt,
+            time: t_new,
+            gravity,
+            f_ext: &f_ext,
+        };
+        let result = NewtonStrategy { settings: self.settings }.solve(&mut problem, &mut report);
+        // phase 3: convective phase
+        if result.is_ok() {
+            let t = Instant::now();
+            self.commit_step(&assembler, dt, t_new, gravity);
+            report.timings.commit += t.elapsed().as_secs_f64();
+        } else {
+            self.state.clone_from(&self.committed);
         }
-        self.update_kinematics(dt);
-        let mut f_ext = vec![0.0; n];
-        for l in &self.loads {
-            let f = l.amplitude.at(t_new);
-            for &(d, v) in &l.forces {
-                f_ext[d] += v * f;
-            }
-        }
-        if let Some(ws) = &self.workspace {
-            ws.slip.to_local(&mut f_ext);
-        }
-        let gf = self.gravity.1.at(t_new);
-        let gravity = self.gravity.0.map(|g| g * gf);
-        let mut inertial = vec![0.0; n];
-        let mut r0 = 0.0;
-        let mut du_step = vec![0.0; n];
-        let mut last_du = f64::INFINITY;
-        let mut previous_du = f64::INFINITY;
-        let mut ws = self.workspace.take().expect("prepared");
-        let result = (|| {
-            for it in 0..=settings.max_iterations {
-                if scheme.coefficients().is_some() {
-                    for ((m, &a), &an) in inertial.iter_mut().zip(&self.state.a).zip(&self.committed.a) {
-                        *m = scheme.inertial_acceleration(a, an);
-                    }
-                }
-                // when the step has most likely converged, assemble the residual alone first
-                // and the tangent only if the residual says otherwise: the displacement
-                // criterion is known before assembling, and Newton's quadratic convergence
-                // predicts the residual after the last correction δu_k from the one before,
-                // r_k ≈ r_{k−1} (|δu_k| / |δu_{k−1}|)² (trusted with a factor 2 to spare; a
-                // wrong guess costs one residual-only assembly)
-                let du_norm = norm(&du_step);
-                let disp_ok = it > 0
-                    && (last_du <= settings.displacement_absolute_tolerance
-                        || last_du <= settings.displacement_relative_tolerance * du_norm);
-                let residual_likely_ok = it > 1 && {
-                    let predicted = report.residuals[it - 1] * (last_du / previous_du).powi(2);
-                    predicted
-                        <= 0.5 * settings.residual_absolute_tolerance.max(settings.residual_relative_tolerance * r0)
-                };
-                let likely_converged = match settings.convergence_criterion {
-                    ConvergenceCriterion::Residual => residual_likely_ok,
-                    ConvergenceCriterion::Displacement | ConvergenceCriterion::And => disp_ok,
-                    ConvergenceCriterion::Or => disp_ok || residual_likely_ok,
-                };
-                let mut with_tangent = !likely_converged;
-                let mut first_pass = true;
-                // fraction of the last correction `ws.delta` currently applied
-                let mut step_length = 1.0;
-                let mut backtracks = 0;
-                loop {
-                    let t = Instant::now();
-                    let input = AssemblyInput {
-                        state: &self.state,
-                        committed: &self.committed,
-                        inertial_acceleration: scheme.coefficients().map(|_| inertial.as_slice()),
-                        mass_coefficient: scheme.mass_coefficient(dt),
-                        gravity,
-                        time_step: dt,
-                        gamma: scheme.coefficients().map_or(0.5, |c| c.2),
-                        time: t_new,
-                        with_tangent,
-                        stiffness: true,
-                    };
-                    ws.assemble_domains(&mut self.domains, &input)?;
-                    ws.pattern.gather_vector(&ws.vectors, &mut ws.residual);
-                    for (r, f) in ws.residual.iter_mut().zip(&f_ext) {
-                        *r -= f;
-                    }
-                    for (g, &e) in ws.dofs.equations().iter().enumerate() {
-                        if e != CONSTRAINED {
-                            ws.rhs[e] = -ws.residual[g];
-                        }
-                    }
-                    let r_norm = norm(&ws.rhs);
-                    report.timings.assembly += t.elapsed().as_secs_f64();
-                    if !first_pass {
-                        break;
-                    }
-                    let r_prev = report.residuals.last().copied().unwrap_or(f64::INFINITY);
-                    if settings.line_search
-                        && it > 1
-                        && backtracks < settings.line_search_max_cuts
-                        && (r_norm >= r_prev || r_norm.is_nan())
-                    {
-                        // take back half of the applied part of the correction
-                        let shorter = 0.5 * step_length;
-                        let back = step_length - shorter;
-                        for ((u, du), d) in self.state.u.iter_mut().zip(du_step.iter_mut()).zip(&ws.delta) {
-                            *u -= back * d;
-                            *du -= back * d;
-                        }
-                        last_du *= shorter / step_length;
-                        step_length = shorter;
-                        backtracks += 1;
-                        self.update_kinematics(dt);
-                        continue;
-                    }
-                    first_pass = false;
-                    report.residuals.push(r_norm);
-                    if trace_newton() {
-                        eprintln!("newton t={t_new:.6e} dt={dt:.3e} it={it} |r|={r_norm:.3e} |du|={last_du:.3e} |Du|={du_norm:.3e} backtracks={backtracks} tangent={with_tangent}");
-                    }
-                    if it == 0 {
-                        r0 = r_norm;
-                    }
-                    let res_ok = r_norm <= settings.residual_absolute_tolerance
-                        || r_norm <= settings.residual_relative_tolerance * r0;
-                    let converged = (it == 0 && r_norm <= settings.residual_absolute_tolerance)
-                        || (it > 0
-                            && match settings.convergence_criterion {
-                                ConvergenceCriterion::Residual => res_ok,
-                                ConvergenceCriterion::Displacement => disp_ok,
-                                ConvergenceCriterion::And => res_ok && disp_ok,
-                                ConvergenceCriterion::Or => res_ok || disp_ok,
-                            });
-                    if !r_norm.is_finite() {
-                        return Err(StepError::NoConvergence { iterations: it, residual: r_norm });
-                    }
-                    if converged {
-                        report.iterations = it;
-                        for (g, &e) in ws.dofs.equations().iter().enumerate() {
-                            self.reactions[g] = if e == CONSTRAINED { ws.residual[g] } else { 0.0 };
-                        }
-                        ws.slip.to_global(&mut self.reactions);
-                        let t = Instant::now();
-                        for d in self.domains.iter_mut() {
-                            d.commit(&input);
-                        }
-                        report.timings.commit += t.elapsed().as_secs_f64();
-                        return Ok(());
-                    }
-                    if with_tangent || it == settings.max_iterations {
-                        break;
-                    }
-                    with_tangent = true;
-                }
-                if it == settings.max_iterations {
-                    break;
-                }
-                let t = Instant::now();
-                ws.pattern.gather_matrix(&ws.matrices, &mut ws.values);
-                report.timings.assembly += t.elapsed().as_secs_f64();
-                let before = ws.solver.timings;
-                ws.solver.solve(&ws.pattern, &ws.values, &mut ws.rhs)?;
-                report.timings.factorisation += ws.solver.timings.factorisation - before.factorisation
-                    + ws.solver.timings.symbolic
-                    - before.symbolic;
-                report.timings.symbolic += ws.solver.timings.symbolic - before.symbolic;
-                report.timings.solve += ws.solver.timings.solve - before.solve;
-                for (g, &e) in ws.dofs.equations().iter().enumerate() {
-                    ws.delta[g] = if e != CONSTRAINED { ws.rhs[e] } else { 0.0 };
-                }
-                ws.slip.to_global(&mut ws.delta);
-                for ((u, du), d) in self.state.u.iter_mut().zip(du_step.iter_mut()).zip(&ws.delta) {
-                    *u += d;
-                    *du += d;
-                }
-                previous_du = last_du;
-                last_du = norm(&ws.rhs);
-                self.update_kinematics(dt);
-            }
-            Err(StepError::NoConvergence {
-                iterations: settings.max_iterations,
-                residual: report.residuals.last().copied().unwrap_or(f64::NAN),
-            })
-        })();
-        self.workspace = Some(ws);
-        match result {
-            Ok(()) => {
-                self.committed.clone_from(&self.state);
-                self.time = t_new;
-                Ok(report)
-            }
-            Err(e) => {
-                self.state.clone_from(&self.committed);
-                Err(e)
-            }
-        }
+        self.assembler = Some(assembler);
+        result.map(|()| report)
     }
 
-    fn update_kinematics(&mut self, dt: f64) {
-        let scheme = self.scheme;
-        let s = &mut self.state;
-        let c = &self.committed;
-        for g in 0..s.u.len() {
-            let (v, a) = scheme.kinematics(dt, s.u[g], c.u[g], c.v[g], c.a[g]);
-            s.v[g] = v;
-            s.a[g] = a;
+    /// Phase 3: records the reactions and the soil's forces on shared nodes from the last
+    /// assembly (at the converged state), lets every domain commit (material points convect)
+    /// and makes the converged state the committed one at `t`.
+    fn commit_step(&mut self, assembler: &Assembler, dt: f64, t: f64, gravity: [f64; 3]) {
+        assembler.reactions(&mut self.reactions);
+        if self.roles.contains(&NodeRole::Interface) || !self.ties.is_empty() {
+            assembler.soil_forces(&self.domains, &self.roles, &self.ties, &mut self.soil_forces);
         }
+        let mut inertial = vec![0.0; self.num_dofs()];
+        if self.scheme.is_dynamic() {
+            self.scheme.inertial_accelerations(&self.state, &self.committed, &mut inertial);
+        }
+        let input = assembly_input(self.scheme, &self.state, &self.committed, &inertial, dt, t, gravity, true);
+        for d in self.domains.iter_mut() {
+            d.commit(&input);
+        }
+        self.committed.clone_from(&self.state);
+        self.time = t;
     }
 
     /// Total kinetic energy of the committed state.
@@ -709,10 +465,93 @@ impl Model {
     pub fn strain_energy(&self) -> f64 {
         self.domains.iter().map(|d| d.strain_energy()).sum()
     }
+
+    /// Starts a step of length `dt` as [`Model::solve_step`] does (initialisation phase and
+    /// predictor) and returns the step's nonlinear system for evaluation at any correction:
+    /// for tests of the consistent tangent against finite differences of the residual. The
+    /// committed state is not changed (the domains' trial states are).
+    pub fn linearise(&mut self, dt: f64) -> Result<Linearisation<'_>, StepError> {
+        self.begin_step()?;
+        self.prepare();
+        let t = self.time + dt;
+        self.predict(t, dt);
+        let mut f_ext = self.external_forces(t);
+        self.assembler.as_ref().expect("prepared").to_local(&mut f_ext);
+        let predictor = self.state.u.clone();
+        Ok(Linearisation { gravity: self.gravity_at(t), model: self, dt, time: t, f_ext, predictor })
+    }
+
+    /// Every output of every domain at the committed state (see [`Domain::outputs`]).
+    pub fn outputs(&self, with_grid: bool) -> Vec<NamedOutput> {
+        self.domains.iter().flat_map(|d| d.outputs(&self.committed, with_grid)).collect()
+    }
+
+    /// The output named `name` (a domain, body or wall) at the committed state.
+    pub fn output(&self, name: &str) -> Option<crate::domain::DomainOutput> {
+        self.outputs(false).into_iter().find(|o| o.name == name).map(|o| o.output)
+    }
 }
 
-/// Whether `LOAM_NEWTON_TRACE` asks for every Newton iteration's norms on stderr.
-fn trace_newton() -> bool {
-    static TRACE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *TRACE.get_or_init(|| std::env::var_os("LOAM_NEWTON_TRACE").is_some())
+/// The nonlinear system `R(u) = 0` of one step, evaluated at corrections of the predictor
+/// ([`Model::linearise`]): what the Newton strategy sees, exposed for checks of the
+/// consistent tangent.
+pub struct Linearisation<'a> {
+    model: &'a mut Model,
+    dt: f64,
+    time: f64,
+    gravity: [f64; 3],
+    f_ext: Vec<f64>,
+    predictor: Vec<f64>,
+}
+
+impl Linearisation<'_> {
+    /// Number of equations.
+    pub fn num_equations(&self) -> usize {
+        self.model.num_equations()
+    }
+
+    /// The block (soil, interface, structure) of equation `e`.
+    pub fn block(&self, e: usize) -> crate::dofs::Block {
+        self.model.assembler.as_ref().expect("prepared").dofs().block(e)
+    }
+
+    /// Residual per equation and the tangent (dense, row-major) at `u = u_pred + δu`, where
+    /// `δu` is the correction `delta` per equation taken to the DOFs as a Newton correction
+    /// is (tied DOFs together, slip frames to the global frame).
+    pub fn evaluate(&mut self, delta: &[f64]) -> Result<(Vec<f64>, Vec<f64>), StepError> {
+        let model = &mut *self.model;
+        let mut assembler = model.assembler.take().expect("prepared");
+        let full = assembler.correction_of(delta);
+        model.state.u.clone_from(&self.predictor);
+        for (u, d) in model.state.u.iter_mut().zip(&full) {
+            *u += d;
+        }
+        model.scheme.update_kinematics(self.dt, &mut model.state, &model.committed);
+        let mut inertial = vec![0.0; model.num_dofs()];
+        model.scheme.inertial_accelerations(&model.state, &model.committed, &mut inertial);
+        let input = crate::newton::assembly_input(
+            model.scheme,
+            &model.state,
+            &model.committed,
+            &inertial,
+            self.dt,
+            self.time,
+            self.gravity,
+            true,
+        );
+        let result = assembler.assemble(&mut model.domains, &input);
+        let out = result.map(|()| {
+            assembler.residual(&self.f_ext);
+            assembler.tangent();
+            (assembler.residual_per_equation(), assembler.dense_tangent())
+        });
+        model.assembler = Some(assembler);
+        Ok(out?)
+    }
+}
+
+impl Drop for Linearisation<'_> {
+    fn drop(&mut self) {
+        self.model.state.clone_from(&self.model.committed);
+    }
 }

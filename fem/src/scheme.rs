@@ -13,6 +13,8 @@
 
 use serde::Deserialize;
 
+use crate::domain::NodalState;
+
 /// How time enters the equations of motion.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
@@ -92,6 +94,36 @@ impl TimeScheme {
         match self.coefficients() {
             Some((alpha, _, _)) => (1.0 - alpha) * a + alpha * an,
             None => 0.0,
+        }
+    }
+
+    /// Newmark γ of the velocity update (½ for static schemes, where it is unused).
+    pub fn gamma(self) -> f64 {
+        self.coefficients().map_or(0.5, |c| c.2)
+    }
+
+    /// Whether the scheme carries inertia.
+    pub fn is_dynamic(self) -> bool {
+        self.coefficients().is_some()
+    }
+
+    /// Updates `v` and `a` of every DOF of `state` from its displacement and the committed
+    /// state ([`TimeScheme::kinematics`]).
+    pub fn update_kinematics(self, dt: f64, state: &mut NodalState, committed: &NodalState) {
+        if !self.is_dynamic() {
+            return;
+        }
+        for g in 0..state.u.len() {
+            let (v, a) = self.kinematics(dt, state.u[g], committed.u[g], committed.v[g], committed.a[g]);
+            state.v[g] = v;
+            state.a[g] = a;
+        }
+    }
+
+    /// The accelerations `ã` at which inertia is evaluated, for every DOF.
+    pub fn inertial_accelerations(self, state: &NodalState, committed: &NodalState, out: &mut [f64]) {
+        for ((m, &a), &an) in out.iter_mut().zip(&state.a).zip(&committed.a) {
+            *m = self.inertial_acceleration(a, an);
         }
     }
 }

@@ -7,6 +7,10 @@
 //! normal DOF becomes a constraint (`ũ_n = 0`: no motion across the boundary) and its
 //! tangential DOFs stay free. Solutions are rotated back, `δu = Q δũ`. A node that also has
 //! a Dirichlet condition keeps only the Dirichlet condition.
+//!
+//! The same rotation without the constraint serves the frictionless (slip) interface between
+//! soil and structure: both nodes of an interface pair get the local frame of the interface
+//! normal, and their normal DOFs share one equation (a [`crate::dofs::DofTie`]).
 
 use std::collections::HashMap;
 
@@ -52,16 +56,33 @@ pub fn local_basis(normal: [f64; 3], dim: usize) -> [[f64; 3]; 3] {
 pub struct SlipRotations {
     dim: usize,
     basis: HashMap<usize, [[f64; 3]; 3]>,
+    /// Nodes whose normal DOF is a constraint (slip boundaries), ascending.
+    constrained: Vec<usize>,
     /// (matrix offset, vector offset, block DOFs, local node, global node) per occurrence.
     occurrences: Vec<(usize, usize, usize, usize, usize)>,
 }
 
 impl SlipRotations {
-    /// Rotations for `slips` on the blocks of `layout`, skipping nodes for which
-    /// `has_dirichlet` holds.
-    pub fn new(dim: usize, slips: &[Slip], layout: &BlockLayout, has_dirichlet: impl Fn(usize) -> bool) -> Self {
-        let basis: HashMap<usize, [[f64; 3]; 3]> =
-            slips.iter().filter(|s| !has_dirichlet(s.node)).map(|s| (s.node, local_basis(s.normal, dim))).collect();
+    /// Rotations for `slips` (normal DOF constrained) and `frames` (local frames only) on
+    /// the blocks of `layout`, skipping nodes for which `has_dirichlet` holds.
+    pub fn new(
+        dim: usize,
+        slips: &[Slip],
+        frames: &[Slip],
+        layout: &BlockLayout,
+        has_dirichlet: impl Fn(usize) -> bool,
+    ) -> Self {
+        let mut basis: HashMap<usize, [[f64; 3]; 3]> = HashMap::new();
+        let mut constrained = Vec::new();
+        for s in slips.iter().filter(|s| !has_dirichlet(s.node)) {
+            basis.insert(s.node, local_basis(s.normal, dim));
+            constrained.push(s.node);
+        }
+        for s in frames.iter().filter(|s| !has_dirichlet(s.node)) {
+            basis.entry(s.node).or_insert_with(|| local_basis(s.normal, dim));
+        }
+        constrained.sort_unstable();
+        constrained.dedup();
         let mut occurrences = Vec::new();
         if !basis.is_empty() {
             for b in 0..layout.num_blocks() {
@@ -74,12 +95,17 @@ impl SlipRotations {
                 }
             }
         }
-        Self { dim, basis, occurrences }
+        Self { dim, basis, constrained, occurrences }
     }
 
     /// Global DOFs that become constraints: the normal DOF of every slip node.
     pub fn normal_dofs(&self) -> impl Iterator<Item = usize> + '_ {
-        self.basis.keys().map(|&n| n * self.dim)
+        self.constrained.iter().map(|&n| n * self.dim)
+    }
+
+    /// Whether `node` has a local frame.
+    pub fn is_rotated(&self, node: usize) -> bool {
+        self.basis.contains_key(&node)
     }
 
     /// Rotates element matrices and vectors to the local frames of slip nodes.

@@ -12,7 +12,7 @@ use nalgebra::Matrix3;
 use rayon::prelude::*;
 
 use crate::assembly::BlockLayout;
-use crate::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NodalState};
+use crate::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NamedOutput, NodalState};
 use crate::element::{ElementType, MAX_NODES};
 use crate::formulation::Formulation;
 use crate::kernel::{point_geometry, solid_element, KernelContext, PointGeometry, PointOutput};
@@ -288,7 +288,15 @@ impl Domain for FemDomain {
         self.mesh.boundary_facets().into_iter().map(|f| f.into_iter().map(|a| self.node_ids[a]).collect()).collect()
     }
 
-    fn output(&self, committed: &NodalState) -> DomainOutput {
+    fn outputs(&self, committed: &NodalState, _with_grid: bool) -> Vec<NamedOutput> {
+        vec![NamedOutput { name: self.name.clone(), output: self.mesh_output(committed) }]
+    }
+}
+
+impl FemDomain {
+    /// The mesh in its reference configuration with nodal `displacement`, `velocity`,
+    /// `acceleration` and the cell averages of the Gauss points' stress, strain and state.
+    fn mesh_output(&self, committed: &NodalState) -> DomainOutput {
         let dim = self.dim();
         let nodal = |src: &[f64]| -> Vec<f64> {
             self.node_ids

@@ -4,77 +4,56 @@
 //! bounding box lists the cells whose bounding boxes overlap each bin, and a point is tested
 //! only against the cells of its bin.
 //!
-//! The grid keeps its node coordinates as data (a [`Mesh`]); local coordinates come from the
-//! element's inverse map (Newton), or, in simplex cells (tri3, tet4), whose isoparametric map
-//! is affine, from that map's inverse `ξ = J⁻¹(x − x₀)`, kept per cell with `det J` when the
-//! grid is built (the cells do not move afterwards): one 3×3 product per located point, and
-//! the shape-function gradients of every point in the cell from the same `J⁻¹`. (Rectangular
-//! quad cells are affine too, but there the Newton path is kept: the affine local coordinates
-//! differ from it by round-off only, and the MPM Cam Clay localisation run,
-//! `biaxial_mcc_mpm`, is sensitive enough to that to stop at 0.08 m of platen travel instead
-//! of 0.13 m.)
+//! The grid keeps its node coordinates as data (a [`Mesh`]) in two configurations: the
+//! **reference** positions, where the grid returns at the start of every step, and the
+//! **current** positions of the step, which differ from them only where the grid is attached
+//! to a structure (interface nodes move with it, a band of nodes around by a mesh-motion
+//! rule: [`Grid::move_nodes`]). Location first asks the reference locator (lattice or bins)
+//! for the cell, which is exact for cells that did not move; cells that moved are searched in
+//! bins over their current positions, rebuilt when the grid moves. Cells inside a structure
+//! are removed ([`Grid::without_cells`]); a structured lattice keeps its arithmetic through an
+//! index from lattice cells to the remaining ones.
+//!
+//! Local coordinates come from the element's inverse map (Newton), or, in simplex cells
+//! (tri3, tet4), whose isoparametric map is affine, from that map's inverse
+//! `ξ = J⁻¹(x − x₀)`, kept per cell with `det J` (recomputed for cells that move): one 3×3
+//! product per located point, and the shape-function gradients of every point in the cell
+//! from the same `J⁻¹`. (Rectangular quad cells are affine too, but there the Newton path is
+//! kept: the affine local coordinates differ from it by round-off only, and the MPM Cam Clay
+//! localisation run, `biaxial_mcc_mpm`, is sensitive enough to that to stop at 0.08 m of
+//! platen travel instead of 0.13 m.)
 
 use loam_fem::element::{ElementType, MAX_NODES};
 use loam_fem::kernel::CellMap;
 use loam_fem::mesh::Mesh;
 use nalgebra::Vector3;
 
-/// How a grid finds the cell that holds a point.
+/// Marker of a lattice cell without a grid cell (removed: inside a structure).
+const NO_CELL: u32 = u32::MAX;
+
+/// Uniform bins over a box, each listing the cells whose bounding boxes overlap it (CSR).
 #[derive(Debug, Clone)]
-enum Locator {
-    /// Structured lattice: cell index by arithmetic.
-    Lattice {
-        origin: [f64; 3],
-        spacing: [f64; 3],
-        cells: [usize; 3],
-        /// `(cos θ, sin θ)` of the grid's rotation about `origin` (2D).
-        rotation: (f64, f64),
-    },
-    /// Uniform bins over the bounding box, each listing the cells overlapping it (CSR).
-    Bins { lower: [f64; 3], size: [f64; 3], bins: [usize; 3], start: Vec<usize>, cells: Vec<u32> },
+struct Bins {
+    lower: [f64; 3],
+    size: [f64; 3],
+    bins: [usize; 3],
+    start: Vec<usize>,
+    cells: Vec<u32>,
 }
 
-/// The isoparametric map of an affine cell, `x = x₀ + J ξ`.
-#[derive(Debug, Clone, Copy)]
-struct AffineCell {
-    /// `x₀ = x(ξ = 0)`.
-    origin: [f64; 3],
-    map: CellMap,
-}
-
-/// An MPM background grid.
-#[derive(Debug, Clone)]
-pub struct Grid {
-    /// The grid as a mesh (node coordinates and cells).
-    pub mesh: Mesh,
-    locator: Locator,
-    /// Per cell, its affine map (`None` where the map is not affine).
-    affine: Vec<Option<AffineCell>>,
-}
-
-impl Grid {
-    /// A grid of `cells` cells over the box `origin + [0, size]` (2D: first two entries).
-    pub fn new(origin: [f64; 3], size: [f64; 3], cells: [usize; 3], element: ElementType) -> Self {
-        let mesh = match element.dim() {
-            2 => Mesh::rectangle([origin[0], origin[1]], [size[0], size[1]], [cells[0], cells[1]], element),
-            _ => Mesh::cuboid(origin, size, cells, element),
-        };
-        let cells = if element.dim() == 2 { [cells[0], cells[1], 1] } else { cells };
-        let spacing = [size[0] / cells[0] as f64, size[1] / cells[1] as f64, size[2] / cells[2] as f64];
-        Self::with_locator(mesh, Locator::Lattice { origin, spacing, cells, rotation: (1.0, 0.0) })
-    }
-
-    /// A grid on any mesh, located by bins about one cell in size.
-    pub fn unstructured(mesh: Mesh) -> Self {
+impl Bins {
+    /// Bins about one cell in size over the bounding box of `cells` of `mesh`.
+    fn new(mesh: &Mesh, cells: &[usize]) -> Self {
         let dim = mesh.element.dim();
         let (mut lower, mut upper) = ([0.0; 3], [0.0; 3]);
         for d in 0..dim {
-            lower[d] = mesh.coords.iter().map(|c| c[d]).fold(f64::MAX, f64::min);
-            upper[d] = mesh.coords.iter().map(|c| c[d]).fold(f64::MIN, f64::max);
+            let coords = || cells.iter().flat_map(|&c| mesh.cell(c)).map(|&a| mesh.coords[a][d]);
+            lower[d] = coords().fold(f64::MAX, f64::min);
+            upper[d] = coords().fold(f64::MIN, f64::max);
         }
         let extent: Vec<f64> = (0..dim).map(|d| (upper[d] - lower[d]).max(1e-300)).collect();
         let volume: f64 = extent.iter().product();
-        let ncells = mesh.num_cells().max(1) as f64;
+        let ncells = cells.len().max(1) as f64;
         let h = (volume / ncells).powf(1.0 / dim as f64);
         let mut bins = [1usize; 3];
         let mut size = [1.0; 3];
@@ -89,7 +68,7 @@ impl Grid {
             a..=b
         };
         let mut lists: Vec<(usize, u32)> = Vec::new();
-        for c in 0..mesh.num_cells() {
+        for &c in cells {
             let (mut lo, mut hi) = ([0.0; 3], [0.0; 3]);
             for d in 0..dim {
                 lo[d] = mesh.cell(c).iter().map(|&a| mesh.coords[a][d]).fold(f64::MAX, f64::min);
@@ -113,7 +92,94 @@ impl Grid {
             start[b + 1] += start[b];
         }
         let cells = lists.into_iter().map(|(_, c)| c).collect();
-        Self::with_locator(mesh, Locator::Bins { lower, size, bins, start, cells })
+        Self { lower, size, bins, start, cells }
+    }
+
+    /// The cells listed in the bin holding `x` (none outside the box).
+    fn candidates(&self, x: &[f64; 3], dim: usize) -> &[u32] {
+        let mut b = [0usize; 3];
+        for d in 0..dim {
+            let s = (x[d] - self.lower[d]) / self.size[d];
+            if !(s >= -1e-9 && s <= self.bins[d] as f64 * (1.0 + 1e-12) + 1e-9) {
+                return &[];
+            }
+            b[d] = (s.floor().max(0.0) as usize).min(self.bins[d] - 1);
+        }
+        let bin = (b[2] * self.bins[1] + b[1]) * self.bins[0] + b[0];
+        &self.cells[self.start[bin]..self.start[bin + 1]]
+    }
+}
+
+/// How a grid finds the cell that holds a point in its reference configuration.
+#[derive(Debug, Clone)]
+enum Locator {
+    /// Structured lattice: cell index by arithmetic.
+    Lattice {
+        origin: [f64; 3],
+        spacing: [f64; 3],
+        cells: [usize; 3],
+        /// `(cos θ, sin θ)` of the grid's rotation about `origin` (2D).
+        rotation: (f64, f64),
+        /// Grid cell of each cell of the full lattice (tri3: two per lattice cell), or
+        /// [`NO_CELL`]; `None` while no cell has been removed (the identity).
+        cell_index: Option<Vec<u32>>,
+    },
+    /// Bins over the reference positions.
+    Bins(Bins),
+}
+
+/// The isoparametric map of an affine cell, `x = x₀ + J ξ`.
+#[derive(Debug, Clone, Copy)]
+struct AffineCell {
+    /// `x₀ = x(ξ = 0)`.
+    origin: [f64; 3],
+    map: CellMap,
+}
+
+/// An MPM background grid.
+#[derive(Debug, Clone)]
+pub struct Grid {
+    /// The grid as a mesh: node coordinates in the current configuration of the step, and
+    /// the cells.
+    pub mesh: Mesh,
+    /// Node coordinates in the reference configuration.
+    reference: Vec<[f64; 3]>,
+    locator: Locator,
+    /// Per cell, its affine map in the current configuration (`None` where the map is not
+    /// affine).
+    affine: Vec<Option<AffineCell>>,
+    /// Per cell, whether a node of it is away from its reference position.
+    moved: Vec<bool>,
+    /// Bins over the moved cells in their current positions (`None` if none moved).
+    moved_bins: Option<Bins>,
+}
+
+/// A cell that the motion of the grid would invert.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InvertedCell {
+    /// Cell index.
+    pub cell: usize,
+    /// Its centre in the reference configuration.
+    pub centre: [f64; 3],
+}
+
+impl Grid {
+    /// A grid of `cells` cells over the box `origin + [0, size]` (2D: first two entries).
+    pub fn new(origin: [f64; 3], size: [f64; 3], cells: [usize; 3], element: ElementType) -> Self {
+        let mesh = match element.dim() {
+            2 => Mesh::rectangle([origin[0], origin[1]], [size[0], size[1]], [cells[0], cells[1]], element),
+            _ => Mesh::cuboid(origin, size, cells, element),
+        };
+        let cells = if element.dim() == 2 { [cells[0], cells[1], 1] } else { cells };
+        let spacing = [size[0] / cells[0] as f64, size[1] / cells[1] as f64, size[2] / cells[2] as f64];
+        Self::with_locator(mesh, Locator::Lattice { origin, spacing, cells, rotation: (1.0, 0.0), cell_index: None })
+    }
+
+    /// A grid on any mesh, located by bins about one cell in size.
+    pub fn unstructured(mesh: Mesh) -> Self {
+        let all: Vec<usize> = (0..mesh.num_cells()).collect();
+        let bins = Bins::new(&mesh, &all);
+        Self::with_locator(mesh, Locator::Bins(bins))
     }
 
     /// A 2D grid as [`Grid::new`], rotated counter-clockwise by `angle` (radians)
@@ -134,7 +200,131 @@ impl Grid {
 
     fn with_locator(mesh: Mesh, locator: Locator) -> Self {
         let affine = (0..mesh.num_cells()).map(|c| affine_cell(&mesh, c)).collect();
-        Self { mesh, locator, affine }
+        let moved = vec![false; mesh.num_cells()];
+        Self { reference: mesh.coords.clone(), mesh, locator, affine, moved, moved_bins: None }
+    }
+
+    /// The grid without the cells marked in `remove` (e.g. those inside a structure) and
+    /// without the nodes only they used; returns it with, for each of its nodes, the index of
+    /// that node in `self`. The reference configuration is kept (a grid that has moved
+    /// returns to it).
+    pub fn without_cells(&self, remove: &[bool]) -> (Grid, Vec<usize>) {
+        let element = self.mesh.element;
+        let nn = element.num_nodes();
+        let mut new_cell = vec![NO_CELL; self.mesh.num_cells()];
+        let mut new_node = vec![usize::MAX; self.reference.len()];
+        let mut kept_nodes = Vec::new();
+        let mut connectivity = Vec::new();
+        let mut kept = 0u32;
+        for c in 0..self.mesh.num_cells() {
+            if remove[c] {
+                continue;
+            }
+            new_cell[c] = kept;
+            kept += 1;
+            for &a in self.mesh.cell(c) {
+                if new_node[a] == usize::MAX {
+                    new_node[a] = kept_nodes.len();
+                    kept_nodes.push(a);
+                }
+                connectivity.push(new_node[a]);
+            }
+        }
+        let mut node_groups = std::collections::BTreeMap::new();
+        for (g, nodes) in &self.mesh.node_groups {
+            let n: Vec<usize> = nodes.iter().map(|&a| new_node[a]).filter(|&a| a != usize::MAX).collect();
+            node_groups.insert(g.clone(), n);
+        }
+        debug_assert_eq!(connectivity.len(), kept as usize * nn);
+        let mesh = Mesh {
+            element,
+            coords: kept_nodes.iter().map(|&a| self.reference[a]).collect(),
+            connectivity,
+            node_groups,
+        };
+        let locator = match &self.locator {
+            Locator::Lattice { origin, spacing, cells, rotation, cell_index } => {
+                let index = match cell_index {
+                    Some(index) => {
+                        index.iter().map(|&c| if c == NO_CELL { NO_CELL } else { new_cell[c as usize] }).collect()
+                    }
+                    None => new_cell,
+                };
+                Locator::Lattice {
+                    origin: *origin,
+                    spacing: *spacing,
+                    cells: *cells,
+                    rotation: *rotation,
+                    cell_index: Some(index),
+                }
+            }
+            Locator::Bins(_) => {
+                let all: Vec<usize> = (0..mesh.num_cells()).collect();
+                Locator::Bins(Bins::new(&mesh, &all))
+            }
+        };
+        (Self::with_locator(mesh, locator), kept_nodes)
+    }
+
+    /// Node coordinates in the reference configuration.
+    pub fn reference_coords(&self) -> &[[f64; 3]] {
+        &self.reference
+    }
+
+    /// Whether any node is away from its reference position.
+    pub fn has_moved(&self) -> bool {
+        self.moved_bins.is_some()
+    }
+
+    /// Places every node at its reference position plus `displacement` (one entry per
+    /// node; zero for a grid at rest) for the coming step: the cells that move get their
+    /// maps and bins anew, the others return to the reference configuration. Fails with the
+    /// first cell that the motion inverts (`det J ≤ 0` at a corner); the grid is then left
+    /// in the inverted configuration and must be moved again before use.
+    pub fn move_nodes(&mut self, displacement: &[[f64; 3]]) -> Result<(), InvertedCell> {
+        let was_moved = self.has_moved();
+        let mut node_moved = vec![false; self.reference.len()];
+        let mut any = false;
+        for ((x, x0), (w, m)) in
+            self.mesh.coords.iter_mut().zip(&self.reference).zip(displacement.iter().zip(&mut node_moved))
+        {
+            *m = w.iter().any(|v| *v != 0.0);
+            any |= *m;
+            *x = [x0[0] + w[0], x0[1] + w[1], x0[2] + w[2]];
+        }
+        if !any && !was_moved {
+            return Ok(());
+        }
+        let element = self.mesh.element;
+        let mut moved_cells = Vec::new();
+        for c in 0..self.mesh.num_cells() {
+            let now = self.mesh.cell(c).iter().any(|&a| node_moved[a]);
+            if now {
+                let coords = self.cell_coords(c);
+                if element.min_corner_det_j(&coords[..element.num_nodes()]) <= 0.0 {
+                    return Err(InvertedCell { cell: c, centre: self.reference_centre(c) });
+                }
+                moved_cells.push(c);
+            }
+            if now || self.moved[c] {
+                self.affine[c] = affine_cell(&self.mesh, c);
+            }
+            self.moved[c] = now;
+        }
+        self.moved_bins = (!moved_cells.is_empty()).then(|| Bins::new(&self.mesh, &moved_cells));
+        Ok(())
+    }
+
+    /// Centre of `cell` in the reference configuration (mean of its nodes).
+    pub fn reference_centre(&self, cell: usize) -> [f64; 3] {
+        let nodes = self.mesh.cell(cell);
+        let mut c = [0.0; 3];
+        for &a in nodes {
+            for d in 0..3 {
+                c[d] += self.reference[a][d] / nodes.len() as f64;
+            }
+        }
+        c
     }
 
     /// Local coordinates of `x` in `cell` (possibly outside the reference element), or `None`
@@ -160,7 +350,8 @@ impl Grid {
         self.affine[cell].as_ref().map(|a| &a.map)
     }
 
-    /// Node coordinates of `cell` (the first `num_nodes` entries), without allocating.
+    /// Node coordinates of `cell` in the current configuration (the first `num_nodes`
+    /// entries), without allocating.
     pub fn cell_coords(&self, cell: usize) -> [[f64; 3]; MAX_NODES] {
         let mut coords = [[0.0; 3]; MAX_NODES];
         for (c, &a) in coords.iter_mut().zip(self.mesh.cell(cell)) {
@@ -189,38 +380,43 @@ impl Grid {
         let test = |cell: usize| {
             self.local_coordinates(cell, x).filter(|xi| element.contains_local(xi, 1e-9)).map(|xi| (cell, xi))
         };
-        let (origin, spacing, cells, rotation) = match &self.locator {
-            Locator::Lattice { origin, spacing, cells, rotation } => (origin, spacing, cells, rotation),
-            Locator::Bins { lower, size, bins, start, cells } => {
-                let mut b = [0usize; 3];
+        let still = |cell: &usize| !self.moved[*cell];
+        let found = match &self.locator {
+            Locator::Bins(bins) => bins.candidates(x, dim).iter().map(|&c| c as usize).filter(still).find_map(test),
+            Locator::Lattice { origin, spacing, cells, rotation, cell_index } => {
+                let (c, s) = *rotation;
+                let (dx, dy) = (x[0] - origin[0], x[1] - origin[1]);
+                let lattice_x = [origin[0] + c * dx + s * dy, origin[1] - s * dx + c * dy, x[2]];
+                let mut ijk = [0usize; 3];
+                let mut inside = true;
                 for d in 0..dim {
-                    let s = (x[d] - lower[d]) / size[d];
-                    if !(s >= -1e-9 && s <= bins[d] as f64 * (1.0 + 1e-12) + 1e-9) {
-                        return None;
+                    let s = (lattice_x[d] - origin[d]) / spacing[d];
+                    if !(s >= -1e-9 && s <= cells[d] as f64 * (1.0 + 1e-12) + 1e-9) {
+                        inside = false;
+                        break;
                     }
-                    b[d] = (s.floor().max(0.0) as usize).min(bins[d] - 1);
+                    ijk[d] = (s.floor().max(0.0) as usize).min(cells[d] - 1);
                 }
-                let bin = (b[2] * bins[1] + b[1]) * bins[0] + b[0];
-                return cells[start[bin]..start[bin + 1]].iter().find_map(|&c| test(c as usize));
+                let lattice = (ijk[2] * cells[1] + ijk[1]) * cells[0] + ijk[0];
+                let structured: &[usize] = match element {
+                    ElementType::Tri3 => &[2 * lattice, 2 * lattice + 1],
+                    _ => &[lattice],
+                };
+                let cell_of = |k: usize| match cell_index {
+                    Some(index) => (index[k] != NO_CELL).then_some(index[k] as usize),
+                    None => Some(k),
+                };
+                if inside {
+                    structured.iter().filter_map(|&k| cell_of(k)).filter(still).find_map(test)
+                } else {
+                    None
+                }
             }
         };
-        let (c, s) = *rotation;
-        let (dx, dy) = (x[0] - origin[0], x[1] - origin[1]);
-        let lattice_x = [origin[0] + c * dx + s * dy, origin[1] - s * dx + c * dy, x[2]];
-        let mut ijk = [0usize; 3];
-        for d in 0..dim {
-            let s = (lattice_x[d] - origin[d]) / spacing[d];
-            if !(s >= -1e-9 && s <= cells[d] as f64 * (1.0 + 1e-12) + 1e-9) {
-                return None;
-            }
-            ijk[d] = (s.floor().max(0.0) as usize).min(cells[d] - 1);
-        }
-        let lattice = (ijk[2] * cells[1] + ijk[1]) * cells[0] + ijk[0];
-        let candidates: &[usize] = match element {
-            ElementType::Tri3 => &[2 * lattice, 2 * lattice + 1],
-            _ => &[lattice],
-        };
-        candidates.iter().find_map(|&cell| test(cell))
+        found.or_else(|| {
+            let bins = self.moved_bins.as_ref()?;
+            bins.candidates(x, dim).iter().find_map(|&c| test(c as usize))
+        })
     }
 }
 
@@ -283,6 +479,49 @@ mod tests {
         let (cell, xi) = g.locate(&[0.75, 0.25, 0.6]).unwrap();
         assert_eq!(cell, 4 + 1);
         assert!((xi[0] - 0.0).abs() < 1e-12 && (xi[2] + 0.6).abs() < 1e-12);
+    }
+
+    /// A grid without the cells of a hole still locates by lattice arithmetic around it,
+    /// finds nothing in the hole, and after moving some nodes locates points in the moved
+    /// cells by their current positions.
+    #[test]
+    fn holes_and_moved_cells_are_located() {
+        for element in [ElementType::Quad4, ElementType::Tri3] {
+            let full = Grid::new([0.0; 3], [4.0, 2.0, 0.0], [4, 2, 1], element);
+            let remove: Vec<bool> = (0..full.mesh.num_cells())
+                .map(|c| {
+                    let x = full.reference_centre(c);
+                    x[0] < 1.0 && x[1] < 1.0
+                })
+                .collect();
+            let (mut g, kept) = full.without_cells(&remove);
+            assert_eq!(kept.len(), 15 - 1, "the corner node (0, 0) is dropped");
+            assert!(g.locate(&[0.5, 0.5, 0.0]).is_none());
+            let (cell, _) = g.locate(&[2.5, 1.5, 0.0]).unwrap();
+            assert!(g.reference_centre(cell)[0] > 2.0);
+            // move the node at (1, 1) by (0.3, 0.2)
+            let node = g.reference_coords().iter().position(|x| x[0] == 1.0 && x[1] == 1.0).unwrap();
+            let mut w = vec![[0.0; 3]; g.mesh.coords.len()];
+            w[node] = [0.3, 0.2, 0.0];
+            g.move_nodes(&w).unwrap();
+            assert!(g.has_moved());
+            // a point that the moved node's cells now cover
+            let x = [1.4, 1.3, 0.0];
+            let (cell, xi) = g.locate(&x).expect("inside a moved cell");
+            let coords = g.cell_coords(cell);
+            let mut n = [0.0; 8];
+            element.shape_functions(&xi, &mut n);
+            for d in 0..2 {
+                let v: f64 = (0..element.num_nodes()).map(|a| n[a] * coords[a][d]).sum();
+                assert!((v - x[d]).abs() < 1e-12);
+            }
+            // an inverting motion is refused with the cell
+            w[node] = [-1.5, -0.2, 0.0];
+            assert!(g.move_nodes(&w).is_err());
+            w[node] = [0.0; 3];
+            g.move_nodes(&w).unwrap();
+            assert!(!g.has_moved());
+        }
     }
 
     /// The per-cell affine maps of simplices give the local coordinates of the Newton inverse

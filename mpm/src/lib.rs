@@ -7,16 +7,25 @@
 //! updated-Lagrangian phase is ordinary assembly into the shared system. What is particular
 //! to MPM happens around it, in the seed's three phases:
 //!
-//! 1. *initialisation* ([`mpm_domain::MpmDomain`]'s `begin_step`): locate points in the
-//!    grid (O(1) per point on a structured grid), sort them by cell, reset the grid and
-//!    project mass, momentum and acceleration to its nodes;
-//! 2. *updated-Lagrangian phase*: Newton on the global system (in `loam-fem`);
-//! 3. *convective phase* (`commit`): interpolate `Δu` and `a` back to the points,
-//!    `v_p ← v_p + Δt/2 (a_p^n + a_p^{n+1})`, `x_p ← x_p + Δu_p`, commit `F`, volume and
-//!    law state; the grid returns to its reference position.
+//! 1. *initialisation* ([`mpm_domain::MpmDomain::move_grid`], `locate_points`,
+//!    `update_pattern`, `project_to_grid`, `place_walls`): place the grid (its reference
+//!    position, or where an attached structure puts it: [`attachment`]), locate points in it
+//!    (O(1) per point on a structured grid), sort them by cell, project mass, momentum and
+//!    acceleration to its nodes and reset them;
+//! 2. *updated-Lagrangian phase*: Newton on the global system (in `loam-fem`), the points of
+//!    every body as the kernel's integration points (`compute_internal_forces`);
+//! 3. *convective phase* (`interpolate_to_points`): interpolate `Δu` and `a` back to the
+//!    points, `v_p ← v_p + Δt/2 (a_p^n + a_p^{n+1})`, `x_p ← x_p + Δu_p`, commit `F`, volume
+//!    and law state.
+//!
+//! One grid is one [`mpm_domain::MpmDomain`]: the bodies ([`body::Body`], one material each)
+//! and the penalty walls ([`penalty_boundary`]) on it are parts of it, not domains of their
+//! own.
 
 #![allow(non_snake_case)]
 
+pub mod attachment;
+pub mod body;
 pub mod grid;
 pub mod material_points;
 pub mod mpm_domain;

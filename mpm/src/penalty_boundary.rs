@@ -77,17 +77,28 @@
 //! Both forms keep their penalty matrix in the solve for the initial acceleration
 //! (assembly with `stiffness == false`), so `a₀` obeys the wall as `Δu` does later: a body
 //! pressed on a wall does not start with the free-fall acceleration into it (which the
-//! trapezoidal rule would carry as a `±a` alternation for the whole run). The nodal masses
-//! and material points come from the [`Projection`] handed to [`Domain::begin_step`], so a
-//! penalty wall must come after the particle domains of its grid in the model's domain list.
+//! trapezoidal rule would carry as a `±a` alternation for the whole run). A wall is a
+//! condition of its grid: the MPM domain that owns the grid places the wall's points after
+//! projecting its bodies (nodal masses, material points) and assembles its blocks after the
+//! bodies' cells.
 
 use loam_fem::amplitude::Amplitude;
 use loam_fem::assembly::BlockLayout;
-use loam_fem::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NodalState, PointExtent, Projection};
+use loam_fem::domain::{AssemblyInput, DomainOutput, Field, PointExtent};
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
 
 use crate::grid::Grid;
+
+/// A grid with the global ids of its nodes: where a wall's points lie and which equations
+/// they touch.
+#[derive(Clone, Copy)]
+pub struct GridNodes<'a> {
+    /// The grid (current configuration).
+    pub grid: &'a Grid,
+    /// Global node id of each grid node.
+    pub node_ids: &'a [usize],
+}
 
 /// Which components of the motion a penalty wall holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -214,8 +225,6 @@ pub struct PenaltyBoundary {
     name: String,
     formulation: Formulation,
     thickness: f64,
-    grid: Grid,
-    node_ids: Vec<usize>,
     /// Wall polyline (positions at `t = 0`).
     vertices: Vec<[f64; 2]>,
     /// Boundary particles (Dirichlet form; empty in the contact form).
@@ -237,14 +246,10 @@ pub struct PenaltyBoundary {
 }
 
 impl PenaltyBoundary {
-    /// A wall along the 2D polyline `vertices` (the body on its left) on `grid`, whose local
-    /// node `a` is global node `node_ids[a]`; in the Dirichlet form its boundary particles
-    /// are `spacing` apart ([`BoundaryParticles::on_polyline`]).
-    #[allow(clippy::too_many_arguments)]
+    /// A wall along the 2D polyline `vertices` (the body on its left); in the Dirichlet form
+    /// its boundary particles are `spacing` apart ([`BoundaryParticles::on_polyline`]).
     pub fn new(
         name: &str,
-        grid: Grid,
-        node_ids: Vec<usize>,
         formulation: Formulation,
         thickness: f64,
         vertices: Vec<[f64; 2]>,
@@ -260,8 +265,6 @@ impl PenaltyBoundary {
             name: name.to_string(),
             formulation,
             thickness,
-            grid,
-            node_ids,
             vertices,
             particles,
             settings,
@@ -291,8 +294,9 @@ impl PenaltyBoundary {
         self.acting.iter().filter(|a| **a).count()
     }
 
-    fn dim(&self) -> usize {
-        self.grid.mesh.element.dim()
+    /// The wall's name (its output file and its `wall_force` monitor).
+    pub fn name(&self) -> &str {
+        &self.name
     }
 
     fn wall_displacement(&self, t: f64) -> [f64; 3] {
@@ -300,14 +304,15 @@ impl PenaltyBoundary {
         self.settings.displacement.map(|d| d * f)
     }
 
-    /// The point at `x` if it lies in a cell with projected mass on every node.
-    fn place(&self, x: [f64; 3], weight: f64, normal: [f64; 3], gap: f64, mass: &[f64]) -> Option<PenaltyPoint> {
-        let (cell, xi) = self.grid.locate(&x)?;
-        if !self.grid.mesh.cell(cell).iter().all(|&a| mass[self.node_ids[a]] > 0.0) {
+    /// The point at `x` if it lies in a cell with projected mass on every node (`mass` per
+    /// grid node).
+    fn place(grid: &Grid, x: [f64; 3], weight: f64, normal: [f64; 3], gap: f64, mass: &[f64]) -> Option<PenaltyPoint> {
+        let (cell, xi) = grid.locate(&x)?;
+        if !grid.mesh.cell(cell).iter().all(|&a| mass[a] > 0.0) {
             return None;
         }
         let mut shape = [0.0; MAX_NODES];
-        let element = self.grid.mesh.element;
+        let element = grid.mesh.element;
         element.shape_functions(&xi, &mut shape[..element.num_nodes()]);
         Some(PenaltyPoint { cell, shape, weight, normal, gap, position: x })
     }
@@ -315,16 +320,21 @@ impl PenaltyBoundary {
     /// Penalty vector `v` (force on the body `−β w v`) of point `k` at `input`, its
     /// derivative `P = ∂v/∂g` with respect to the point's displacement (the tangent is
     /// `β w N_I N_J P`), and whether the point acts.
-    fn penalty_vector(&self, k: usize, input: &AssemblyInput<'_>) -> ([f64; 3], [[f64; 3]; 3], bool) {
+    fn penalty_vector(
+        &self,
+        at: GridNodes<'_>,
+        k: usize,
+        input: &AssemblyInput<'_>,
+    ) -> ([f64; 3], [[f64; 3]; 3], bool) {
         let p = &self.points[k];
-        let dim = self.dim();
+        let dim = at.grid.mesh.element.dim();
         let wall = self.wall_displacement(input.time);
         let mut g = [0.0; 3];
         for i in 0..dim {
             g[i] = -(wall[i] - self.offset[i]);
         }
-        for (a, &node) in self.grid.mesh.cell(p.cell).iter().enumerate() {
-            let dof = self.node_ids[node] * dim;
+        for (a, &node) in at.grid.mesh.cell(p.cell).iter().enumerate() {
+            let dof = at.node_ids[node] * dim;
             for i in 0..dim {
                 g[i] += p.shape[a] * (input.state.u[dof + i] - input.committed.u[dof + i]);
             }
@@ -356,30 +366,21 @@ impl PenaltyBoundary {
     }
 }
 
-impl Domain for PenaltyBoundary {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn formulation(&self) -> Formulation {
-        self.formulation
-    }
-
-    fn thickness(&self) -> f64 {
-        self.thickness
-    }
-
+impl PenaltyBoundary {
     /// Places the penalty points at the wall's position at `t_n`: the boundary particles
     /// (Dirichlet form) or the material points within one size of the wall (contact form),
     /// each kept only in a cell with projected mass on every node; their cells are the
     /// element blocks.
-    fn begin_step(&mut self, projection: &mut Projection) -> bool {
+    ///
+    /// `mass` is the nodal mass projected by the bodies (per grid node), `material` the
+    /// material points of the bodies on the grid. Returns whether the blocks changed.
+    pub fn begin_step(&mut self, grid: &Grid, mass: &[f64], material: &[PointExtent]) -> bool {
         self.offset = self.wall_displacement(self.time);
         let o = self.offset;
         let mut points = Vec::new();
         if self.settings.contact {
             let segs = segments(&self.vertices);
-            for &PointExtent { position: x, size, .. } in &projection.points {
+            for &PointExtent { position: x, size, .. } in material {
                 let r = 0.5 * size;
                 // the nearest segment on whose span the point lies
                 let near = segs
@@ -394,7 +395,7 @@ impl Domain for PenaltyBoundary {
                     .min_by(|a, b| a.0.abs().total_cmp(&b.0.abs()));
                 if let Some((dist, n)) = near {
                     let w = size * self.formulation.measure_factor(self.thickness, x[0]);
-                    points.extend(self.place(x, w, n, dist - r, &projection.mass));
+                    points.extend(Self::place(grid, x, w, n, dist - r, mass));
                 }
             }
         } else {
@@ -402,7 +403,7 @@ impl Domain for PenaltyBoundary {
                 let x0 = self.particles.position[b];
                 let x = [x0[0] + o[0], x0[1] + o[1], x0[2] + o[2]];
                 let (w, n) = (self.particles.weight[b], self.particles.normal[b]);
-                points.extend(self.place(x, w, n, 0.0, &projection.mass));
+                points.extend(Self::place(grid, x, w, n, 0.0, mass));
             }
         }
         // by cell, then by position (deterministic whatever the order of the projection)
@@ -427,23 +428,25 @@ impl Domain for PenaltyBoundary {
         changed
     }
 
-    fn blocks(&self, layout: &mut BlockLayout) {
-        let dim = self.dim();
+    /// Appends the wall's blocks (the cells holding its points) to `layout`.
+    pub fn blocks(&self, at: GridNodes<'_>, layout: &mut BlockLayout) {
+        let dim = at.grid.mesh.element.dim();
         for &c in &self.cells {
-            layout.push(self.grid.mesh.cell(c).iter().flat_map(|&a| (0..dim).map(move |i| self.node_ids[a] * dim + i)));
+            layout.push(at.grid.mesh.cell(c).iter().flat_map(|&a| (0..dim).map(move |i| at.node_ids[a] * dim + i)));
         }
+    }
+
+    /// Length of the wall's part of the element buffers: matrices, vectors.
+    pub fn buffer_lengths(&self, grid: &Grid) -> (usize, usize) {
+        let nd = grid.mesh.element.num_nodes() * grid.mesh.element.dim();
+        (self.cells.len() * nd * nd, self.cells.len() * nd)
     }
 
     /// `r_I = Σ β w N_I v` and `K_IJ = Σ β w N_I N_J P` over the acting points of each block
     /// (`v` and `P` of the form, see the module doc).
-    fn assemble(
-        &mut self,
-        input: &AssemblyInput<'_>,
-        matrices: &mut [f64],
-        vectors: &mut [f64],
-    ) -> Result<(), DomainError> {
-        let nn = self.grid.mesh.element.num_nodes();
-        let dim = self.dim();
+    pub fn assemble(&self, at: GridNodes<'_>, input: &AssemblyInput<'_>, matrices: &mut [f64], vectors: &mut [f64]) {
+        let nn = at.grid.mesh.element.num_nodes();
+        let dim = at.grid.mesh.element.dim();
         let nd = nn * dim;
         for blk in 0..self.cells.len() {
             let fv = &mut vectors[blk * nd..(blk + 1) * nd];
@@ -453,7 +456,7 @@ impl Domain for PenaltyBoundary {
                 km.fill(0.0);
             }
             for k in self.cell_ptr[blk]..self.cell_ptr[blk + 1] {
-                let (v, dv, acts) = self.penalty_vector(k, input);
+                let (v, dv, acts) = self.penalty_vector(at, k, input);
                 if !acts {
                     continue;
                 }
@@ -478,15 +481,14 @@ impl Domain for PenaltyBoundary {
                 }
             }
         }
-        Ok(())
     }
 
     /// Records the force of the wall on the body at each point, `f = −β w v`, and moves the
     /// wall's clock to `t_{n+1}`.
-    fn commit(&mut self, input: &AssemblyInput<'_>) {
+    pub fn commit(&mut self, at: GridNodes<'_>, input: &AssemblyInput<'_>) {
         let (force, acting): (Vec<[f64; 3]>, Vec<bool>) = (0..self.points.len())
             .map(|k| {
-                let (v, _, acts) = self.penalty_vector(k, input);
+                let (v, _, acts) = self.penalty_vector(at, k, input);
                 let bw = self.settings.penalty_factor * self.points[k].weight;
                 (v.map(|c| -bw * c), acts)
             })
@@ -496,26 +498,10 @@ impl Domain for PenaltyBoundary {
         self.time = input.time;
     }
 
-    fn wall_force(&self) -> Option<[f64; 3]> {
-        Some(self.total_force())
-    }
-
-    fn kinetic_energy(&self, _v: &[f64]) -> f64 {
-        0.0
-    }
-
-    fn strain_energy(&self) -> f64 {
-        0.0
-    }
-
-    fn boundary_facets(&self) -> Vec<Vec<usize>> {
-        Vec::new()
-    }
-
     /// The penalty points of the last step (boundary particles, or the material points near
     /// the wall) with `force` (of the wall on the body, N), `normal` and `active` (1 where the
     /// point acted).
-    fn output(&self, _committed: &NodalState) -> DomainOutput {
+    pub fn output(&self) -> DomainOutput {
         let n = self.points.len().min(self.force.len());
         let pts = &self.points[..n];
         DomainOutput {
@@ -543,6 +529,8 @@ impl Domain for PenaltyBoundary {
 mod tests {
     use loam_fem::element::ElementType;
 
+    use loam_fem::domain::NodalState;
+
     use super::*;
 
     const WALL: [[f64; 2]; 2] = [[0.1, 0.3], [2.9, 1.7]];
@@ -551,7 +539,29 @@ mod tests {
     /// projection with mass on every node but the top-right one; in the contact form, three
     /// material points of size 0.2 near the wall (one 0.05 behind its line, one touching it,
     /// one 0.15 in front).
-    fn setup(kind: PenaltyKind, contact: bool) -> (PenaltyBoundary, Projection) {
+    struct Fixture {
+        wall: PenaltyBoundary,
+        grid: Grid,
+        ids: Vec<usize>,
+        mass: Vec<f64>,
+        material: Vec<PointExtent>,
+    }
+
+    impl Fixture {
+        fn at(&self) -> GridNodes<'_> {
+            GridNodes { grid: &self.grid, node_ids: &self.ids }
+        }
+
+        fn begin(&mut self) -> bool {
+            self.wall.begin_step(&self.grid, &self.mass, &self.material)
+        }
+
+        fn ndof(&self) -> usize {
+            2 * self.grid.mesh.coords.len()
+        }
+    }
+
+    fn setup(kind: PenaltyKind, contact: bool) -> Fixture {
         let grid = Grid::new([0.0; 3], [3.0, 2.0, 0.0], [3, 2, 1], ElementType::Quad4);
         let nodes = grid.mesh.coords.len();
         let settings = PenaltySettings {
@@ -561,25 +571,16 @@ mod tests {
             displacement: [0.0; 3],
             amplitude: Amplitude::default(),
         };
-        let wall = PenaltyBoundary::new(
-            "wall",
-            grid,
-            (0..nodes).collect(),
-            Formulation::PlaneStrain,
-            2.0,
-            WALL.to_vec(),
-            0.25,
-            settings,
-        );
-        let mut projection = Projection::new(nodes, 2);
-        projection.mass.iter_mut().for_each(|m| *m = 1.0);
-        projection.mass[nodes - 1] = 0.0;
+        let wall = PenaltyBoundary::new("wall", Formulation::PlaneStrain, 2.0, WALL.to_vec(), 0.25, settings);
+        let mut mass = vec![1.0; nodes];
+        mass[nodes - 1] = 0.0;
         let n = [-0.4472135954999579, 0.8944271909999159];
+        let mut material = Vec::new();
         for (s, d) in [(0.6, 0.05), (1.2, 0.1), (1.8, 0.25)] {
             let x = [WALL[0][0] + s * 0.8944271909999159 + d * n[0], WALL[0][1] + s * 0.4472135954999579 + d * n[1]];
-            projection.points.push(PointExtent::new([x[0], x[1], 0.0], 0.2));
+            material.push(PointExtent::new([x[0], x[1], 0.0], 0.2));
         }
-        (wall, projection)
+        Fixture { wall, grid, ids: (0..nodes).collect(), mass, material }
     }
 
     fn input<'a>(state: &'a NodalState, committed: &'a NodalState) -> AssemblyInput<'a> {
@@ -609,15 +610,15 @@ mod tests {
 
     #[test]
     fn penalty_points_lie_where_the_material_is() {
-        let (mut wall, mut projection) = setup(PenaltyKind::NoSlip, false);
-        assert!(wall.begin_step(&mut projection));
+        let mut f = setup(PenaltyKind::NoSlip, false);
+        assert!(f.begin());
         // the segment crosses cells 0, 1, 4 and 5; cell 5 has the massless top-right node
-        assert_eq!(wall.cells, vec![0, 1, 4]);
-        assert!(!wall.begin_step(&mut projection), "same blocks: the pattern is kept");
+        assert_eq!(f.wall.cells, vec![0, 1, 4]);
+        assert!(!f.begin(), "same blocks: the pattern is kept");
         // contact form: the three material points, gaps d − r
-        let (mut wall, mut projection) = setup(PenaltyKind::NoSlip, true);
-        assert!(wall.begin_step(&mut projection));
-        let gaps: Vec<f64> = wall.points.iter().map(|p| p.gap).collect();
+        let mut f = setup(PenaltyKind::NoSlip, true);
+        assert!(f.begin());
+        let gaps: Vec<f64> = f.wall.points.iter().map(|p| p.gap).collect();
         assert_eq!(gaps.len(), 3);
         for (g, e) in gaps.iter().zip([-0.05, 0.0, 0.15]) {
             assert!((g - e).abs() < 1e-12, "{gaps:?}");
@@ -639,11 +640,11 @@ mod tests {
     fn tangent_matches_finite_differences_of_the_residual() {
         for kind in [PenaltyKind::NoSlip, PenaltyKind::Slip] {
             for contact in [false, true] {
-                let (mut wall, mut projection) = setup(kind, contact);
-                wall.begin_step(&mut projection);
+                let mut f = setup(kind, contact);
+                f.begin();
                 let mut layout = BlockLayout::default();
-                wall.blocks(&mut layout);
-                let ndof = 2 * wall.grid.mesh.coords.len();
+                f.wall.blocks(f.at(), &mut layout);
+                let ndof = f.ndof();
                 let committed = NodalState::zeros(ndof);
                 let mut state = NodalState::zeros(ndof);
                 for (k, u) in state.u.iter_mut().enumerate() {
@@ -652,7 +653,7 @@ mod tests {
                 }
                 let mut mats = vec![0.0; layout.matrix_len()];
                 let mut vecs = vec![0.0; layout.vector_len()];
-                wall.assemble(&input(&state, &committed), &mut mats, &mut vecs).unwrap();
+                f.wall.assemble(f.at(), &input(&state, &committed), &mut mats, &mut vecs);
                 let scale = mats.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                 assert!(scale > 0.0);
                 let h = 1e-6;
@@ -665,7 +666,7 @@ mod tests {
                             let mut st = state.clone();
                             st.u[gj] += sign * h;
                             let mut m = vec![0.0; layout.matrix_len()];
-                            wall.assemble(&input(&st, &committed), &mut m, &mut r[s]).unwrap();
+                            f.wall.assemble(f.at(), &input(&st, &committed), &mut m, &mut r[s]);
                         }
                         for i in 0..nd {
                             let fd = (r[0][layout.dof_ptr[blk] + i] - r[1][layout.dof_ptr[blk] + i]) / (2.0 * h);
@@ -689,11 +690,13 @@ mod tests {
         let u = [0.01 * t[0] - 0.1 * n[0], 0.01 * t[1] - 0.1 * n[1]];
         for kind in [PenaltyKind::Slip, PenaltyKind::NoSlip] {
             for contact in [false, true] {
-                let (mut wall, mut projection) = setup(kind, contact);
-                wall.begin_step(&mut projection);
-                let ndof = 2 * wall.grid.mesh.coords.len();
+                let mut fx = setup(kind, contact);
+                fx.begin();
+                let ndof = fx.ndof();
                 let (committed, state) = (NodalState::zeros(ndof), uniform(ndof, u));
-                wall.commit(&input(&state, &committed));
+                let at = GridNodes { grid: &fx.grid, node_ids: &fx.ids };
+                fx.wall.commit(at, &input(&state, &committed));
+                let wall = &fx.wall;
                 let f = wall.total_force();
                 let (fn_, ft) = (f[0] * n[0] + f[1] * n[1], f[0] * t[0] + f[1] * t[1]);
                 let (expected_n, expected_t, acting) = if contact {
@@ -713,12 +716,13 @@ mod tests {
             }
         }
         // contact releases a body moving away from the wall
-        let (mut wall, mut projection) = setup(PenaltyKind::Slip, true);
-        wall.begin_step(&mut projection);
-        let ndof = 2 * wall.grid.mesh.coords.len();
+        let mut fx = setup(PenaltyKind::Slip, true);
+        fx.begin();
+        let ndof = fx.ndof();
         let (committed, state) = (NodalState::zeros(ndof), uniform(ndof, [0.1 * n[0], 0.1 * n[1]]));
-        wall.commit(&input(&state, &committed));
-        assert_eq!((wall.acting_points(), wall.total_force()), (0, [0.0; 3]));
+        let at = GridNodes { grid: &fx.grid, node_ids: &fx.ids };
+        fx.wall.commit(at, &input(&state, &committed));
+        assert_eq!((fx.wall.acting_points(), fx.wall.total_force()), (0, [0.0; 3]));
     }
 
     /// A moving wall (displacement × amplitude ramp): a body that follows the wall's
@@ -727,18 +731,21 @@ mod tests {
     #[test]
     fn moving_wall_prescribes_its_increment() {
         for contact in [false, true] {
-            let (mut wall, mut projection) = setup(PenaltyKind::NoSlip, contact);
-            wall.settings.displacement = [0.05, -0.02, 0.0];
-            wall.settings.amplitude = Amplitude::Table(vec![[0.0, 0.0], [1.0, 1.0], [2.0, 3.0]]);
-            wall.begin_step(&mut projection);
-            let ndof = 2 * wall.grid.mesh.coords.len();
+            let mut fx = setup(PenaltyKind::NoSlip, contact);
+            fx.wall.settings.displacement = [0.05, -0.02, 0.0];
+            fx.wall.settings.amplitude = Amplitude::Table(vec![[0.0, 0.0], [1.0, 1.0], [2.0, 3.0]]);
+            fx.begin();
+            let ndof = fx.ndof();
             let committed = NodalState::zeros(ndof);
-            wall.commit(&input(&committed, &committed));
-            let left_behind = wall.total_force();
+            let at = GridNodes { grid: &fx.grid, node_ids: &fx.ids };
+            fx.wall.commit(at, &input(&committed, &committed));
+            let left_behind = fx.wall.total_force();
             // t = 1 → 2: the wall moves by 2 × (0.05, −0.02)
-            wall.begin_step(&mut projection);
+            fx.begin();
             let state = uniform(ndof, [0.1, -0.04]);
-            wall.commit(&AssemblyInput { time: 2.0, ..input(&state, &committed) });
+            let at = GridNodes { grid: &fx.grid, node_ids: &fx.ids };
+            fx.wall.commit(at, &AssemblyInput { time: 2.0, ..input(&state, &committed) });
+            let wall = &fx.wall;
             let f = wall.total_force();
             if contact {
                 // the wall moved away from the points (which the test keeps in place)

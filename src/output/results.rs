@@ -29,7 +29,7 @@ impl ResultWriter {
             write!(monitors, ",{name}")?;
         }
         writeln!(monitors)?;
-        let vtk = if sim.case.output.vtk { Some(super::vtk_output::VtkSeries::new(dir, sim)) } else { None };
+        let vtk = if sim.case.output.vtk { Some(super::vtk_output::VtkSeries::new(dir)) } else { None };
         Ok(Self {
             dir: dir.to_path_buf(),
             monitors,

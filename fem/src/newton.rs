@@ -1,0 +1,254 @@
+//! The Newton–Raphson strategy of one implicit step (Kratos' residual-based Newton strategy).
+//!
+//! From the predictor `u = u_n` (prescribed values at `t_{n+1}`), iteration `k`:
+//!
+//! 1. the time scheme gives `v`, `a` and the inertial acceleration `ã` from `u`;
+//! 2. the assembler forms `R(u) = f_int − f_body + M ã − f_ext` (and the tangent
+//!    `K_t + c_M M` unless the step has most likely converged: then the residual alone first,
+//!    [`crate::convergence::Convergence::likely`]);
+//! 3. with a line search, a residual that grew (or is not finite) takes back half of the
+//!    last correction, up to `line_search_max_cuts` times;
+//! 4. the convergence criteria decide; if not converged, `K δu = −R` is solved and
+//!    `u ← u + δu`.
+//!
+//! The residual and correction norms of every iteration, per block of the monolithic system,
+//! go into the [`StepReport`]; `LOAM_NEWTON_TRACE=1` prints them on stderr.
+
+use std::time::Instant;
+
+use serde::Deserialize;
+
+use crate::assembler::{norm, Assembler};
+use crate::convergence::{Convergence, ConvergenceCriterion};
+use crate::domain::{AssemblyInput, Domain, NodalState};
+use crate::linear_solver::LinearSolverKind;
+use crate::model::{StepError, StepReport};
+use crate::scheme::TimeScheme;
+
+/// Newton–Raphson settings, as in the case file's `solver` object.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct NewtonSettings {
+    /// Largest number of iterations per step (default 20).
+    pub max_iterations: usize,
+    /// `‖R_k‖ / ‖R_0‖` below which the residual has converged (default 1e-6).
+    pub residual_relative_tolerance: f64,
+    /// `‖R_k‖` (N) below which the residual has converged (default 1e-9).
+    pub residual_absolute_tolerance: f64,
+    /// `‖δu‖ / ‖Δu‖` (increment of this iteration vs of the step) (default 1e-6).
+    pub displacement_relative_tolerance: f64,
+    /// `‖δu‖` (m) below which the displacement has converged (default 1e-12).
+    pub displacement_absolute_tolerance: f64,
+    /// Combination of the two criteria (default `and`).
+    pub convergence_criterion: ConvergenceCriterion,
+    /// Direct solver (default `auto`: Cholesky if symmetric, else LU).
+    pub linear_solver: LinearSolverKind,
+    /// Backtracking line search: halve the correction while the residual grows (default
+    /// off; helps Newton through the kinks of plasticity in flowing granular bodies).
+    pub line_search: bool,
+    /// Halvings tried per iteration by the line search (default 4).
+    pub line_search_max_cuts: u32,
+}
+
+impl Default for NewtonSettings {
+    fn default() -> Self {
+        Self {
+            max_iterations: 20,
+            residual_relative_tolerance: 1e-6,
+            residual_absolute_tolerance: 1e-9,
+            displacement_relative_tolerance: 1e-6,
+            displacement_absolute_tolerance: 1e-12,
+            convergence_criterion: ConvergenceCriterion::And,
+            linear_solver: LinearSolverKind::Auto,
+            line_search: false,
+            line_search_max_cuts: 4,
+        }
+    }
+}
+
+impl NewtonSettings {
+    /// The convergence criteria of these settings.
+    pub fn convergence(&self) -> Convergence {
+        Convergence::new(
+            self.convergence_criterion,
+            self.residual_relative_tolerance,
+            self.residual_absolute_tolerance,
+            self.displacement_relative_tolerance,
+            self.displacement_absolute_tolerance,
+        )
+    }
+}
+
+/// The nonlinear problem of one step: what the strategy iterates on.
+pub struct StepProblem<'a> {
+    /// The domains (element blocks).
+    pub domains: &'a mut [Box<dyn Domain>],
+    /// The global system of the current pattern.
+    pub assembler: &'a mut Assembler,
+    /// The iterate at `t_{n+1}`, starting from the predictor.
+    pub state: &'a mut NodalState,
+    /// The converged state at `t_n`.
+    pub committed: &'a NodalState,
+    /// Time scheme.
+    pub scheme: TimeScheme,
+    /// Step length Δt.
+    pub dt: f64,
+    /// `t_{n+1}`.
+    pub time: f64,
+    /// Gravity at `t_{n+1}`.
+    pub gravity: [f64; 3],
+    /// External nodal forces at `t_{n+1}` (local frames at slip nodes).
+    pub f_ext: &'a [f64],
+}
+
+impl StepProblem<'_> {
+    /// `u ← u + s δu` for the last correction, with the step's increment `Δu` and the
+    /// kinematics following.
+    fn apply_correction(&mut self, s: f64, du_step: &mut [f64]) {
+        for ((u, du), d) in self.state.u.iter_mut().zip(du_step.iter_mut()).zip(self.assembler.correction()) {
+            *u += s * d;
+            *du += s * d;
+        }
+        self.scheme.update_kinematics(self.dt, self.state, self.committed);
+    }
+}
+
+/// The assembly input of a step at the iterate `state`, with inertia at `inertial`.
+#[allow(clippy::too_many_arguments)]
+pub fn assembly_input<'b>(
+    scheme: TimeScheme,
+    state: &'b NodalState,
+    committed: &'b NodalState,
+    inertial: &'b [f64],
+    dt: f64,
+    time: f64,
+    gravity: [f64; 3],
+    with_tangent: bool,
+) -> AssemblyInput<'b> {
+    AssemblyInput {
+        state,
+        committed,
+        inertial_acceleration: scheme.is_dynamic().then_some(inertial),
+        mass_coefficient: scheme.mass_coefficient(dt),
+        gravity,
+        time_step: dt,
+        gamma: scheme.gamma(),
+        time,
+        with_tangent,
+        stiffness: true,
+    }
+}
+
+/// Newton–Raphson with optional line search (see the module doc).
+pub struct NewtonStrategy {
+    /// Settings from the case file.
+    pub settings: NewtonSettings,
+}
+
+impl NewtonStrategy {
+    /// Iterates `problem` to convergence; the iterations and norms go into `report`. On
+    /// success `problem.state` is the converged state and the last assembly is at it.
+    pub fn solve(&self, problem: &mut StepProblem<'_>, report: &mut StepReport) -> Result<(), StepError> {
+        let settings = &self.settings;
+        let mut convergence = settings.convergence();
+        let n = problem.state.u.len();
+        let mut inertial = vec![0.0; n];
+        let mut du_step = vec![0.0; n];
+        let mut last_du = f64::INFINITY;
+        let mut previous_du = f64::INFINITY;
+        for it in 0..=settings.max_iterations {
+            if problem.scheme.is_dynamic() {
+                problem.scheme.inertial_accelerations(problem.state, problem.committed, &mut inertial);
+            }
+            let r_prev = report.residuals.last().copied().unwrap_or(f64::INFINITY);
+            let du_step_norm = norm(&du_step);
+            let displacement_met = convergence.displacement_met(it, last_du, du_step_norm);
+            let likely = convergence.likely(it, r_prev, last_du, previous_du, du_step_norm);
+            let mut with_tangent = !likely;
+            // fraction of the last correction currently applied
+            let mut step_length = 1.0;
+            let mut backtracks = 0;
+            let r_norm = loop {
+                let r = Self::assemble_residual(problem, &inertial, with_tangent, report)?;
+                if settings.line_search
+                    && it > 1
+                    && backtracks < settings.line_search_max_cuts
+                    && (r >= r_prev || r.is_nan())
+                {
+                    // take back half of the applied part of the correction
+                    let shorter = 0.5 * step_length;
+                    problem.apply_correction(shorter - step_length, &mut du_step);
+                    last_du *= shorter / step_length;
+                    step_length = shorter;
+                    backtracks += 1;
+                    continue;
+                }
+                break r;
+            };
+            report.residuals.push(r_norm);
+            report.block_residuals.push(problem.assembler.block_norms());
+            if trace_newton() {
+                let b = problem.assembler.block_norms();
+                eprintln!(
+                    "newton t={:.6e} dt={:.3e} it={it} |r|={r_norm:.3e} (soil {:.3e} interface {:.3e} structure {:.3e}) |du|={last_du:.3e} |Du|={:.3e} backtracks={backtracks} tangent={with_tangent}",
+                    problem.time, problem.dt, b.soil, b.interface, b.structure, norm(&du_step)
+                );
+            }
+            if !r_norm.is_finite() {
+                return Err(StepError::NoConvergence { iterations: it, residual: r_norm });
+            }
+            if convergence.converged(it, r_norm, displacement_met) {
+                report.iterations = it;
+                return Ok(());
+            }
+            if it == settings.max_iterations {
+                break;
+            }
+            if !with_tangent {
+                // the prediction failed: the tangent at the same iterate
+                with_tangent = true;
+                Self::assemble_residual(problem, &inertial, with_tangent, report)?;
+            }
+            let t = Instant::now();
+            problem.assembler.tangent();
+            report.timings.assembly += t.elapsed().as_secs_f64();
+            let before = problem.assembler.solver_timings();
+            let correction = problem.assembler.solve()?;
+            let after = problem.assembler.solver_timings();
+            report.timings.factorisation +=
+                after.factorisation - before.factorisation + after.symbolic - before.symbolic;
+            report.timings.symbolic += after.symbolic - before.symbolic;
+            report.timings.solve += after.solve - before.solve;
+            report.block_corrections.push(problem.assembler.block_norms());
+            problem.apply_correction(1.0, &mut du_step);
+            previous_du = last_du;
+            last_du = correction;
+        }
+        Err(StepError::NoConvergence {
+            iterations: settings.max_iterations,
+            residual: report.residuals.last().copied().unwrap_or(f64::NAN),
+        })
+    }
+
+    /// Element kernels and residual at the current iterate; returns `‖R‖`.
+    fn assemble_residual(
+        problem: &mut StepProblem<'_>,
+        inertial: &[f64],
+        with_tangent: bool,
+        report: &mut StepReport,
+    ) -> Result<f64, StepError> {
+        let t = Instant::now();
+        let p = &mut *problem;
+        let input = assembly_input(p.scheme, p.state, p.committed, inertial, p.dt, p.time, p.gravity, with_tangent);
+        p.assembler.assemble(p.domains, &input)?;
+        let r = problem.assembler.residual(problem.f_ext);
+        report.timings.assembly += t.elapsed().as_secs_f64();
+        Ok(r)
+    }
+}
+
+/// Whether `LOAM_NEWTON_TRACE` asks for every Newton iteration's norms on stderr.
+fn trace_newton() -> bool {
+    static TRACE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *TRACE.get_or_init(|| std::env::var_os("LOAM_NEWTON_TRACE").is_some())
+}

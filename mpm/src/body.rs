@@ -1,0 +1,517 @@
+//! A body: the material points of one material on a background grid, and what each phase of
+//! a step computes for them (CB-Geo's names: `locate_particles`, `p2g`,
+//! `compute_internal_forces`, `g2p`/`update_particles`).
+//!
+//! - [`Body::locate`]: find each point's cell (points outside the grid are erased), sort the
+//!   points by (cell, id), evaluate the shape functions and their gradients at the points in
+//!   the grid's configuration at the start of the step;
+//! - [`Body::project`]: `m_I += Σ_p N_I m_p`, `(m v)_I += Σ_p N_I m_p v_p`,
+//!   `(m a)_I += Σ_p N_I m_p a_p`;
+//! - [`Body::add_cell`]: the points of one cell as the kernel's integration points (weight
+//!   `V_p^n`, `F0 = F_p^n`) and their lumped mass `M_I = Σ_p N_I m_p` with gravity and inertia;
+//! - [`Body::convect`]: `Δu_p = Σ N_I Δu_I`, `a_p = Σ N_I a_I`,
+//!   `v_p ← v_p + Δt ((1 − γ) a_p^n + γ a_p^{n+1})` (blended with the grid velocity, see
+//!   [`VelocityBlend`]), `x_p ← x_p + Δu_p`, and `F_p`, `V_p = J_p V_p^0`, stress and law
+//!   state committed.
+
+use std::sync::Arc;
+
+use loam_fem::domain::{AssemblyInput, PointExtent, PointLoad};
+use loam_fem::element::MAX_NODES;
+use loam_fem::formulation::Formulation;
+use loam_fem::kernel::{point_geometry, solid_element, KernelContext, KernelError, PointGeometry, PointOutput};
+use loam_laws::ConstitutiveLaw;
+use nalgebra::Matrix3;
+use rayon::prelude::*;
+
+use crate::grid::Grid;
+use crate::material_points::MaterialPoints;
+
+/// Share θ of the grid (PIC) velocity in the material points' velocity update of the
+/// convective phase, `v_p ← (1 − θ) v_p^FLIP + θ Σ_I N_I v_I^{n+1}` (Brackbill & Ruppel
+/// 1986; Nairn 2015 on FLIP/PIC blending). The blend damps the particle-velocity modes the
+/// grid does not see by the factor `1 − θ` per step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum VelocityBlend {
+    /// The same θ in every step (θ = 0: FLIP-type Newmark update; θ = 1: PIC); the damping
+    /// per unit time then grows as the step shrinks.
+    PicFraction(f64),
+    /// `θ = 1 − exp(−Δt/τ)`: the modes decay as `exp(−t/τ)` whatever the step sizes, so that
+    /// runs with different (or adaptive) steps damp alike.
+    RelaxationTime(f64),
+}
+
+impl VelocityBlend {
+    /// θ for a step of length `dt`.
+    pub fn theta(self, dt: f64) -> f64 {
+        match self {
+            Self::PicFraction(theta) => theta,
+            Self::RelaxationTime(tau) => -(-dt / tau).exp_m1(),
+        }
+    }
+}
+
+/// Nodal sums of the point-to-grid projection, per grid node.
+#[derive(Debug, Clone, Default)]
+pub struct GridSums {
+    /// `m_I`.
+    pub mass: Vec<f64>,
+    /// `(m v)_I`.
+    pub momentum: Vec<[f64; 3]>,
+    /// `(m a)_I`.
+    pub inertia: Vec<[f64; 3]>,
+}
+
+impl GridSums {
+    /// Zero sums for `nodes` grid nodes.
+    pub fn reset(&mut self, nodes: usize) {
+        self.mass.clear();
+        self.mass.resize(nodes, 0.0);
+        self.momentum.clear();
+        self.momentum.resize(nodes, [0.0; 3]);
+        self.inertia.clear();
+        self.inertia.resize(nodes, [0.0; 3]);
+    }
+}
+
+/// The points' trial history and kernel output of the current iterate (committed in the
+/// convective phase).
+#[derive(Debug, Clone, Default)]
+pub struct Trial {
+    /// Law history, `state_len` values per point.
+    pub state: Vec<f64>,
+    /// Kernel output per point.
+    pub out: Vec<PointOutput>,
+}
+
+impl Trial {
+    /// Per-block mutable views for the cells `blocks` (ascending; `None` where the body has
+    /// no point), for the parallel element loop; `cell_start` as [`Body::points_in_cell`].
+    pub fn views(
+        &mut self,
+        cell_start: &[usize],
+        state_len: usize,
+        blocks: &[usize],
+    ) -> Vec<Option<(&mut [f64], &mut [PointOutput])>> {
+        let mut views = Vec::with_capacity(blocks.len());
+        let (mut rest_s, mut rest_o) = (self.state.as_mut_slice(), self.out.as_mut_slice());
+        let mut consumed = 0;
+        for &c in blocks {
+            let range = cell_start[c]..cell_start[c + 1];
+            if range.is_empty() {
+                views.push(None);
+                continue;
+            }
+            // every occupied cell is a block, so the points are consumed in order
+            debug_assert_eq!(range.start, consumed);
+            let np = range.len();
+            let (s, r) = std::mem::take(&mut rest_s).split_at_mut(np * state_len);
+            rest_s = r;
+            let (o, r) = std::mem::take(&mut rest_o).split_at_mut(np);
+            rest_o = r;
+            consumed += np;
+            views.push(Some((s, o)));
+        }
+        views
+    }
+}
+
+/// The material points of one material (see the module doc).
+pub struct Body {
+    /// Name from the case file (its output file `<name>.pvd`).
+    pub name: String,
+    law: Arc<dyn ConstitutiveLaw>,
+    /// The material points (sorted by cell during a step).
+    pub points: MaterialPoints,
+    /// Ids of this body's points seen from outside: `id_offset + points.id`.
+    pub id_offset: usize,
+    /// Number of points at the start (ids run over `0..initial_count`).
+    initial_count: usize,
+    index_of_id: Vec<usize>,
+    /// Per point (in the sorted order): its cell and its shape functions there.
+    cell_of_point: Vec<usize>,
+    geometry: Vec<PointGeometry>,
+    /// Points of grid cell `c`: `cell_start[c]..cell_start[c + 1]`.
+    cell_start: Vec<usize>,
+    trial: Trial,
+    erased: usize,
+    /// Forces carried by material points (particle Neumann conditions).
+    point_loads: Vec<PointLoad>,
+    velocity_blend: VelocityBlend,
+}
+
+impl Body {
+    /// A body of `points` of the material `law`; its point ids start at `id_offset`.
+    pub fn new(name: &str, law: Arc<dyn ConstitutiveLaw>, mut points: MaterialPoints, id_offset: usize) -> Self {
+        let sl = law.state_len();
+        points.state = vec![0.0; points.len() * sl];
+        for p in 0..points.len() {
+            law.initialise_state(&mut points.state[p * sl..(p + 1) * sl]);
+        }
+        let initial_count = points.len();
+        Self {
+            name: name.to_string(),
+            law,
+            points,
+            id_offset,
+            initial_count,
+            index_of_id: (0..initial_count).collect(),
+            cell_of_point: Vec::new(),
+            geometry: Vec::new(),
+            cell_start: Vec::new(),
+            trial: Trial::default(),
+            erased: 0,
+            point_loads: Vec::new(),
+            velocity_blend: VelocityBlend::PicFraction(0.0),
+        }
+    }
+
+    /// The material's law.
+    pub fn law(&self) -> &dyn ConstitutiveLaw {
+        self.law.as_ref()
+    }
+
+    /// Blends the particle velocity update with the grid velocity ([`VelocityBlend`]).
+    pub fn set_velocity_blend(&mut self, blend: VelocityBlend) {
+        self.velocity_blend = blend;
+    }
+
+    /// Starts every material point from the Cauchy stress `stress(x_p)` (at rest, `F = I`):
+    /// the law writes the history that carries it
+    /// ([`ConstitutiveLaw::initialise_state_at_stress`]). Fails with the first point whose
+    /// stress the law cannot hold (e.g. outside the yield surface).
+    pub fn set_initial_stress(
+        &mut self,
+        stress: impl Fn(&[f64; 3]) -> Matrix3<f64>,
+    ) -> Result<(), (usize, loam_laws::LawError)> {
+        let sl = self.law.state_len();
+        for p in 0..self.points.len() {
+            let sigma = stress(&self.points.position[p]);
+            self.law
+                .initialise_state_at_stress(&sigma, &mut self.points.state[p * sl..(p + 1) * sl])
+                .map_err(|e| (p, e))?;
+            self.points.cauchy[p] = sigma;
+        }
+        Ok(())
+    }
+
+    /// Material points erased so far because they left the grid.
+    pub fn erased(&self) -> usize {
+        self.erased
+    }
+
+    /// Range of the ids of this body's points.
+    pub fn id_range(&self) -> std::ops::Range<usize> {
+        self.id_offset..self.id_offset + self.initial_count
+    }
+
+    /// Current index of the point with (outside) id `id`, if it is this body's and not erased.
+    pub fn index_of(&self, id: usize) -> Option<usize> {
+        let local = id.checked_sub(self.id_offset)?;
+        self.index_of_id.get(local).copied().filter(|&k| k != usize::MAX)
+    }
+
+    /// Points of grid cell `c` (indices into the sorted points).
+    pub fn points_in_cell(&self, c: usize) -> std::ops::Range<usize> {
+        self.cell_start[c]..self.cell_start[c + 1]
+    }
+
+    /// Whether the body has points in grid cell `c`.
+    pub fn occupies(&self, c: usize) -> bool {
+        self.cell_start[c + 1] > self.cell_start[c]
+    }
+
+    /// Attaches a force to some of the body's points.
+    pub fn add_point_load(&mut self, load: PointLoad) {
+        self.point_loads.push(load);
+    }
+
+    /// Locate: every point's cell in `grid` (points outside are erased), the points sorted
+    /// by (cell, id), their shape functions and gradients in the grid's current
+    /// configuration.
+    pub fn locate(&mut self, grid: &Grid, formulation: Formulation, thickness: f64) {
+        let n_before = self.points.len();
+        let located: Vec<Option<(usize, [f64; 3])>> =
+            self.points.position.par_iter().with_min_len(1024).map(|x| grid.locate(x)).collect();
+        // counting sort by cell, each cell's points by id: order (cell, id)
+        let num_cells = grid.mesh.num_cells();
+        let mut start = vec![0usize; num_cells + 1];
+        for (c, _) in located.iter().flatten() {
+            start[c + 1] += 1;
+        }
+        for c in 0..num_cells {
+            start[c + 1] += start[c];
+        }
+        let kept = start[num_cells];
+        self.erased += n_before - kept;
+        let mut order = vec![0usize; kept];
+        {
+            let mut fill = start.clone();
+            for (p, l) in located.iter().enumerate() {
+                if let Some((c, _)) = l {
+                    order[fill[*c]] = p;
+                    fill[*c] += 1;
+                }
+            }
+        }
+        let ids = &self.points.id;
+        for c in 0..num_cells {
+            order[start[c]..start[c + 1]].sort_unstable_by_key(|&p| ids[p]);
+        }
+        let sl = self.law.state_len();
+        if kept != n_before || order.iter().enumerate().any(|(k, &p)| k != p) {
+            self.points.reorder(&order, sl);
+        }
+        self.index_of_id.iter_mut().for_each(|i| *i = usize::MAX);
+        for (k, &id) in self.points.id.iter().enumerate() {
+            self.index_of_id[id] = k;
+        }
+        self.cell_of_point.clear();
+        self.cell_of_point.extend(order.iter().map(|&p| located[p].expect("kept points are located").0));
+        let element = grid.mesh.element;
+        let nn = element.num_nodes();
+        order
+            .par_iter()
+            .with_min_len(1024)
+            .zip(self.points.volume.par_iter())
+            .map(|(&p, &volume)| {
+                let (cell, xi) = located[p].expect("kept points are located");
+                let coords = grid.cell_coords(cell);
+                let mut g =
+                    point_geometry(element, formulation, thickness, &coords[..nn], &xi, 1.0, grid.cell_map(cell))
+                        .expect("located points lie in cells that are not inverted");
+                g.weight = volume;
+                g
+            })
+            .collect_into_vec(&mut self.geometry);
+        self.cell_start = start;
+        self.trial.state.clone_from(&self.points.state);
+        self.trial.out.resize(self.points.len(), PointOutput::default());
+    }
+
+    /// Project (p2g): adds the points' mass, momentum and mass-weighted acceleration to the
+    /// grid nodes of their cells.
+    pub fn project(&self, grid: &Grid, dim: usize, sums: &mut GridSums) {
+        let nn = grid.mesh.element.num_nodes();
+        for (p, &cell) in self.cell_of_point.iter().enumerate() {
+            let m = self.points.mass[p];
+            for (a, &node) in grid.mesh.cell(cell).iter().enumerate().take(nn) {
+                let w = self.geometry[p].shape[a] * m;
+                sums.mass[node] += w;
+                for i in 0..dim {
+                    sums.momentum[node][i] += w * self.points.velocity[p][i];
+                    sums.inertia[node][i] += w * self.points.acceleration[p][i];
+                }
+            }
+        }
+    }
+
+    /// Takes the trial arrays out for the element loop (give them back with
+    /// [`Body::restore_trial`]), so that the kernel can read the body while writing them.
+    pub fn take_trial(&mut self) -> Trial {
+        std::mem::take(&mut self.trial)
+    }
+
+    /// Gives back the trial arrays of [`Body::take_trial`].
+    pub fn restore_trial(&mut self, trial: Trial) {
+        self.trial = trial;
+    }
+
+    /// Start of each cell's points (see [`Body::points_in_cell`]).
+    pub fn cell_start(&self) -> &[usize] {
+        &self.cell_start
+    }
+
+    /// Compute internal forces of one cell: the kernel over the body's points in `cell`
+    /// (`trial`, `out` their views), written into `f_int` and `stiffness` (overwritten), then
+    /// the lumped mass terms `r_I += M_I (ã_I − g)`, `K_II += c_M M_I` added.
+    #[allow(clippy::too_many_arguments)]
+    pub fn cell_contribution(
+        &self,
+        ctx: &KernelContext<'_>,
+        cell: usize,
+        disp: &[[f64; 3]],
+        inertia: &[[f64; 3]],
+        input: &AssemblyInput<'_>,
+        trial: &mut [f64],
+        out: &mut [PointOutput],
+        f_int: &mut [f64],
+        stiffness: Option<&mut [f64]>,
+    ) -> Result<(), KernelError> {
+        let range = self.points_in_cell(cell);
+        let sl = self.law.state_len();
+        let nn = ctx.element.num_nodes();
+        let dim = ctx.element.dim();
+        let nd = nn * dim;
+        let f = &self.points.deformation_gradient[range.clone()];
+        let with_stiffness = input.with_tangent && input.stiffness;
+        let mut stiffness = stiffness;
+        solid_element(
+            ctx,
+            disp,
+            &self.geometry[range.clone()],
+            f,
+            f,
+            &self.points.state[range.start * sl..range.end * sl],
+            trial,
+            out,
+            f_int,
+            if with_stiffness { stiffness.as_deref_mut() } else { None },
+        )?;
+        if let (Some(km), false) = (stiffness.as_deref_mut(), with_stiffness) {
+            km.fill(0.0);
+        }
+        let mut lumped = [0.0; MAX_NODES];
+        for p in range {
+            for (a, m) in lumped.iter_mut().enumerate().take(nn) {
+                *m += self.geometry[p].shape[a] * self.points.mass[p];
+            }
+        }
+        for a in 0..nn {
+            for i in 0..dim {
+                let mut r = -lumped[a] * input.gravity[i];
+                if input.inertial_acceleration.is_some() {
+                    r += lumped[a] * inertia[a][i];
+                }
+                f_int[a * dim + i] += r;
+                if let Some(km) = stiffness.as_deref_mut() {
+                    km[(a * dim + i) * nd + a * dim + i] += input.mass_coefficient * lumped[a];
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Particle Neumann: every loaded point `p` in cell `c` adds `−N_I(ξ_p) F f(t)` to the
+    /// residual of the block of `c` (`r = f_int − f_ext + M ã`); `block_of_cell` gives the
+    /// block of a cell. The point's natural coordinates are fixed within a step (the grid
+    /// moves with the body), so the force is a follower of the body without a tangent
+    /// contribution.
+    pub fn add_point_loads(
+        &self,
+        time: f64,
+        nd: usize,
+        dim: usize,
+        block_of_cell: impl Fn(usize) -> usize,
+        vectors: &mut [f64],
+    ) {
+        let nn = nd / dim;
+        for load in &self.point_loads {
+            let f = load.amplitude.at(time);
+            for &id in &load.ids {
+                let Some(k) = self.index_of(id) else { continue }; // erased
+                let b = block_of_cell(self.cell_of_point[k]);
+                let v = &mut vectors[b * nd..(b + 1) * nd];
+                for a in 0..nn {
+                    let n = self.geometry[k].shape[a];
+                    for i in 0..dim {
+                        v[a * dim + i] -= n * load.force[i] * f;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Convect (g2p, update particles): see the module doc. `node_ids` maps grid nodes to
+    /// global nodes.
+    pub fn convect(&mut self, grid: &Grid, node_ids: &[usize], input: &AssemblyInput<'_>) {
+        let nn = grid.mesh.element.num_nodes();
+        let dim = grid.mesh.element.dim();
+        let (dt, gamma) = (input.time_step, input.gamma);
+        let theta = self.velocity_blend.theta(dt);
+        let dynamic = input.inertial_acceleration.is_some();
+        let (geometry, cells) = (&self.geometry, &self.cell_of_point);
+        let pts = &mut self.points;
+        let outs = &self.trial.out;
+        (
+            pts.position.par_iter_mut(),
+            pts.displacement.par_iter_mut(),
+            pts.velocity.par_iter_mut(),
+            pts.acceleration.par_iter_mut(),
+            pts.deformation_gradient.par_iter_mut(),
+            pts.cauchy.par_iter_mut(),
+            pts.volume.par_iter_mut(),
+        )
+            .into_par_iter()
+            .zip(pts.work.par_iter_mut().zip(pts.initial_volume.par_iter()))
+            .enumerate()
+            .for_each(|(p, ((x, u, v, a, f, sigma, vol), (work, v0)))| {
+                let cell = grid.mesh.cell(cells[p]);
+                let mut du = [0.0; 3];
+                let mut acc = [0.0; 3];
+                let mut v_grid = [0.0; 3];
+                for a_ in 0..nn {
+                    let g = node_ids[cell[a_]] * dim;
+                    let n = geometry[p].shape[a_];
+                    for i in 0..dim {
+                        du[i] += n * (input.state.u[g + i] - input.committed.u[g + i]);
+                        acc[i] += n * input.state.a[g + i];
+                        v_grid[i] += n * input.state.v[g + i];
+                    }
+                }
+                for i in 0..dim {
+                    if dynamic {
+                        let flip = v[i] + dt * ((1.0 - gamma) * a[i] + gamma * acc[i]);
+                        v[i] = (1.0 - theta) * flip + theta * v_grid[i];
+                        a[i] = acc[i];
+                    }
+                    x[i] += du[i];
+                    u[i] += du[i];
+                }
+                let o = &outs[p];
+                let delta_f = o.deformation_gradient * f.try_inverse().unwrap_or_else(Matrix3::identity);
+                *work += 0.5 * (*sigma + o.stress).dot(&(delta_f - Matrix3::identity())) * *vol;
+                *f = o.deformation_gradient;
+                *sigma = o.cauchy;
+                *vol = v0 * f.determinant();
+            });
+        self.points.state.copy_from_slice(&self.trial.state);
+    }
+
+    /// Interpolates the nodal accelerations `a` (full DOF vector) to the points.
+    pub fn interpolate_acceleration(&mut self, grid: &Grid, node_ids: &[usize], a: &[f64]) {
+        let element = grid.mesh.element;
+        let dim = element.dim();
+        for (p, &cell) in self.cell_of_point.iter().enumerate() {
+            let mut acc = [0.0; 3];
+            for (k, &node) in grid.mesh.cell(cell).iter().enumerate().take(element.num_nodes()) {
+                let g = node_ids[node] * dim;
+                for i in 0..dim {
+                    acc[i] += self.geometry[p].shape[k] * a[g + i];
+                }
+            }
+            self.points.acceleration[p] = acc;
+        }
+    }
+
+    /// Kinetic energy `Σ_p ½ m_p |v_p|²`.
+    pub fn kinetic_energy(&self) -> f64 {
+        (0..self.points.len())
+            .map(|p| 0.5 * self.points.mass[p] * self.points.velocity[p].iter().map(|c| c * c).sum::<f64>())
+            .sum()
+    }
+
+    /// Current position and sizes of every point ([`PointExtent`]).
+    pub fn point_extents(&self, formulation: Formulation, thickness: f64) -> impl Iterator<Item = PointExtent> + '_ {
+        let pts = &self.points;
+        (0..pts.len()).map(move |p| {
+            let x = pts.position[p];
+            let size = |v: f64| match formulation {
+                Formulation::ThreeD => v.cbrt(),
+                Formulation::Axisymmetric => (v / (2.0 * std::f64::consts::PI * x[0].max(1e-300))).sqrt(),
+                _ => (v / thickness).sqrt(),
+            };
+            PointExtent { position: x, size: size(pts.volume[p]), initial_size: size(pts.initial_volume[p]) }
+        })
+    }
+
+    /// Nodal mass `Σ_p N_I m_p` of this body's points (per grid node).
+    pub fn nodal_mass(&self, grid: &Grid, mass: &mut [f64]) {
+        let nn = grid.mesh.element.num_nodes();
+        for (p, &cell) in self.cell_of_point.iter().enumerate() {
+            for (a, &node) in grid.mesh.cell(cell).iter().enumerate().take(nn) {
+                mass[node] += self.geometry[p].shape[a] * self.points.mass[p];
+            }
+        }
+    }
+}

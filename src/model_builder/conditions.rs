@@ -1,0 +1,310 @@
+//! Boundary conditions (prescribed displacements, slip, penalty walls), loads and gravity.
+
+use std::collections::BTreeMap;
+
+use loam_fem::domain::PointLoad;
+use loam_fem::loads::{facet_forces, SurfaceLoad};
+use loam_fem::model::{Constraint, Load, Model};
+use loam_fem::slip::Slip;
+use loam_mpm::penalty_boundary::{BoundaryParticles, PenaltyBoundary, PenaltyKind, PenaltySettings};
+
+use super::meshes::{GridPart, Part};
+use super::regions::{mean_boundary_normal, region, select_points};
+use super::{check_len, check_positive};
+use crate::case::{Case, CaseError, LoadSpec, PenaltySpec};
+
+/// The boundary conditions of the case: constraints and slips on the model, penalty walls
+/// on their grids. Returns, per boundary condition, the index of its constraint (the slot
+/// of its amplitude, which an FMU input can drive).
+pub(super) fn boundary_conditions(
+    case: &Case,
+    model: &mut Model,
+    regions: &BTreeMap<String, Vec<usize>>,
+    parts: &mut [Part],
+) -> Result<Vec<usize>, CaseError> {
+    let dim = case.formulation.dim();
+    let mut constraint_of_bc = Vec::with_capacity(case.boundary_conditions.len());
+    for (k, bc) in case.boundary_conditions.iter().enumerate() {
+        if let Some(spec) = &bc.penalty {
+            let (part, wall) = build_penalty_wall(case, k, spec, parts)?;
+            match &mut parts[part] {
+                Part::Grid(grid) => grid.domain.add_wall(wall),
+                Part::Fem(..) => unreachable!("walls are on grids"),
+            }
+            constraint_of_bc.push(model.constraints.len());
+            model.constraints.push(Constraint::without_dofs(bc.amplitude.clone()));
+            continue;
+        }
+        if bc.region.is_empty() {
+            return Err(CaseError::new(format!("boundary_conditions[{k}]"), "needs a region (or a penalty wall)"));
+        }
+        let nodes = region(regions, format!("boundary_conditions[{k}].region"), &bc.region)?;
+        if let Some(slip) = &bc.slip {
+            if !bc.displacement.is_empty() {
+                return Err(CaseError::new(
+                    format!("boundary_conditions[{k}]"),
+                    "give either displacement or slip, not both",
+                ));
+            }
+            let normal = match &slip.normal {
+                Some(n) => {
+                    check_len(&format!("boundary_conditions[{k}].slip.normal"), n, dim)?;
+                    let mut v = [0.0; 3];
+                    v[..dim].copy_from_slice(n);
+                    v
+                }
+                None => mean_boundary_normal(&model.coords, &part_facets(parts), nodes).ok_or_else(|| {
+                    CaseError::new(
+                        format!("boundary_conditions[{k}].region"),
+                        format!("region '{}' contains no boundary edge or face to take a slip normal from", bc.region),
+                    )
+                })?,
+            };
+            if normal[..dim].iter().map(|v| v * v).sum::<f64>() <= 0.0 {
+                return Err(CaseError::new(format!("boundary_conditions[{k}].slip.normal"), "must not be zero"));
+            }
+            model.slips.extend(nodes.iter().map(|&node| Slip { node, normal }));
+            constraint_of_bc.push(model.constraints.len());
+            model.constraints.push(Constraint::without_dofs(bc.amplitude.clone()));
+            continue;
+        }
+        check_len(&format!("boundary_conditions[{k}].displacement"), &bc.displacement, dim)?;
+        bc.amplitude.check().map_err(|m| CaseError::new(format!("boundary_conditions[{k}].amplitude"), m))?;
+        let mut c = Constraint::without_dofs(bc.amplitude.clone());
+        for &n in nodes {
+            for (i, v) in bc.displacement.iter().enumerate() {
+                if let Some(v) = v {
+                    c.dofs.push(n * dim + i);
+                    c.values.push(*v);
+                }
+            }
+        }
+        constraint_of_bc.push(model.constraints.len());
+        model.constraints.push(c);
+    }
+
+    Ok(constraint_of_bc)
+}
+
+/// The loads of the case (nodal forces, pressures, tractions on the model; forces on
+/// material points in their domains). Returns, per load, its index in `model.loads`
+/// (`usize::MAX` for forces on material points, which no input can drive).
+pub(super) fn loads(
+    case: &Case,
+    model: &mut Model,
+    regions: &BTreeMap<String, Vec<usize>>,
+) -> Result<Vec<usize>, CaseError> {
+    let dim = case.formulation.dim();
+    let facets: Vec<Vec<usize>> = model.domains.iter().flat_map(|d| d.boundary_facets()).collect();
+    let mut load_of_load = Vec::with_capacity(case.loads.len());
+    for (k, l) in case.loads.iter().enumerate() {
+        let loc = format!("loads[{k}]");
+        if let LoadSpec::MaterialPointForce { domain, point, within, force, amplitude } = l {
+            amplitude.check().map_err(|m| CaseError::new(format!("{loc}.amplitude"), m))?;
+            check_len(&format!("{loc}.force"), force, dim)?;
+            if let Some(name) = domain {
+                if !model.domains.iter().any(|d| d.point_set(name).is_some()) {
+                    return Err(CaseError::new(
+                        format!("{loc}.domain"),
+                        format!("no mpm domain named '{name}' in domains"),
+                    ));
+                }
+            }
+            let points = select_points(model, &loc, dim, domain.as_deref(), point.as_deref(), within.as_ref())?;
+            let mut f = [0.0; 3];
+            f[..dim].copy_from_slice(force);
+            let mut domains: Vec<usize> = points.iter().map(|p| p.0).collect();
+            domains.dedup();
+            for d in domains {
+                let ids = points.iter().filter(|p| p.0 == d).map(|p| p.1).collect();
+                model.domains[d].add_point_load(PointLoad { ids, force: f, amplitude: amplitude.clone() });
+            }
+            load_of_load.push(usize::MAX); // not a model load; cannot be named (no FMU input)
+            continue;
+        }
+        let (region_name, amplitude) = match l {
+            LoadSpec::NodalForce { region, amplitude, .. }
+            | LoadSpec::Pressure { region, amplitude, .. }
+            | LoadSpec::Traction { region, amplitude, .. } => (region, amplitude),
+            LoadSpec::MaterialPointForce { .. } => unreachable!("handled above"),
+        };
+        amplitude.check().map_err(|m| CaseError::new(format!("{loc}.amplitude"), m))?;
+        let nodes = region(regions, format!("{loc}.region"), region_name)?;
+        let mut forces = Vec::new();
+        let surface = match l {
+            LoadSpec::NodalForce { force, .. } => {
+                check_len(&format!("{loc}.force"), force, dim)?;
+                for &n in nodes {
+                    forces.extend((0..dim).map(|i| (n * dim + i, force[i])));
+                }
+                None
+            }
+            LoadSpec::Pressure { pressure, .. } => Some(SurfaceLoad::Pressure(*pressure)),
+            LoadSpec::Traction { traction, .. } => {
+                check_len(&format!("{loc}.traction"), traction, dim)?;
+                let mut t = [0.0; 3];
+                t[..dim].copy_from_slice(traction);
+                Some(SurfaceLoad::Traction(t))
+            }
+            LoadSpec::MaterialPointForce { .. } => unreachable!("handled above"),
+        };
+        if let Some(load) = surface {
+            let in_region: std::collections::HashSet<usize> = nodes.iter().copied().collect();
+            let mut count = 0;
+            for f in facets.iter().filter(|f| f.iter().all(|n| in_region.contains(n))) {
+                let xs: Vec<[f64; 3]> = f.iter().map(|&n| model.coords[n]).collect();
+                let mut fa = vec![[0.0; 3]; f.len()];
+                facet_forces(case.formulation, case.thickness, &xs, load, &mut fa);
+                for (&n, v) in f.iter().zip(&fa) {
+                    forces.extend((0..dim).map(|i| (n * dim + i, v[i])));
+                }
+                count += 1;
+            }
+            if count == 0 {
+                return Err(CaseError::new(
+                    format!("{loc}.region"),
+                    format!("region '{region_name}' contains no boundary edge or face"),
+                ));
+            }
+        }
+        load_of_load.push(model.loads.len());
+        model.loads.push(Load { forces, amplitude: amplitude.clone() });
+    }
+
+    Ok(load_of_load)
+}
+
+/// Gravity and its amplitude.
+pub(super) fn gravity(case: &Case, model: &mut Model) -> Result<(), CaseError> {
+    let dim = case.formulation.dim();
+    if let Some(g) = &case.gravity {
+        check_len("gravity.acceleration", &g.acceleration, dim)?;
+        g.amplitude.check().map_err(|m| CaseError::new("gravity.amplitude", m))?;
+        let mut a = [0.0; 3];
+        a[..dim].copy_from_slice(&g.acceleration);
+        model.gravity = (a, g.amplitude.clone());
+    }
+
+    Ok(())
+}
+
+/// The penalty wall of `boundary_conditions[k]` (`spec` its `penalty`) on the grid of an
+/// MPM domain; its name is the condition's `name` (default `penalty_<k>`).
+fn build_penalty_wall(
+    case: &Case,
+    k: usize,
+    spec: &PenaltySpec,
+    parts: &[Part],
+) -> Result<(usize, PenaltyBoundary), CaseError> {
+    let bc = &case.boundary_conditions[k];
+    let loc = format!("boundary_conditions[{k}]");
+    let dim = case.formulation.dim();
+    if dim != 2 {
+        return Err(CaseError::new(format!("{loc}.penalty"), "penalty walls are segments or polylines of 2D problems"));
+    }
+    if !bc.region.is_empty() {
+        return Err(CaseError::new(format!("{loc}.region"), "a penalty wall takes no region"));
+    }
+    if bc.slip.is_some() {
+        return Err(CaseError::new(format!("{loc}.slip"), "a penalty wall sets its own \"slip\": true | false"));
+    }
+    let name = bc.name.clone().unwrap_or_else(|| format!("penalty_{k}"));
+    if case.domains.iter().any(|d| d.name == name) {
+        return Err(CaseError::new(format!("{loc}.name"), format!("'{name}' is already a domain name")));
+    }
+    let grids: Vec<(usize, &GridPart)> = parts
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| match p {
+            Part::Grid(g) => Some((i, &**g)),
+            Part::Fem(..) => None,
+        })
+        .collect();
+    let (part, grid_part, domain) = match &spec.domain {
+        Some(d) => {
+            let found = grids.iter().find(|(_, g)| g.bodies.iter().any(|&b| case.domains[b].name == *d));
+            let &(i, g) = found.ok_or_else(|| {
+                CaseError::new(format!("{loc}.penalty.domain"), format!("no mpm domain named '{d}' in domains"))
+            })?;
+            (i, g, d.as_str())
+        }
+        None if grids.len() == 1 => (grids[0].0, grids[0].1, case.domains[grids[0].1.bodies[0]].name.as_str()),
+        None => {
+            return Err(CaseError::new(
+                format!("{loc}.penalty.domain"),
+                format!("name the mpm domain whose grid carries the wall ({} grids)", grids.len()),
+            ));
+        }
+    };
+    let grid = grid_part.domain.grid();
+    let vertices: Vec<[f64; 2]> = match (&spec.segment, &spec.polyline) {
+        (Some(s), None) => s.to_vec(),
+        (None, Some(p)) => p.clone(),
+        _ => return Err(CaseError::new(format!("{loc}.penalty"), "give either segment or polyline")),
+    };
+    let key = if spec.segment.is_some() { "segment" } else { "polyline" };
+    if vertices.len() < 2 || vertices.windows(2).any(|w| w[0] == w[1]) {
+        return Err(CaseError::new(
+            format!("{loc}.penalty.{key}"),
+            "needs at least two points, consecutive points distinct",
+        ));
+    }
+    let spacing = match (spec.spacing, spec.contact) {
+        (Some(_), true) => {
+            return Err(CaseError::new(
+                format!("{loc}.penalty.spacing"),
+                "the contact form has no boundary particles (its contact points are the material points)",
+            ));
+        }
+        (None, false) => {
+            return Err(CaseError::new(
+                format!("{loc}.penalty.spacing"),
+                "the Dirichlet form needs the spacing of its boundary particles",
+            ));
+        }
+        (Some(s), false) => {
+            check_positive(&format!("{loc}.penalty.spacing"), s)?;
+            s
+        }
+        (None, true) => 0.0,
+    };
+    check_positive(&format!("{loc}.penalty.penalty_factor"), spec.penalty_factor)?;
+    let mut displacement = [0.0; 3];
+    if !bc.displacement.is_empty() {
+        check_len(&format!("{loc}.displacement"), &bc.displacement, dim)?;
+        for (i, v) in bc.displacement.iter().enumerate() {
+            displacement[i] = v.ok_or_else(|| {
+                CaseError::new(format!("{loc}.displacement[{i}]"), "a penalty wall moves as a whole: give a number")
+            })?;
+        }
+    }
+    bc.amplitude.check().map_err(|m| CaseError::new(format!("{loc}.amplitude"), m))?;
+    let length: f64 = vertices.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum();
+    let samples = BoundaryParticles::on_polyline(&vertices, 1e-3 * length, case.formulation, case.thickness);
+    if !samples.position.iter().any(|x| grid.locate(x).is_some()) {
+        return Err(CaseError::new(
+            format!("{loc}.penalty.{key}"),
+            format!("lies outside the grid of domain '{domain}'"),
+        ));
+    }
+    let settings = PenaltySettings {
+        penalty_factor: spec.penalty_factor,
+        kind: if spec.slip { PenaltyKind::Slip } else { PenaltyKind::NoSlip },
+        contact: spec.contact,
+        displacement,
+        amplitude: bc.amplitude.clone(),
+    };
+    Ok((part, PenaltyBoundary::new(&name, case.formulation, case.thickness, vertices, spacing, settings)))
+}
+
+/// The boundary facets of every part (global node ids).
+fn part_facets(parts: &[Part]) -> Vec<Vec<usize>> {
+    use loam_fem::domain::Domain;
+    parts
+        .iter()
+        .flat_map(|p| match p {
+            Part::Fem(_, d) => d.boundary_facets(),
+            Part::Grid(g) => g.domain.boundary_facets(),
+        })
+        .collect()
+}

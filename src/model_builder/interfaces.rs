@@ -1,0 +1,110 @@
+//! Attaching grids to structures once the boundary conditions are known: the mesh motion
+//! of each coupled grid, the node kinds its initialisation phase needs, and, on slip
+//! interfaces, the local frames and tied normal DOFs of each soil–structure node pair.
+
+use std::collections::HashSet;
+
+use loam_coupling::mesh_motion::{HarmonicExtension, MotionConstraints};
+use loam_fem::dofs::DofTie;
+use loam_fem::model::{Constraint, Model};
+use loam_fem::slip::Slip;
+use loam_mpm::attachment::{GridAttachment, GridNodeKind};
+
+use super::meshes::Part;
+use crate::case::{Case, CaseError};
+
+/// Default width of the mesh-motion band, in grid cells.
+const DEFAULT_BAND_CELLS: f64 = 20.0;
+
+/// Attaches every coupled grid of `parts` to its structures (see the module doc).
+pub(super) fn attach(case: &Case, model: &mut Model, parts: &mut [Part]) -> Result<(), CaseError> {
+    let dim = model.dim;
+    let prescribed_dofs: HashSet<usize> = model.constraints.iter().flat_map(|c| c.dofs.iter().copied()).collect();
+    let slip_nodes: HashSet<usize> = model.slips.iter().map(|s| s.node).collect();
+    for part in parts.iter_mut() {
+        let Part::Grid(grid_part) = part else { continue };
+        let Some(coupling) = &grid_part.coupling else { continue };
+        let domain = &grid_part.domain;
+        let grid = domain.grid();
+        let node_ids = domain.node_ids().to_vec();
+        let held = |g: usize, i: usize| prescribed_dofs.contains(&(g * dim + i)) || slip_nodes.contains(&g);
+        let prescribed: Vec<[bool; 3]> =
+            node_ids.iter().map(|&g| std::array::from_fn(|i| i < dim && held(g, i))).collect();
+        let anchored: Vec<bool> = coupling.on_interface.iter().map(Option::is_some).collect();
+        let band = coupling
+            .interfaces
+            .iter()
+            .filter_map(|&k| case.interfaces[k].band)
+            .fold(f64::INFINITY, f64::min)
+            .min(DEFAULT_BAND_CELLS * mean_cell_size(grid));
+        let motion =
+            HarmonicExtension::new(grid, &MotionConstraints { anchored: &anchored, prescribed: &prescribed, band });
+        let mut kind = vec![GridNodeKind::Free; node_ids.len()];
+        let mut anchor = vec![None; node_ids.len()];
+        for (a, on) in coupling.on_interface.iter().enumerate() {
+            let Some((node, structure)) = on else { continue };
+            let slip = case.interfaces[coupling.interfaces[node.interface]].slip;
+            if !slip {
+                kind[a] = GridNodeKind::Tied;
+                anchor[a] = Some(*structure);
+                continue;
+            }
+            let soil = node_ids[a];
+            kind[a] = GridNodeKind::Slip { source: *structure, normal: node.normal };
+            anchor[a] = Some(*structure);
+            let structure_held = (0..dim).any(|i| held(*structure, i));
+            let soil_held = (0..dim).any(|i| held(soil, i));
+            if structure_held {
+                // the soil node follows the structure's prescribed components
+                let copies: Vec<Constraint> = model
+                    .constraints
+                    .iter()
+                    .filter(|c| c.dofs.iter().any(|&d| d / dim == *structure))
+                    .map(|c| {
+                        let mut copy = Constraint::without_dofs(c.amplitude.clone());
+                        for (&d, &v) in c.dofs.iter().zip(&c.values) {
+                            if d / dim == *structure && !held(soil, d % dim) {
+                                copy.dofs.push(soil * dim + d % dim);
+                                copy.values.push(v);
+                            }
+                        }
+                        copy
+                    })
+                    .collect();
+                model.constraints.extend(copies.into_iter().filter(|c| !c.dofs.is_empty()));
+                continue;
+            }
+            if soil_held {
+                continue;
+            }
+            model.frames.push(Slip { node: soil, normal: node.normal });
+            model.frames.push(Slip { node: *structure, normal: node.normal });
+            model.ties.push(DofTie { leader: structure * dim, follower: soil * dim });
+        }
+        let names: Vec<String> =
+            coupling.interfaces.iter().map(|&k| format!("'{}'", case.interfaces[k].name)).collect();
+        grid_part.domain.attach(GridAttachment {
+            interfaces: names.join(", "),
+            kind,
+            anchor,
+            motion: Box::new(motion),
+        });
+    }
+    Ok(())
+}
+
+/// Mean cell size of a grid: the square (cube) root of its mean cell measure.
+fn mean_cell_size(grid: &loam_mpm::grid::Grid) -> f64 {
+    let mesh = &grid.mesh;
+    let dim = mesh.element.dim();
+    let coords = grid.reference_coords();
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for x in coords {
+        for d in 0..dim {
+            lo[d] = lo[d].min(x[d]);
+            hi[d] = hi[d].max(x[d]);
+        }
+    }
+    let volume: f64 = (0..dim).map(|d| hi[d] - lo[d]).product();
+    (volume / mesh.num_cells().max(1) as f64).powf(1.0 / dim as f64)
+}

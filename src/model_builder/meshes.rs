@@ -1,0 +1,720 @@
+//! Meshes, background grids and their bodies of material points, the interfaces that attach
+//! grids to structures, and the one global node set with the role of every node.
+//!
+//! Node numbering follows the roles, not the coordinates alone: FEM meshes share the nodes
+//! they have at the same position (a multi-material structure); MPM domains whose grids are
+//! specified identically are bodies on one grid; a grid node is a structure node only where
+//! an interface says so (tied), or the partner of one (slip). Any other contact between an
+//! FEM mesh and a grid is refused (`loam_coupling::interface`).
+
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
+
+use loam_coupling::interface::{self as coupling, InterfaceNode, InterfaceRequest, InterfaceSummary, Structure};
+use loam_fem::dofs::NodeRole;
+use loam_fem::element::ElementType;
+use loam_fem::formulation::Formulation;
+use loam_fem::mesh::Mesh;
+use loam_fem::model::Model;
+use loam_fem::solid_domain::FemDomain;
+use loam_laws::ConstitutiveLaw;
+use loam_mpm::body::{Body, VelocityBlend};
+use loam_mpm::grid::Grid;
+use loam_mpm::material_points::{self, MaterialPoints};
+use loam_mpm::mpm_domain::MpmDomain;
+use nalgebra::Matrix3;
+
+use super::regions::{line_tolerance, select_region};
+use super::{check_len, check_positive};
+use crate::case::{
+    BodySpec, Case, CaseError, DomainKind, GridSpec, InitialStressSpec, InitialVelocity, MassMatrix, MeshSpec,
+};
+
+/// A part of the model: an FEM domain, or a grid with its bodies.
+pub(super) enum Part {
+    /// An FEM domain (case index, domain).
+    Fem(usize, Box<FemDomain>),
+    /// A background grid.
+    Grid(Box<GridPart>),
+}
+
+/// A background grid with its bodies, as an MPM domain.
+pub(super) struct GridPart {
+    /// The domain (grid, bodies, later walls and attachment).
+    pub domain: MpmDomain,
+    /// Case indices of its bodies, in order.
+    pub bodies: Vec<usize>,
+    /// Where it touches structures, if an interface attaches it.
+    pub coupling: Option<GridCoupling>,
+}
+
+/// A grid's interface nodes.
+pub(super) struct GridCoupling {
+    /// Per grid node: on which interface, and the global node of the structure there.
+    pub on_interface: Vec<Option<(InterfaceNode, usize)>>,
+    /// Indices (into the case's interfaces) of the interfaces on this grid.
+    pub interfaces: Vec<usize>,
+}
+
+/// An interface after numbering.
+pub(super) struct ResolvedInterface {
+    /// What `loam check` reports.
+    pub summary: InterfaceSummary,
+    /// Index of the grid's part (while numbering: the case index of its first body).
+    pub part: usize,
+    /// Global nodes where the soil's force on the structure acts (tied: the shared nodes;
+    /// slip: the soil's partner nodes).
+    pub soil_nodes: Vec<usize>,
+}
+
+/// Everything numbered: global nodes with roles, Gmsh groups, parts, interfaces.
+pub(super) struct Discretisation {
+    pub coords: Vec<[f64; 3]>,
+    pub roles: Vec<NodeRole>,
+    pub groups: BTreeMap<String, Vec<usize>>,
+    pub parts: Vec<Part>,
+    pub interfaces: Vec<ResolvedInterface>,
+}
+
+/// How a grid is specified: domains with equal specs share the grid.
+#[derive(PartialEq)]
+enum GridKey<'a> {
+    Structured(&'a GridSpec),
+    Mesh(&'a MeshSpec),
+}
+
+/// A grid before numbering, with its bodies' points.
+struct GridGroup<'a> {
+    key: GridKey<'a>,
+    grid: Grid,
+    /// (case index, points) of each body.
+    bodies: Vec<(usize, MaterialPoints)>,
+    coupled: Option<coupling::CoupledGrid>,
+    /// Case indices of the structures of `coupled.on_interface[..].structure`.
+    structures: Vec<usize>,
+    interfaces: Vec<usize>,
+}
+
+/// Builds the mesh described by `spec` (at JSON path `loc`).
+pub(super) fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh, CaseError> {
+    let dim = case.formulation.dim();
+    let mesh = match spec {
+        MeshSpec::Rectangle { origin, size, cells, element } => {
+            for (i, s) in size.iter().enumerate() {
+                check_positive(&format!("{loc}.rectangle.size[{i}]"), *s)?;
+            }
+            if cells.contains(&0) {
+                return Err(CaseError::new(
+                    format!("{loc}.rectangle.cells"),
+                    "needs at least one cell in each direction",
+                ));
+            }
+            if element.dim() != 2 {
+                return Err(CaseError::new(format!("{loc}.rectangle.element"), "a rectangle takes quad4 or tri3"));
+            }
+            Mesh::rectangle(*origin, *size, *cells, *element)
+        }
+        MeshSpec::Box { origin, size, cells, element } => {
+            for (i, s) in size.iter().enumerate() {
+                check_positive(&format!("{loc}.box.size[{i}]"), *s)?;
+            }
+            if cells.contains(&0) {
+                return Err(CaseError::new(format!("{loc}.box.cells"), "needs at least one cell in each direction"));
+            }
+            if element.dim() != 3 {
+                return Err(CaseError::new(format!("{loc}.box.element"), "a box takes hex8 or tet4"));
+            }
+            Mesh::cuboid(*origin, *size, *cells, *element)
+        }
+        MeshSpec::Gmsh(file) => {
+            let path = case.directory.join(file);
+            loam_fem::gmsh::read_gmsh(&path).map_err(|e| CaseError::new(format!("{loc}.gmsh"), e.to_string()))?
+        }
+    };
+    if mesh.element.dim() != dim {
+        return Err(CaseError::new(
+            loc,
+            format!("{} elements do not fit the {} formulation", mesh.element.name(), case.formulation.name()),
+        ));
+    }
+    if case.formulation == Formulation::Axisymmetric && mesh.coords.iter().any(|c| c[0] < -1e-12) {
+        return Err(CaseError::new(loc, "axisymmetric meshes need r = x ≥ 0"));
+    }
+    Ok(mesh)
+}
+
+/// Checks the keys of domain `k` against its kind.
+fn check_keys(case: &Case, k: usize) -> Result<(), CaseError> {
+    let d = &case.domains[k];
+    let loc = format!("domains[{k}]");
+    let misplaced = |key: &str| {
+        CaseError::new(
+            format!("{loc}.{key}"),
+            format!(
+                "does not apply to an {} domain",
+                match d.kind {
+                    DomainKind::Fem => "fem",
+                    DomainKind::Mpm => "mpm",
+                }
+            ),
+        )
+    };
+    match d.kind {
+        DomainKind::Fem => {
+            if d.grid.is_some() {
+                return Err(misplaced("grid"));
+            }
+            if d.grid_mesh.is_some() {
+                return Err(misplaced("grid_mesh"));
+            }
+            if d.material_points.is_some() {
+                return Err(misplaced("material_points"));
+            }
+            if d.initial_stress.is_some() {
+                return Err(misplaced("initial_stress"));
+            }
+            if d.pic_fraction != 0.0 {
+                return Err(misplaced("pic_fraction"));
+            }
+            if d.pic_relaxation_time.is_some() {
+                return Err(misplaced("pic_relaxation_time"));
+            }
+            if d.mesh.is_none() {
+                return Err(CaseError::new(format!("{loc}.mesh"), "an fem domain needs a mesh"));
+            }
+        }
+        DomainKind::Mpm => {
+            if d.mesh.is_some() {
+                return Err(misplaced("mesh"));
+            }
+            match (&d.grid, &d.grid_mesh) {
+                (Some(_), Some(_)) => {
+                    return Err(CaseError::new(format!("{loc}.grid_mesh"), "give either grid or grid_mesh, not both"));
+                }
+                (None, None) => {
+                    return Err(CaseError::new(format!("{loc}.grid"), "an mpm domain needs a grid (or a grid_mesh)"));
+                }
+                _ => {}
+            }
+            if d.material_points.is_none() {
+                return Err(CaseError::new(format!("{loc}.material_points"), "an mpm domain needs material_points"));
+            }
+        }
+    }
+    if let Some(v0) = &d.initial_velocity {
+        let dim = case.formulation.dim();
+        let loc = format!("{loc}.initial_velocity");
+        match v0 {
+            InitialVelocity::Uniform(u) => check_len(&format!("{loc}.uniform"), u, dim)?,
+            InitialVelocity::Sine { amplitude, wavenumber } => {
+                check_len(&format!("{loc}.sine.amplitude"), amplitude, dim)?;
+                check_len(&format!("{loc}.sine.wavenumber"), wavenumber, dim)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The material points of the MPM domain `k` (`density` of its material), checked to lie
+/// in `grid`.
+fn material_points(case: &Case, k: usize, density: f64, grid: &Grid) -> Result<MaterialPoints, CaseError> {
+    let d = &case.domains[k];
+    let dim = case.formulation.dim();
+    let body_loc = format!("domains[{k}].material_points");
+    let body = d.material_points.as_ref().expect("checked");
+    let (f, t) = (case.formulation, case.thickness);
+    let points = match body {
+        BodySpec::Cells { mesh, points_per_cell } => {
+            let m = build_mesh(case, &format!("{body_loc}.cells.mesh"), mesh)?;
+            material_points::from_mesh(&m, *points_per_cell, f, t, density)
+                .map_err(|e| CaseError::new(format!("{body_loc}.cells.points_per_cell"), e))?
+        }
+        BodySpec::Disk { centre, radius, spacing } => {
+            check_positive(&format!("{body_loc}.disk.radius"), *radius)?;
+            check_positive(&format!("{body_loc}.disk.spacing"), *spacing)?;
+            let (c, r) = (*centre, *radius);
+            material_points::from_lattice_2d(
+                [c[0] - r, c[1] - r],
+                [c[0] + r, c[1] + r],
+                *spacing,
+                f,
+                t,
+                density,
+                |x, y| (x - c[0]).powi(2) + (y - c[1]).powi(2) <= r * r,
+            )
+        }
+        BodySpec::Polygon { vertices, spacing } => {
+            check_positive(&format!("{body_loc}.polygon.spacing"), *spacing)?;
+            if vertices.len() < 3 {
+                return Err(CaseError::new(format!("{body_loc}.polygon.vertices"), "needs at least 3 vertices"));
+            }
+            let lo = [0, 1].map(|d| vertices.iter().map(|v| v[d]).fold(f64::MAX, f64::min));
+            let hi = [0, 1].map(|d| vertices.iter().map(|v| v[d]).fold(f64::MIN, f64::max));
+            material_points::from_lattice_2d(lo, hi, *spacing, f, t, density, |x, y| point_in_polygon(vertices, x, y))
+        }
+    };
+    if points.is_empty() {
+        return Err(CaseError::new(body_loc, "generates no material point"));
+    }
+    if let Some(p) = points.position.iter().position(|x| grid.locate(x).is_none()) {
+        return Err(CaseError::new(
+            body_loc,
+            format!("material point at {:?} lies outside the grid", &points.position[p][..dim]),
+        ));
+    }
+    Ok(points)
+}
+
+/// The structured grid of `g` (at JSON path `loc`), checked.
+fn structured_grid(case: &Case, loc: &str, g: &GridSpec) -> Result<Grid, CaseError> {
+    let dim = case.formulation.dim();
+    check_len(&format!("{loc}.grid.origin"), &g.origin, dim)?;
+    check_len(&format!("{loc}.grid.size"), &g.size, dim)?;
+    check_len(&format!("{loc}.grid.cells"), &g.cells, dim)?;
+    for (i, v) in g.size.iter().enumerate() {
+        check_positive(&format!("{loc}.grid.size[{i}]"), *v)?;
+    }
+    if g.cells.contains(&0) {
+        return Err(CaseError::new(format!("{loc}.grid.cells"), "needs at least one cell in each direction"));
+    }
+    if g.element.dim() != dim || g.element == ElementType::Tet4 {
+        return Err(CaseError::new(
+            format!("{loc}.grid.element"),
+            format!(
+                "a structured {} grid takes {}",
+                case.formulation.name(),
+                if dim == 2 { "quad4 or tri3" } else { "hex8" }
+            ),
+        ));
+    }
+    let mut origin = [0.0; 3];
+    let mut size = [1.0; 3];
+    let mut cells = [1; 3];
+    origin[..dim].copy_from_slice(&g.origin);
+    size[..dim].copy_from_slice(&g.size);
+    cells[..dim].copy_from_slice(&g.cells);
+    if case.formulation == Formulation::Axisymmetric && origin[0] < -1e-12 {
+        return Err(CaseError::new(format!("{loc}.grid.origin"), "axisymmetric grids need r = x ≥ 0"));
+    }
+    if g.rotation != 0.0 && dim != 2 {
+        return Err(CaseError::new(format!("{loc}.grid.rotation"), "only 2D grids can be rotated"));
+    }
+    Ok(Grid::rotated(origin, size, cells, g.element, g.rotation.to_radians()))
+}
+
+/// Even–odd rule.
+fn point_in_polygon(vertices: &[[f64; 2]], x: f64, y: f64) -> bool {
+    let mut inside = false;
+    let n = vertices.len();
+    for i in 0..n {
+        let (a, b) = (vertices[i], vertices[(i + n - 1) % n]);
+        if (a[1] > y) != (b[1] > y) && x < (b[0] - a[0]) * (y - a[1]) / (b[1] - a[1]) + a[0] {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+/// Merges coincident nodes of several meshes into one global node set.
+/// Returns the global coordinates and, per mesh, local → global ids.
+fn merge_nodes(meshes: &[Mesh]) -> (Vec<[f64; 3]>, Vec<Vec<usize>>) {
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for c in meshes.iter().flat_map(|m| &m.coords) {
+        for d in 0..3 {
+            lo[d] = lo[d].min(c[d]);
+            hi[d] = hi[d].max(c[d]);
+        }
+    }
+    let size = (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max).max(1e-300);
+    let quantum = size * 1e-9;
+    let key = |c: &[f64; 3]| c.map(|v| (v / quantum).round() as i64);
+    let mut global = Vec::new();
+    let mut index: HashMap<[i64; 3], usize> = HashMap::new();
+    let ids = meshes
+        .iter()
+        .map(|m| {
+            m.coords
+                .iter()
+                .map(|c| {
+                    *index.entry(key(c)).or_insert_with(|| {
+                        global.push(*c);
+                        global.len() - 1
+                    })
+                })
+                .collect()
+        })
+        .collect();
+    (global, ids)
+}
+
+/// Builds the meshes, grids and bodies of `case`, couples grids to structures by the
+/// case's interfaces and numbers the global nodes (see the module doc).
+pub(super) fn discretise(
+    case: &Case,
+    laws: &BTreeMap<&str, Arc<dyn ConstitutiveLaw>>,
+) -> Result<Discretisation, CaseError> {
+    if case.domains.is_empty() {
+        return Err(CaseError::new("domains", "needs at least one domain"));
+    }
+    let mut names = std::collections::BTreeSet::new();
+    for (k, d) in case.domains.iter().enumerate() {
+        if !names.insert(&d.name) {
+            return Err(CaseError::new(format!("domains[{k}].name"), format!("duplicate domain name '{}'", d.name)));
+        }
+        if !laws.contains_key(d.material.as_str()) {
+            return Err(CaseError::new(
+                format!("domains[{k}].material"),
+                format!("no material named '{}' in materials", d.material),
+            ));
+        }
+        check_keys(case, k)?;
+    }
+    // FEM meshes, and grids with their bodies (identical specs: one grid)
+    let mut fem_meshes: BTreeMap<usize, Mesh> = BTreeMap::new();
+    let mut groups: Vec<GridGroup<'_>> = Vec::new();
+    let mut group_of: HashMap<usize, usize> = HashMap::new();
+    for (k, d) in case.domains.iter().enumerate() {
+        let loc = format!("domains[{k}]");
+        match d.kind {
+            DomainKind::Fem => {
+                let mesh = build_mesh(case, &format!("{loc}.mesh"), d.mesh.as_ref().expect("checked"))?;
+                fem_meshes.insert(k, mesh);
+            }
+            DomainKind::Mpm => {
+                let key = match (&d.grid, &d.grid_mesh) {
+                    (Some(g), _) => GridKey::Structured(g),
+                    (None, Some(m)) => GridKey::Mesh(m),
+                    (None, None) => unreachable!("checked"),
+                };
+                let g = match groups.iter().position(|g| g.key == key) {
+                    Some(g) => g,
+                    None => {
+                        let grid = match &key {
+                            GridKey::Structured(g) => structured_grid(case, &loc, g)?,
+                            GridKey::Mesh(spec) => {
+                                Grid::unstructured(build_mesh(case, &format!("{loc}.grid_mesh"), spec)?)
+                            }
+                        };
+                        groups.push(GridGroup {
+                            key,
+                            grid,
+                            bodies: Vec::new(),
+                            coupled: None,
+                            structures: Vec::new(),
+                            interfaces: Vec::new(),
+                        });
+                        groups.len() - 1
+                    }
+                };
+                let points = material_points(case, k, laws[d.material.as_str()].density(), &groups[g].grid)?;
+                groups[g].bodies.push((k, points));
+                group_of.insert(k, g);
+            }
+        }
+    }
+    couple_grids(case, &fem_meshes, &mut groups, &group_of)?;
+    number(case, laws, fem_meshes, groups)
+}
+
+/// Resolves the case's interfaces and attaches each grid to its structures; checks that
+/// no FEM mesh touches a grid without an interface.
+fn couple_grids(
+    case: &Case,
+    fem_meshes: &BTreeMap<usize, Mesh>,
+    groups: &mut [GridGroup<'_>],
+    group_of: &HashMap<usize, usize>,
+) -> Result<(), CaseError> {
+    let dim = case.formulation.dim();
+    let domain_index = |loc: String, name: &str| {
+        case.domains
+            .iter()
+            .position(|d| d.name == name)
+            .ok_or_else(|| CaseError::new(loc, format!("no domain named '{name}' in domains")))
+    };
+    let mut names = std::collections::BTreeSet::new();
+    let mut requests: Vec<Vec<(usize, usize, Vec<usize>)>> = vec![Vec::new(); groups.len()];
+    for (k, spec) in case.interfaces.iter().enumerate() {
+        let loc = format!("interfaces[{k}]");
+        if spec.name.is_empty() || !names.insert(spec.name.as_str()) {
+            return Err(CaseError::new(format!("{loc}.name"), format!("must be a unique name, got '{}'", spec.name)));
+        }
+        let soil = domain_index(format!("{loc}.soil"), &spec.soil)?;
+        let Some(&g) = group_of.get(&soil) else {
+            return Err(CaseError::new(format!("{loc}.soil"), format!("'{}' is not an mpm domain", spec.soil)));
+        };
+        let structure = domain_index(format!("{loc}.structure"), &spec.structure)?;
+        let Some(mesh) = fem_meshes.get(&structure) else {
+            return Err(CaseError::new(
+                format!("{loc}.structure"),
+                format!("'{}' is not an fem domain", spec.structure),
+            ));
+        };
+        let region_spec = case.regions.get(&spec.region).ok_or_else(|| {
+            CaseError::new(format!("{loc}.region"), format!("no region named '{}' in regions", spec.region))
+        })?;
+        let tol = line_tolerance(&mesh.coords);
+        let nodes =
+            select_region(&spec.region, region_spec, &mesh.coords, dim, &mesh.node_groups, tol).map_err(|e| {
+                CaseError::new(
+                    format!("{loc}.region"),
+                    format!("selects no node of '{}' ({})", spec.structure, e.message),
+                )
+            })?;
+        if let Some(band) = spec.band {
+            check_positive(&format!("{loc}.band"), band)?;
+        }
+        requests[g].push((k, structure, nodes));
+    }
+    for (g, group) in groups.iter_mut().enumerate() {
+        let soil = &case.domains[group.bodies[0].0].name;
+        if !requests[g].is_empty() {
+            let mut structures: Vec<usize> = requests[g].iter().map(|r| r.1).collect();
+            structures.sort_unstable();
+            structures.dedup();
+            let views: Vec<Structure<'_>> =
+                structures.iter().map(|&s| Structure { name: &case.domains[s].name, mesh: &fem_meshes[&s] }).collect();
+            let reqs: Vec<InterfaceRequest<'_>> = requests[g]
+                .iter()
+                .map(|(k, s, nodes)| InterfaceRequest {
+                    name: &case.interfaces[*k].name,
+                    structure: structures.iter().position(|x| x == s).expect("listed"),
+                    region: nodes.clone(),
+                    slip: case.interfaces[*k].slip,
+                })
+                .collect();
+            let at = |e: coupling::InterfaceError| match e.interface {
+                Some(i) => CaseError::new(format!("interfaces[{}]", requests[g][i].0), e.message),
+                None => CaseError::new("interfaces", e.message),
+            };
+            let coupled = coupling::couple(soil, &group.grid, &views, &reqs).map_err(at)?;
+            for (k, points) in &group.bodies {
+                coupling::check_points_outside(&case.domains[*k].name, &points.position, &views)
+                    .map_err(|e| CaseError::new(format!("domains[{k}].material_points"), e.message))?;
+            }
+            group.interfaces = requests[g].iter().map(|r| r.0).collect();
+            group.structures = structures;
+            group.coupled = Some(coupled);
+        }
+        let grid = group.coupled.as_ref().map_or(&group.grid, |c| &c.grid);
+        for (&s, mesh) in fem_meshes {
+            if group.structures.contains(&s) {
+                continue;
+            }
+            coupling::check_no_overlap(soil, grid, &Structure { name: &case.domains[s].name, mesh })
+                .map_err(|e| CaseError::new(format!("domains[{s}].mesh"), e.message))?;
+        }
+    }
+    Ok(())
+}
+
+/// Numbers the global nodes (FEM meshes first, merged by position among themselves, then
+/// every grid's nodes, shared with the structure on tied interfaces) and builds the parts.
+fn number(
+    case: &Case,
+    laws: &BTreeMap<&str, Arc<dyn ConstitutiveLaw>>,
+    fem_meshes: BTreeMap<usize, Mesh>,
+    groups: Vec<GridGroup<'_>>,
+) -> Result<Discretisation, CaseError> {
+    let fem_list: Vec<(usize, Mesh)> = fem_meshes.into_iter().collect();
+    let meshes: Vec<Mesh> = fem_list.iter().map(|(_, m)| m.clone()).collect();
+    let (mut coords, fem_ids) = merge_nodes(&meshes);
+    let mut roles = vec![NodeRole::Structure; coords.len()];
+    let ids_of_structure: HashMap<usize, &Vec<usize>> = fem_list.iter().map(|(k, _)| *k).zip(&fem_ids).collect();
+    let mut node_groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+    for (m, id) in meshes.iter().zip(&fem_ids) {
+        for (g, nodes) in &m.node_groups {
+            node_groups.entry(g.clone()).or_default().extend(nodes.iter().map(|&n| id[n]));
+        }
+    }
+    let mut parts: Vec<(usize, Part)> = Vec::new();
+    let mut interfaces: Vec<Option<ResolvedInterface>> = (0..case.interfaces.len()).map(|_| None).collect();
+    for group in groups {
+        let (grid, on_interface) = match group.coupled {
+            Some(c) => (c.grid, Some((c.on_interface, c.summaries))),
+            None => (group.grid, None),
+        };
+        let mut node_ids = Vec::with_capacity(grid.mesh.coords.len());
+        let mut coupling = on_interface.as_ref().map(|_| GridCoupling {
+            on_interface: vec![None; grid.mesh.coords.len()],
+            interfaces: group.interfaces.clone(),
+        });
+        let mut soil_nodes: Vec<Vec<usize>> = vec![Vec::new(); group.interfaces.len()];
+        for (a, x) in grid.reference_coords().iter().enumerate() {
+            let on = on_interface.as_ref().and_then(|(on, _)| on[a]);
+            let structure_node = on.map(|n| ids_of_structure[&group.structures[n.structure]][n.node]);
+            let g = match (on, structure_node) {
+                (Some(n), Some(s)) if !case.interfaces[group.interfaces[n.interface]].slip => {
+                    roles[s] = NodeRole::Interface;
+                    s
+                }
+                _ => {
+                    coords.push(*x);
+                    roles.push(NodeRole::Grid);
+                    coords.len() - 1
+                }
+            };
+            if let (Some(n), Some(s), Some(c)) = (on, structure_node, coupling.as_mut()) {
+                c.on_interface[a] = Some((n, s));
+                soil_nodes[n.interface].push(g);
+            }
+            node_ids.push(g);
+        }
+        for (gname, nodes) in &grid.mesh.node_groups {
+            node_groups.entry(gname.clone()).or_default().extend(nodes.iter().map(|&n| node_ids[n]));
+        }
+        let part_key = group.bodies[0].0;
+        if let Some((_, summaries)) = on_interface {
+            for (i, (&k, summary)) in group.interfaces.iter().zip(summaries).enumerate() {
+                interfaces[k] =
+                    Some(ResolvedInterface { summary, part: part_key, soil_nodes: std::mem::take(&mut soil_nodes[i]) });
+            }
+        }
+        let (domain, bodies) = grid_domain(case, laws, grid, node_ids, group.bodies)?;
+        parts.push((part_key, Part::Grid(Box::new(GridPart { domain, bodies, coupling }))));
+    }
+    for ((k, mesh), ids) in fem_list.into_iter().zip(fem_ids) {
+        let d = &case.domains[k];
+        let domain = FemDomain::new(
+            &d.name,
+            mesh,
+            ids,
+            case.formulation,
+            case.thickness,
+            laws[d.material.as_str()].clone(),
+            d.mass_matrix == MassMatrix::Lumped,
+        )
+        .map_err(|e| CaseError::new(format!("domains[{k}].mesh"), format!("element {}: {}", e.element, e.message)))?;
+        parts.push((k, Part::Fem(k, Box::new(domain))));
+    }
+    // the parts in the case's order (a grid where its first body is)
+    parts.sort_by_key(|(k, _)| *k);
+    let interfaces = interfaces
+        .into_iter()
+        .map(|i| {
+            let mut i = i.expect("every interface is on a grid");
+            i.part = parts.iter().position(|(k, _)| *k == i.part).expect("the grid's part");
+            i
+        })
+        .collect();
+    for nodes in node_groups.values_mut() {
+        nodes.sort_unstable();
+        nodes.dedup();
+    }
+    Ok(Discretisation {
+        coords,
+        roles,
+        groups: node_groups,
+        parts: parts.into_iter().map(|(_, p)| p).collect(),
+        interfaces,
+    })
+}
+
+/// The MPM domain of a grid with its bodies `(case index, points)`: ids in body order,
+/// initial velocity, PIC blend and initial stress of each. Returns it with the bodies' case
+/// indices.
+fn grid_domain(
+    case: &Case,
+    laws: &BTreeMap<&str, Arc<dyn ConstitutiveLaw>>,
+    grid: Grid,
+    node_ids: Vec<usize>,
+    bodies: Vec<(usize, MaterialPoints)>,
+) -> Result<(MpmDomain, Vec<usize>), CaseError> {
+    let dim = case.formulation.dim();
+    let mut domain: Option<MpmDomain> = None;
+    let mut indices = Vec::with_capacity(bodies.len());
+    let mut grid = Some(grid);
+    let mut node_ids = Some(node_ids);
+    for (k, mut points) in bodies {
+        let d = &case.domains[k];
+        let law = laws[d.material.as_str()].clone();
+        if let Some(v0) = &d.initial_velocity {
+            for (x, v) in points.position.iter().zip(points.velocity.iter_mut()) {
+                *v = v0.at(x, dim);
+            }
+        }
+        let density = law.density();
+        let offset = domain.as_ref().map_or(0, MpmDomain::next_point_id);
+        let mut body = Body::new(&d.name, law, points, offset);
+        body.set_velocity_blend(velocity_blend(case, k)?);
+        if let Some(InitialStressSpec::Geostatic { surface, k0 }) = d.initial_stress {
+            let loc = format!("domains[{k}].initial_stress.geostatic");
+            if !(k0 >= 0.0 && k0.is_finite()) {
+                return Err(CaseError::new(format!("{loc}.k0"), format!("must be ≥ 0, got {k0}")));
+            }
+            let g = case.gravity.as_ref().map_or(0.0, |g| g.acceleration.get(dim - 1).copied().unwrap_or(0.0));
+            if g >= 0.0 {
+                return Err(CaseError::new(
+                    &loc,
+                    "a geostatic stress needs gravity pointing down (negative last component)",
+                ));
+            }
+            let vertical = dim - 1;
+            body.set_initial_stress(|x| {
+                let sigma_v = density * g * (surface - x[vertical]).max(0.0);
+                let mut s = Matrix3::from_diagonal_element(k0 * sigma_v);
+                s[(vertical, vertical)] = sigma_v;
+                s
+            })
+            .map_err(|(p, e)| CaseError::new(&loc, format!("material point {p}: {e}")))?;
+        }
+        match domain.as_mut() {
+            Some(domain) => domain.add_body(body),
+            None => {
+                domain = Some(MpmDomain::new(
+                    grid.take().expect("once"),
+                    node_ids.take().expect("once"),
+                    case.formulation,
+                    case.thickness,
+                    body,
+                ))
+            }
+        }
+        indices.push(k);
+    }
+    Ok((domain.expect("a grid has a body"), indices))
+}
+
+/// The PIC blend of the MPM domain `k`.
+fn velocity_blend(case: &Case, k: usize) -> Result<VelocityBlend, CaseError> {
+    let d = &case.domains[k];
+    if !(0.0..=1.0).contains(&d.pic_fraction) {
+        return Err(CaseError::new(
+            format!("domains[{k}].pic_fraction"),
+            format!("must lie in [0, 1], got {}", d.pic_fraction),
+        ));
+    }
+    match d.pic_relaxation_time {
+        None => Ok(VelocityBlend::PicFraction(d.pic_fraction)),
+        Some(_) if d.pic_fraction != 0.0 => Err(CaseError::new(
+            format!("domains[{k}].pic_relaxation_time"),
+            "give either pic_fraction or pic_relaxation_time, not both",
+        )),
+        Some(tau) if tau > 0.0 && tau.is_finite() => Ok(VelocityBlend::RelaxationTime(tau)),
+        Some(tau) => Err(CaseError::new(
+            format!("domains[{k}].pic_relaxation_time"),
+            format!("must be a positive time in s, got {tau}"),
+        )),
+    }
+}
+
+/// Puts the parts into the model as domains, in the case's order, and gives FEM domains
+/// their initial velocity.
+pub(super) fn place_domains(case: &Case, model: &mut Model, parts: Vec<Part>) -> Result<(), CaseError> {
+    let dim = case.formulation.dim();
+    for part in parts {
+        match part {
+            Part::Fem(k, domain) => {
+                if let Some(v0) = &case.domains[k].initial_velocity {
+                    for &g in domain.node_ids() {
+                        let v = v0.at(&model.coords[g], dim);
+                        model.committed.v[g * dim..(g + 1) * dim].copy_from_slice(&v[..dim]);
+                    }
+                    model.state.v.clone_from(&model.committed.v);
+                }
+                model.domains.push(domain);
+            }
+            Part::Grid(grid) => model.domains.push(Box::new(grid.domain)),
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,150 @@
+//! From a parsed [`Case`] to a solvable [`Model`], with every consistency check that needs
+//! more than the JSON schema (empty regions, missing materials, inverted elements, wrong
+//! vector lengths, grids that do not conform to an interface). One concern per module, in
+//! the order [`build_model`] takes them:
+//!
+//! 1. [`settings`]: analysis, solver and output settings, the time scheme;
+//! 2. [`meshes`]: FEM meshes, background grids with their bodies of material points, the
+//!    interfaces that attach grids to structures, and the one global node set with its node
+//!    roles;
+//! 3. [`regions`]: named node sets;
+//! 4. [`conditions`]: boundary conditions, penalty walls, the grids' attachment to their
+//!    structures ([`interfaces`]), loads and gravity;
+//! 5. [`monitors`] and [`fmu_variables`].
+
+mod conditions;
+mod fmu_variables;
+mod interfaces;
+mod meshes;
+mod monitors;
+mod regions;
+mod settings;
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use loam_coupling::interface::InterfaceSummary;
+use loam_fem::model::Model;
+use loam_laws::ConstitutiveLaw;
+
+use crate::case::{Case, CaseError, Component};
+use crate::monitor::Monitor;
+
+pub use monitors::monitor_unit;
+pub use regions::nearest_node;
+
+/// A model ready to run, with the monitors resolved to nodes and regions.
+pub struct BuiltModel {
+    /// The model.
+    pub model: Model,
+    /// Monitors in case-file order.
+    pub monitors: Vec<Monitor>,
+    /// Node sets of the regions (global ids).
+    pub regions: BTreeMap<String, Vec<usize>>,
+    /// Named inputs (`fmu.inputs`), resolved to their targets in the model.
+    pub inputs: Vec<ModelInput>,
+    /// Named outputs (`fmu.outputs`, or every monitor), resolved to monitors.
+    pub outputs: Vec<ModelOutput>,
+    /// The interfaces between soil and structures, as `loam check` reports them.
+    pub interfaces: Vec<InterfaceSummary>,
+}
+
+/// Where an input acts in the [`Model`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InputSlot {
+    /// `model.loads[i]`.
+    Load(usize),
+    /// `model.constraints[i]`.
+    Constraint(usize),
+    /// `model.gravity`.
+    Gravity,
+}
+
+/// A named input resolved to its target.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelInput {
+    /// Variable name.
+    pub name: String,
+    /// The amplitude it replaces.
+    pub slot: InputSlot,
+    /// Unit (`1` for a factor).
+    pub unit: String,
+    /// Start value (FMI `start`).
+    pub start: f64,
+    /// Description.
+    pub description: String,
+}
+
+/// A named output resolved to a monitor.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelOutput {
+    /// Variable name.
+    pub name: String,
+    /// Index into the monitors.
+    pub monitor: usize,
+    /// Unit.
+    pub unit: String,
+    /// Description.
+    pub description: String,
+}
+
+/// Builds the model of `case` (see the module doc for the order of the steps).
+pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
+    let dim = case.formulation.dim();
+    let scheme = settings::check(case)?;
+    let laws = materials(case)?;
+    let discretisation = meshes::discretise(case, &laws)?;
+    let mut model = Model::new(dim, discretisation.coords.clone(), scheme, case.solver);
+    model.roles.clone_from(&discretisation.roles);
+    let regions = regions::select_all(case, &model.coords, &discretisation.groups)?;
+    let mut parts = discretisation.parts;
+    let bcs = conditions::boundary_conditions(case, &mut model, &regions, &mut parts)?;
+    interfaces::attach(case, &mut model, &mut parts)?;
+    meshes::place_domains(case, &mut model, parts)?;
+    let load_of_load = conditions::loads(case, &mut model, &regions)?;
+    conditions::gravity(case, &mut model)?;
+    let monitors = monitors::build(case, &model, &regions, &discretisation.interfaces)?;
+    let (inputs, outputs) = fmu_variables::resolve(case, &bcs, &load_of_load, &monitors)?;
+    let interfaces = discretisation.interfaces.iter().map(|i| i.summary.clone()).collect();
+    Ok(BuiltModel { model, monitors, regions, inputs, outputs, interfaces })
+}
+
+/// The laws of the case's materials, checked.
+fn materials(case: &Case) -> Result<BTreeMap<&str, Arc<dyn ConstitutiveLaw>>, CaseError> {
+    let mut laws: BTreeMap<&str, Arc<dyn ConstitutiveLaw>> = BTreeMap::new();
+    for (name, spec) in &case.materials {
+        let law = spec.build().map_err(|e| CaseError::new(format!("materials.{name}.{}", e.parameter), e.problem))?;
+        laws.insert(name, Arc::from(law));
+    }
+    Ok(laws)
+}
+
+fn check_positive(location: &str, value: f64) -> Result<(), CaseError> {
+    if value > 0.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(CaseError::new(location, format!("must be > 0, got {value}")))
+    }
+}
+
+fn check_len(location: &str, v: &[impl Sized], dim: usize) -> Result<(), CaseError> {
+    if v.len() == dim {
+        Ok(())
+    } else {
+        Err(CaseError::new(location, format!("needs {dim} components (one per coordinate), got {}", v.len())))
+    }
+}
+
+fn component_index(location: &str, c: Component, dim: usize) -> Result<Option<usize>, CaseError> {
+    let i = match c {
+        Component::X => 0,
+        Component::Y => 1,
+        Component::Z => 2,
+        Component::Magnitude => return Ok(None),
+    };
+    if i < dim {
+        Ok(Some(i))
+    } else {
+        Err(CaseError::new(location, format!("component z does not exist in a {dim}D model")))
+    }
+}

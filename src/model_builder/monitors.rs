@@ -1,0 +1,186 @@
+//! Monitors: named scalar time histories resolved to nodes, material points, regions,
+//! walls and interfaces.
+
+use std::collections::BTreeMap;
+
+use loam_fem::domain::{PointQuantity, PointTensor};
+use loam_fem::model::Model;
+
+use super::meshes::ResolvedInterface;
+use super::regions::{nearest_node, region, select_points};
+use super::{check_len, check_positive, component_index};
+use crate::case::{Case, CaseError, MonitorSpec};
+use crate::monitor::{Monitor, MonitorKind};
+
+/// The monitors of the case, in case order.
+pub(super) fn build(
+    case: &Case,
+    model: &Model,
+    regions: &BTreeMap<String, Vec<usize>>,
+    interfaces: &[ResolvedInterface],
+) -> Result<Vec<Monitor>, CaseError> {
+    let dim = case.formulation.dim();
+    let mut monitor_names = std::collections::BTreeSet::new();
+    let mut monitors = Vec::new();
+    for (k, m) in case.monitors.iter().enumerate() {
+        let loc = format!("monitors[{k}]");
+        if m.name() == "time" || m.name().is_empty() || m.name().contains(',') {
+            return Err(CaseError::new(format!("{loc}.name"), "must be non-empty, not 'time', without commas"));
+        }
+        if !monitor_names.insert(m.name().to_string()) {
+            return Err(CaseError::new(format!("{loc}.name"), format!("duplicate monitor name '{}'", m.name())));
+        }
+        let kind = match m {
+            MonitorSpec::Displacement { point, component, .. }
+            | MonitorSpec::Velocity { point, component, .. }
+            | MonitorSpec::Acceleration { point, component, .. } => {
+                check_len(&format!("{loc}.point"), point, dim)?;
+                let node = nearest_node(&model.coords, point).expect("model has nodes");
+                let c = component_index(&format!("{loc}.component"), *component, dim)?;
+                match m {
+                    MonitorSpec::Displacement { .. } => MonitorKind::Displacement { node, component: c },
+                    MonitorSpec::Velocity { .. } => MonitorKind::Velocity { node, component: c },
+                    _ => MonitorKind::Acceleration { node, component: c },
+                }
+            }
+            MonitorSpec::Reaction { region: r, component, .. } => MonitorKind::Reaction {
+                nodes: region(regions, format!("{loc}.region"), r)?.clone(),
+                component: component_index(&format!("{loc}.component"), *component, dim)?,
+            },
+            MonitorSpec::MaterialPointDisplacement { point, component, .. }
+            | MonitorSpec::MaterialPointVelocity { point, component, .. } => {
+                check_len(&format!("{loc}.point"), point, dim)?;
+                let nearest = model
+                    .domains
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(k, d)| d.nearest_point(point).map(|(id, dist)| (k, id, dist)))
+                    .min_by(|a, b| a.2.total_cmp(&b.2))
+                    .ok_or_else(|| CaseError::new(format!("{loc}.type"), "the model has no material points"))?;
+                let quantity = match m {
+                    MonitorSpec::MaterialPointDisplacement { .. } => PointQuantity::Displacement,
+                    _ => PointQuantity::Velocity,
+                };
+                MonitorKind::MaterialPoint {
+                    domain: nearest.0,
+                    id: nearest.1,
+                    quantity,
+                    component: component_index(&format!("{loc}.component"), *component, dim)?,
+                }
+            }
+            MonitorSpec::Runout { wall, base, threshold, .. } => {
+                check_surface_monitor(&loc, model, dim)?;
+                check_positive(&format!("{loc}.threshold"), *threshold)?;
+                MonitorKind::Runout { wall: *wall, base: *base, threshold: *threshold }
+            }
+            MonitorSpec::SurfaceHeight { x, base, .. } => {
+                check_surface_monitor(&loc, model, dim)?;
+                MonitorKind::SurfaceHeight { x: *x, base: *base }
+            }
+            MonitorSpec::MaterialPointStress { point, within, component, .. } => MonitorKind::MaterialPointTensor {
+                points: select_points(model, &loc, dim, None, point.as_deref(), within.as_ref())?,
+                quantity: PointTensor::CauchyStress,
+                component: *component,
+            },
+            MonitorSpec::WallForce { wall, component, .. } => MonitorKind::WallForce {
+                domain: model.domains.iter().position(|d| d.wall_force(wall).is_some()).ok_or_else(|| {
+                    CaseError::new(
+                        format!("{loc}.wall"),
+                        format!("no penalty wall named '{wall}' in boundary_conditions"),
+                    )
+                })?,
+                wall: wall.clone(),
+                component: component_index(&format!("{loc}.component"), *component, dim)?,
+            },
+            MonitorSpec::InterfaceForce { interface, component, .. } => {
+                let k = case.interfaces.iter().position(|i| i.name == *interface).ok_or_else(|| {
+                    CaseError::new(
+                        format!("{loc}.interface"),
+                        format!("no interface named '{interface}' in interfaces"),
+                    )
+                })?;
+                MonitorKind::InterfaceForce {
+                    nodes: interfaces[k].soil_nodes.clone(),
+                    component: component_index(&format!("{loc}.component"), *component, dim)?,
+                }
+            }
+            MonitorSpec::MaterialVolume { within, .. } | MonitorSpec::MaterialMass { within, .. } => {
+                if model.domains.iter().all(|d| d.point_extents().is_empty()) {
+                    return Err(CaseError::new(format!("{loc}.type"), "the model has no material points"));
+                }
+                let (min, max) = match within {
+                    Some(b) => {
+                        check_len(&format!("{loc}.box.min"), &b.min, dim)?;
+                        check_len(&format!("{loc}.box.max"), &b.max, dim)?;
+                        if let Some(d) = (0..dim).find(|&d| b.max[d] < b.min[d]) {
+                            return Err(CaseError::new(
+                                format!("{loc}.box.max[{d}]"),
+                                format!("must not lie below box.min[{d}] = {}, got {}", b.min[d], b.max[d]),
+                            ));
+                        }
+                        (b.min.clone(), b.max.clone())
+                    }
+                    None => (vec![f64::NEG_INFINITY; dim], vec![f64::INFINITY; dim]),
+                };
+                match m {
+                    MonitorSpec::MaterialVolume { .. } => MonitorKind::MaterialVolume { min, max },
+                    _ => MonitorKind::MaterialMass { min, max },
+                }
+            }
+            MonitorSpec::KineticEnergy { domain, .. } => {
+                MonitorKind::KineticEnergy { domain: energy_domain(model, &loc, domain.as_deref())? }
+            }
+            MonitorSpec::StrainEnergy { domain, .. } => {
+                MonitorKind::StrainEnergy { domain: energy_domain(model, &loc, domain.as_deref())? }
+            }
+        };
+        monitors.push(Monitor { name: m.name().to_string(), kind });
+    }
+    Ok(monitors)
+}
+
+/// The `(domain index, name)` of the domain or body named `name` for an energy monitor at
+/// `loc` (`None`: every domain).
+fn energy_domain(model: &Model, loc: &str, name: Option<&str>) -> Result<Option<(usize, String)>, CaseError> {
+    let Some(name) = name else { return Ok(None) };
+    model
+        .domains
+        .iter()
+        .position(|d| d.energies(name, &model.committed.v).is_some())
+        .map(|k| Some((k, name.to_string())))
+        .ok_or_else(|| CaseError::new(format!("{loc}.domain"), format!("no domain named '{name}' in domains")))
+}
+
+/// Surface monitors need material points in a plane problem.
+fn check_surface_monitor(loc: &str, model: &Model, dim: usize) -> Result<(), CaseError> {
+    if dim != 2 {
+        return Err(CaseError::new(format!("{loc}.type"), "surface monitors need a plane (2D) problem"));
+    }
+    if model.domains.iter().all(|d| d.point_extents().is_empty()) {
+        return Err(CaseError::new(format!("{loc}.type"), "the model has no material points"));
+    }
+    Ok(())
+}
+
+/// SI unit of a monitor's value.
+pub fn monitor_unit(kind: &MonitorKind) -> &'static str {
+    match kind {
+        MonitorKind::Displacement { .. } => "m",
+        MonitorKind::Velocity { .. } => "m/s",
+        MonitorKind::Acceleration { .. } => "m/s2",
+        MonitorKind::Reaction { .. } | MonitorKind::WallForce { .. } | MonitorKind::InterfaceForce { .. } => "N",
+        MonitorKind::Runout { .. } | MonitorKind::SurfaceHeight { .. } => "m",
+        MonitorKind::MaterialPoint { quantity, .. } => match quantity {
+            PointQuantity::Position | PointQuantity::Displacement => "m",
+            PointQuantity::Velocity => "m/s",
+            PointQuantity::Acceleration => "m/s2",
+        },
+        MonitorKind::MaterialPointTensor { quantity, .. } => match quantity {
+            PointTensor::CauchyStress => "Pa",
+            PointTensor::DeformationGradient => "1",
+        },
+        MonitorKind::MaterialVolume { .. } => "m3",
+        MonitorKind::MaterialMass { .. } => "kg",
+        MonitorKind::KineticEnergy { .. } | MonitorKind::StrainEnergy { .. } => "J",
+    }
+}

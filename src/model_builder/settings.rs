@@ -1,0 +1,67 @@
+//! Analysis, solver and output settings: ranges and combinations, and the time scheme.
+
+use loam_fem::scheme::TimeScheme;
+
+use super::check_positive;
+use crate::case::{AnalysisType, Case, CaseError};
+
+/// Checks the case's scalar settings and returns its time scheme.
+pub(super) fn check(case: &Case) -> Result<TimeScheme, CaseError> {
+    check_positive("thickness", case.thickness)?;
+    check_positive("analysis.time_step", case.analysis.time_step)?;
+    check_positive("analysis.end_time", case.analysis.end_time)?;
+    if case.analysis.time_step > case.analysis.end_time * (1.0 + 1e-12) {
+        return Err(CaseError::new("analysis.time_step", "is longer than analysis.end_time"));
+    }
+    check_positive("solver.residual_relative_tolerance", case.solver.residual_relative_tolerance)?;
+    check_positive("solver.residual_absolute_tolerance", case.solver.residual_absolute_tolerance)?;
+    if let Some(a) = &case.analysis.adaptive {
+        check_positive("analysis.adaptive.min_time_step", a.min_time_step)?;
+        check_positive("analysis.adaptive.max_time_step", a.max_time_step)?;
+        if a.min_time_step > case.analysis.time_step || a.max_time_step < case.analysis.time_step {
+            return Err(CaseError::new(
+                "analysis.adaptive",
+                format!(
+                    "time_step {} must lie in [min_time_step, max_time_step] = [{}, {}]",
+                    case.analysis.time_step, a.min_time_step, a.max_time_step
+                ),
+            ));
+        }
+        if a.target_iterations == 0 {
+            return Err(CaseError::new("analysis.adaptive.target_iterations", "must be at least 1"));
+        }
+        if !(a.growth >= 1.0 && a.growth.is_finite()) {
+            return Err(CaseError::new("analysis.adaptive.growth", format!("must be ≥ 1, got {}", a.growth)));
+        }
+    }
+    if let Some(r) = &case.analysis.stop_at_rest {
+        check_positive("analysis.stop_at_rest.kinetic_energy_ratio", r.kinetic_energy_ratio)?;
+        if !(r.duration >= 0.0 && r.min_time >= 0.0) {
+            return Err(CaseError::new("analysis.stop_at_rest", "duration and min_time must be ≥ 0"));
+        }
+    }
+    if let Some(t) = case.output.time_interval {
+        check_positive("output.time_interval", t)?;
+    }
+    for (k, &t) in case.output.times.iter().enumerate() {
+        check_positive(&format!("output.times[{k}]"), t)?;
+        if k > 0 && t <= case.output.times[k - 1] {
+            return Err(CaseError::new(format!("output.times[{k}]"), "times must increase"));
+        }
+    }
+    if case.solver.max_iterations == 0 {
+        return Err(CaseError::new("solver.max_iterations", "must be at least 1"));
+    }
+    let scheme = match (case.analysis.kind, case.analysis.scheme) {
+        (AnalysisType::Dynamic, None) => TimeScheme::Newmark { beta: 0.25, gamma: 0.5 },
+        (AnalysisType::Dynamic, Some(TimeScheme::Static)) => {
+            return Err(CaseError::new("analysis.scheme", "a dynamic analysis needs newmark or bossak"));
+        }
+        (AnalysisType::Dynamic, Some(s)) => s,
+        (_, None) => TimeScheme::Static,
+        (_, Some(TimeScheme::Static)) => TimeScheme::Static,
+        (_, Some(_)) => return Err(CaseError::new("analysis.scheme", "only dynamic analyses take a time scheme")),
+    };
+    scheme.check().map_err(|(k, m)| CaseError::new(format!("analysis.scheme.{k}"), m))?;
+    Ok(scheme)
+}
