@@ -188,7 +188,7 @@ fn run_case(case: &std::path::Path, out: Option<PathBuf>, quiet: bool) -> ExitCo
                 String::new()
             };
             let summary = format!(
-                "{} steps, {} Newton iterations, {} step cuts, wall time {:.2} s (assembly {:.2} s, factorisation {:.2} s, solve {:.2} s{gmres}){blocks}",
+                "{} steps, {} Newton iterations, {} step cuts, wall time {:.3} s (assembly {:.2} s, factorisation {:.2} s, solve {:.2} s{gmres}){blocks}",
                 sim.stats.steps, sim.stats.iterations, sim.stats.cuts, wall, t.assembly, t.factorisation, t.solve
             );
             match end {

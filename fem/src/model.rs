@@ -203,6 +203,8 @@ pub struct Model {
     /// Force (N) that the soil domains exert on the nodes they share with a structure, at
     /// the committed state (full DOF vector, global frame; 0 at nodes only the soil has).
     pub soil_forces: Vec<f64>,
+    /// Amplitude factor of each constraint at the committed state (0 before the first step).
+    applied_factors: Vec<f64>,
     assembler: Option<Assembler>,
 }
 
@@ -228,6 +230,7 @@ impl Model {
             time: 0.0,
             reactions: vec![0.0; n],
             soil_forces: vec![0.0; n],
+            applied_factors: Vec::new(),
             assembler: None,
         }
     }
@@ -314,13 +317,21 @@ impl Model {
     }
 
     /// The predictor of a step to `t`: `u = u_n` with the prescribed values at `t`, and the
-    /// time scheme's `v`, `a` for it.
+    /// time scheme's `v`, `a` for it. A structure node's prescribed displacement is its total
+    /// displacement `ū(t)`; a grid node starts every step where the grid was placed, so its
+    /// prescribed displacement moves it by the increment `ū(t) − ū(t_n)` from there (a
+    /// boundary of the grid follows the prescribed trajectory; `ū(t_n)` is what the committed
+    /// state applied, 0 at the start, so a constant value is applied in the first step).
     fn predict(&mut self, t: f64, dt: f64) {
         self.state.clone_from(&self.committed);
-        for c in &self.constraints {
+        self.applied_factors.resize(self.constraints.len(), 0.0);
+        for (c, &f_n) in self.constraints.iter().zip(&self.applied_factors) {
             let f = c.amplitude.at(t);
             for (&d, &v) in c.dofs.iter().zip(&c.values) {
-                self.state.u[d] = v * f;
+                self.state.u[d] = match self.roles[d / self.dim] {
+                    NodeRole::Grid => self.committed.u[d] + v * (f - f_n),
+                    NodeRole::Structure | NodeRole::Interface => v * f,
+                };
             }
         }
         self.scheme.update_kinematics(dt, &mut self.state, &self.committed);
@@ -452,6 +463,7 @@ impl Model {
         for d in self.domains.iter_mut() {
             d.commit(&input);
         }
+        self.applied_factors = self.constraints.iter().map(|c| c.amplitude.at(t)).collect();
         self.committed.clone_from(&self.state);
         self.time = t;
     }

@@ -16,11 +16,13 @@ use std::path::{Path, PathBuf};
 
 use super::vtk::OutputError;
 
-/// A `.pvd` series being written: (time, file name relative to the `.pvd`) per step.
+/// A `.pvd` series being written: (time, file name relative to the `.pvd`, part) per data
+/// set; a series of several parts lists every part of each step (ParaView shows them
+/// together, e.g. the soil's points and the structure's mesh of a coupled case).
 #[derive(Debug, Clone)]
 pub struct PvdSeries {
     path: PathBuf,
-    steps: Vec<(f64, String)>,
+    steps: Vec<(f64, String, usize)>,
 }
 
 impl PvdSeries {
@@ -33,6 +35,11 @@ impl PvdSeries {
     /// Record that `file` (a name relative to the `.pvd`'s directory, e.g. `soil_000003.vtu`)
     /// holds the state at `time`, and rewrite the `.pvd`.
     pub fn add(&mut self, time: f64, file: &str) -> Result<(), OutputError> {
+        self.add_part(time, file, 0)
+    }
+
+    /// As [`add`](Self::add), for part `part` of a series of several parts.
+    pub fn add_part(&mut self, time: f64, file: &str, part: usize) -> Result<(), OutputError> {
         let invalid = |reason: String| OutputError::InvalidData { file: self.path.clone(), reason };
         if !time.is_finite() {
             return Err(invalid(format!("time {time} of `{file}` is not finite")));
@@ -40,7 +47,7 @@ impl PvdSeries {
         if file.is_empty() || Path::new(file).is_absolute() {
             return Err(invalid(format!("`{file}` is not a file name relative to the .pvd")));
         }
-        self.steps.push((time, file.to_string()));
+        self.steps.push((time, file.to_string(), part));
         if let Err(e) = self.write() {
             self.steps.pop();
             return Err(e);
@@ -53,8 +60,8 @@ impl PvdSeries {
         &self.path
     }
 
-    /// The steps recorded so far: (time, relative file name).
-    pub fn steps(&self) -> &[(f64, String)] {
+    /// The data sets recorded so far: (time, relative file name, part).
+    pub fn steps(&self) -> &[(f64, String, usize)] {
         &self.steps
     }
 
@@ -64,8 +71,9 @@ impl PvdSeries {
             "<?xml version=\"1.0\"?>\n\
              <VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n",
         );
-        for (time, file) in &self.steps {
-            xml += &format!("    <DataSet timestep=\"{time}\" group=\"\" part=\"0\" file=\"{}\"/>\n", escape(file));
+        for (time, file, part) in &self.steps {
+            xml +=
+                &format!("    <DataSet timestep=\"{time}\" group=\"\" part=\"{part}\" file=\"{}\"/>\n", escape(file));
         }
         xml += "  </Collection>\n</VTKFile>\n";
         xml

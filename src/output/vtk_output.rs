@@ -1,7 +1,9 @@
 //! VTK series of the model's domains: per output of a domain (an FEM mesh, each body of
 //! material points, each penalty wall; with `output.grid` also every background grid as
 //! `<domain>_grid`), `<name>_<step>.vtu` per output step and `<name>.pvd` listing them with
-//! their times.
+//! their times; with more than one output (e.g. the soil and the structure of a coupled
+//! case), also `<case>.pvd` listing all of them at each time as parts of one series, which
+//! ParaView opens as one.
 
 use std::path::{Path, PathBuf};
 
@@ -15,6 +17,8 @@ use crate::simulation::Simulation;
 pub struct VtkSeries {
     dir: PathBuf,
     series: Vec<(String, PvdSeries)>,
+    /// Every output as a part of one series (`<case>.pvd`).
+    all: Option<PvdSeries>,
 }
 
 fn fields(f: &[Field]) -> Vec<VtuField<'_>> {
@@ -24,12 +28,16 @@ fn fields(f: &[Field]) -> Vec<VtuField<'_>> {
 impl VtkSeries {
     /// A series in `dir`.
     pub fn new(dir: &Path) -> Self {
-        Self { dir: dir.to_path_buf(), series: Vec::new() }
+        Self { dir: dir.to_path_buf(), series: Vec::new(), all: None }
     }
 
     /// Writes the committed state of every output of every domain.
     pub fn write(&mut self, sim: &Simulation) -> std::io::Result<()> {
-        for named in sim.model.outputs(sim.case.output.grid) {
+        let outputs = sim.model.outputs(sim.case.output.grid);
+        if outputs.len() > 1 && self.all.is_none() && outputs.iter().all(|o| o.name != sim.case.name) {
+            self.all = Some(PvdSeries::new(self.dir.join(format!("{}.pvd", sim.case.name))));
+        }
+        for named in outputs {
             let out = &named.output;
             let file = format!("{}_{:06}.vtu", named.name, sim.step);
             let cells = match &out.cells {
@@ -53,6 +61,9 @@ impl VtkSeries {
                 }
             };
             self.series[k].1.add(sim.time(), &file).map_err(std::io::Error::other)?;
+            if let Some(all) = &mut self.all {
+                all.add_part(sim.time(), &file, k).map_err(std::io::Error::other)?;
+            }
         }
         Ok(())
     }
