@@ -18,7 +18,8 @@
 //!   "wall_time": { "total": 53.1, "search": 1.2, "pattern": 0.4, "assembly": 20.3,
 //!                  "factorisation": 25.0, "symbolic": 0.3, "solve": 2.1, "commit": 0.5,
 //!                  "output": 1.0, "other": 2.6 },
-//!   "monitors": { "runout": 0.416, "height_at_wall": 0.1002 }
+//!   "monitors": { "runout": 0.416, "height_at_wall": 0.1002 },
+//!   "monitor_units": { "runout": "m", "height_at_wall": "m" }
 //! }
 //! ```
 //!
@@ -34,6 +35,7 @@ use loam_fem::formulation::Formulation;
 use loam_fem::model::PhaseTimings;
 use serde::{Deserialize, Serialize};
 
+use crate::model_builder::monitor_unit;
 use crate::simulation::Simulation;
 
 /// File name of the report in the output directory.
@@ -158,50 +160,58 @@ pub struct RunSummary {
     pub linear_solver: LinearSolverReport,
     /// Wall time per phase (s).
     pub wall_time: WallTimeReport,
-    /// Monitor values at the last converged state, by name in case order.
-    pub monitors: MonitorValues,
+    /// Monitor values at the last converged state, by name in case order (`null` where not
+    /// finite).
+    pub monitors: NamedValues<Option<f64>>,
+    /// SI unit of each monitor (`m`, `N`, `Pa`, `J`, `1`, …).
+    pub monitor_units: NamedValues<String>,
 }
 
-/// Monitor values by name, written as a JSON object in case order (a non-finite value as
-/// `null`).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct MonitorValues(pub Vec<(String, Option<f64>)>);
+/// Values by name, written as a JSON object in their order (monitors in case order).
+#[derive(Debug, Clone, PartialEq)]
+pub struct NamedValues<T>(pub Vec<(String, T)>);
 
-impl MonitorValues {
-    /// The value of monitor `name`, if present and finite.
-    pub fn get(&self, name: &str) -> Option<f64> {
-        self.0.iter().find(|(n, _)| n == name).and_then(|(_, v)| *v)
+impl<T> Default for NamedValues<T> {
+    fn default() -> Self {
+        Self(Vec::new())
     }
 }
 
-impl Serialize for MonitorValues {
+impl<T> NamedValues<T> {
+    /// The value of `name`.
+    pub fn get(&self, name: &str) -> Option<&T> {
+        self.0.iter().find(|(n, _)| n == name).map(|(_, v)| v)
+    }
+}
+
+impl<T: Serialize> Serialize for NamedValues<T> {
     fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
         use serde::ser::SerializeMap;
         let mut map = serializer.serialize_map(Some(self.0.len()))?;
         for (name, value) in &self.0 {
-            map.serialize_entry(name, &value.filter(|v| v.is_finite()))?;
+            map.serialize_entry(name, value)?;
         }
         map.end()
     }
 }
 
-impl<'de> Deserialize<'de> for MonitorValues {
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for NamedValues<T> {
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        struct Visitor;
-        impl<'de> serde::de::Visitor<'de> for Visitor {
-            type Value = MonitorValues;
+        struct Visitor<T>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for Visitor<T> {
+            type Value = NamedValues<T>;
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("an object of monitor values")
+                f.write_str("an object of named values")
             }
             fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
                 let mut values = Vec::new();
-                while let Some(entry) = map.next_entry::<String, Option<f64>>()? {
+                while let Some(entry) = map.next_entry::<String, T>()? {
                     values.push(entry);
                 }
-                Ok(MonitorValues(values))
+                Ok(NamedValues(values))
             }
         }
-        deserializer.deserialize_map(Visitor)
+        deserializer.deserialize_map(Visitor(std::marker::PhantomData))
     }
 }
 
@@ -227,9 +237,15 @@ impl RunSummary {
     /// The report of `sim` as it stands, with `status` and the wall times measured so far.
     pub fn of(sim: &Simulation, status: RunStatus, wall_time: WallTimeReport) -> Self {
         let solver = sim.model.solver_timings();
-        let monitors = MonitorValues(
-            sim.monitor_names().into_iter().map(String::from).zip(sim.monitor_values().into_iter().map(Some)).collect(),
+        let monitors = NamedValues(
+            sim.monitors
+                .iter()
+                .zip(sim.monitor_values())
+                .map(|(m, v)| (m.name.clone(), v.is_finite().then_some(v)))
+                .collect(),
         );
+        let monitor_units =
+            NamedValues(sim.monitors.iter().map(|m| (m.name.clone(), monitor_unit(&m.kind).to_string())).collect());
         Self {
             case: sim.case.name.clone(),
             case_file: std::fs::canonicalize(sim.case.directory.join(format!("{}.json", sim.case.name))).ok(),
@@ -248,6 +264,7 @@ impl RunSummary {
             },
             wall_time,
             monitors,
+            monitor_units,
         }
     }
 
@@ -274,13 +291,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn monitors_keep_case_order_and_non_finite_values_are_null() {
-        let m = MonitorValues(vec![("z".into(), Some(1.5)), ("a".into(), Some(f64::NAN)), ("m".into(), Some(-2.0))]);
+    fn named_values_keep_their_order() {
+        let m = NamedValues(vec![("z".to_string(), Some(1.5)), ("a".into(), None), ("m".into(), Some(-2.0))]);
         let text = serde_json::to_string(&m).unwrap();
         assert_eq!(text, r#"{"z":1.5,"a":null,"m":-2.0}"#);
-        let back: MonitorValues = serde_json::from_str(&text).unwrap();
-        assert_eq!(back.0, vec![("z".into(), Some(1.5)), ("a".into(), None), ("m".into(), Some(-2.0))]);
-        assert_eq!(back.get("m"), Some(-2.0));
+        let back: NamedValues<Option<f64>> = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, m);
+        assert_eq!(back.get("m"), Some(&Some(-2.0)));
     }
 
     #[test]
