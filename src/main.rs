@@ -116,6 +116,10 @@ struct PlotArgs {
     /// Draw the MPM background grid (written with output.grid).
     #[arg(long)]
     grid: bool,
+    /// Draw a material point no larger than this many times the side of its initial volume
+    /// (V / det F): degenerate points with a huge det F otherwise cover their neighbours.
+    #[arg(long)]
+    max_stretch: Option<f64>,
     /// No frames, monitor plots only.
     #[arg(long, conflicts_with = "no_monitors")]
     no_frames: bool,
@@ -167,6 +171,7 @@ fn plot_results(a: PlotArgs) -> ExitCode {
         plane: a.plane,
         view: a.view,
         grid: a.grid,
+        max_stretch: a.max_stretch,
         frames: !a.no_frames,
         monitor_plots: !a.no_monitors,
     };

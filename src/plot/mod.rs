@@ -150,6 +150,8 @@ pub struct PlotOptions {
     pub view: Option<View>,
     /// Draw the MPM background grid (`output.grid`).
     pub grid: bool,
+    /// Largest side of a drawn material point, in sides of its initial volume.
+    pub max_stretch: Option<f64>,
     /// Draw frames of the series.
     pub frames: bool,
     /// Draw monitor plots.
@@ -173,6 +175,7 @@ impl Default for PlotOptions {
             plane: Plane::Xy,
             view: None,
             grid: false,
+            max_stretch: None,
             frames: true,
             monitor_plots: true,
         }
@@ -264,9 +267,10 @@ fn nearest(times: &[f64], t: f64) -> usize {
 fn geometry(
     summary: Option<&RunSummary>,
     first: &[(SeriesKind, Piece)],
-    plane: Plane,
+    options: &PlotOptions,
     notes: &mut Vec<String>,
 ) -> Geometry {
+    let (plane, max_stretch) = (options.plane, options.max_stretch);
     match summary {
         Some(s) => {
             let kind = match s.formulation.as_str() {
@@ -274,7 +278,7 @@ fn geometry(
                 "3d" => ModelKind::ThreeD,
                 _ => ModelKind::Plane,
             };
-            Geometry { formulation: kind, thickness: s.thickness, plane }
+            Geometry { formulation: kind, thickness: s.thickness, plane, max_stretch }
         }
         None => {
             let three_d = first.iter().any(|(_, p)| p.points.iter().any(|x| x[2] != 0.0));
@@ -283,7 +287,12 @@ fn geometry(
                 if three_d { "3D" } else { "plane" },
                 if three_d { "" } else { " of unit thickness" }
             ));
-            Geometry { formulation: if three_d { ModelKind::ThreeD } else { ModelKind::Plane }, thickness: 1.0, plane }
+            Geometry {
+                formulation: if three_d { ModelKind::ThreeD } else { ModelKind::Plane },
+                thickness: 1.0,
+                plane,
+                max_stretch,
+            }
         }
     }
 }
@@ -344,7 +353,7 @@ fn plot_frames(
         pieces_at.push(pieces);
     }
     let first: Vec<(SeriesKind, Piece)> = pieces_at[0].iter().map(|(_, k, p)| (*k, (**p).clone())).collect();
-    let geometry = geometry(summary, &first, options.plane, &mut report.notes);
+    let geometry = geometry(summary, &first, options, &mut report.notes);
     let selection = FieldSelection::parse(options.field.as_deref().unwrap_or("displacement"));
     let bodies = || first.iter().filter(|(k, _)| matches!(k, SeriesKind::MaterialPoints | SeriesKind::Mesh));
     let Some((field, _)) = bodies().find_map(|(_, p)| p.field(&selection.name)) else {

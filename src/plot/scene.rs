@@ -6,7 +6,9 @@
 //! problems (thickness `t`), `√(V/(2πr))` in axisymmetry (the volume is the full ring at
 //! radius `r`) and `∛V` in 3D. A 3D model is projected on a coordinate plane and drawn from
 //! the far side to the near one (nearer material hides what lies behind it); of a 3D mesh
-//! only the boundary faces are drawn.
+//! only the boundary faces are drawn. With a `max_stretch` R a point is drawn no larger
+//! than R times the side of its initial volume `V₀ = V / det F`: a degenerate point (det F
+//! in the thousands in the toe of a granular flow) otherwise covers its neighbours.
 
 use std::collections::HashMap;
 
@@ -55,6 +57,9 @@ pub struct Geometry {
     pub thickness: f64,
     /// Plane of the picture (3D only; 2D models are drawn in x–y).
     pub plane: Plane,
+    /// Largest side of a drawn material point as a multiple of the side of its initial
+    /// volume `V/det F` (`None`: the current volume's side whatever it is).
+    pub max_stretch: Option<f64>,
 }
 
 /// The formulation as it matters for drawing.
@@ -186,6 +191,23 @@ pub fn add_piece(
     match kind {
         SeriesKind::MaterialPoints => {
             let volume = piece.field("volume").map(|(f, _)| f.values.as_slice()).unwrap_or(&[]);
+            let jacobian = piece.field("deformation_gradient").filter(|(f, _)| f.components == 9).map(|(f, _)| {
+                f.values
+                    .chunks_exact(9)
+                    .map(|m| {
+                        m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6])
+                            + m[2] * (m[3] * m[7] - m[4] * m[6])
+                    })
+                    .collect::<Vec<f64>>()
+            });
+            let side = |p: usize, x: &[f64; 3]| {
+                let v = volume.get(p).copied().unwrap_or(0.0);
+                let side = geometry.point_side(v, x);
+                match (geometry.max_stretch, &jacobian) {
+                    (Some(r), Some(j)) if j[p] > 0.0 => side.min(r * geometry.point_side(v / j[p], x)),
+                    _ => side,
+                }
+            };
             let values = match piece.field(&field.name) {
                 Some((f, _)) => Some(field.values(f)?),
                 None => None,
@@ -196,11 +218,7 @@ pub fn add_piece(
             }
             scene.squares.extend(order.into_iter().map(|p| {
                 let x = &piece.points[p];
-                Square {
-                    centre: project(x),
-                    half: 0.5 * geometry.point_side(volume.get(p).copied().unwrap_or(0.0), x),
-                    value: values.as_ref().map(|v| v[p]),
-                }
+                Square { centre: project(x), half: 0.5 * side(p, x), value: values.as_ref().map(|v| v[p]) }
             }));
         }
         SeriesKind::Mesh => {
@@ -288,7 +306,7 @@ mod tests {
     use crate::plot::results::FieldData;
 
     fn geometry(formulation: ModelKind) -> Geometry {
-        Geometry { formulation, thickness: 2.0, plane: Plane::Xy }
+        Geometry { formulation, thickness: 2.0, plane: Plane::Xy, max_stretch: None }
     }
 
     #[test]
@@ -298,6 +316,28 @@ mod tests {
         let ring = 2.0 * std::f64::consts::PI * 0.5 * 0.01;
         assert!((geometry(ModelKind::Axisymmetric).point_side(ring, &x) - 0.1).abs() < 1e-15);
         assert!((geometry(ModelKind::ThreeD).point_side(8.0, &x) - 2.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn stretched_points_are_capped_by_their_initial_volume() {
+        // a point of volume 4 (side 2) whose F = diag(4, 1, 1): initial volume 1 (side 1)
+        let f = vec![4.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+        let piece = Piece {
+            points: vec![[0.0; 3]],
+            cells: Cells::Vertices,
+            point_fields: vec![
+                FieldData { name: "volume".into(), components: 1, values: vec![4.0] },
+                FieldData { name: "deformation_gradient".into(), components: 9, values: f },
+            ],
+            cell_fields: vec![],
+        };
+        let field = FieldSelection::parse("volume");
+        for (cap, half) in [(None, 1.0), (Some(1.5), 0.75), (Some(3.0), 1.0)] {
+            let g = Geometry { formulation: ModelKind::Plane, thickness: 1.0, plane: Plane::Xy, max_stretch: cap };
+            let mut scene = Scene::default();
+            add_piece(&mut scene, &piece, SeriesKind::MaterialPoints, &field, &g).unwrap();
+            assert_eq!(scene.squares[0].half, half, "{cap:?}");
+        }
     }
 
     #[test]
@@ -317,7 +357,7 @@ mod tests {
             cell_fields: vec![FieldData { name: "p".into(), components: 1, values: vec![1.0, 2.0] }],
         };
         let mut scene = Scene::default();
-        let g = Geometry { formulation: ModelKind::ThreeD, thickness: 1.0, plane: Plane::Xy };
+        let g = Geometry { formulation: ModelKind::ThreeD, thickness: 1.0, plane: Plane::Xy, max_stretch: None };
         add_piece(&mut scene, &piece, SeriesKind::Mesh, &FieldSelection::parse("p"), &g).unwrap();
         assert_eq!(scene.polygons.len(), 10);
         // seen from +z: the top faces (z = 1) come last
