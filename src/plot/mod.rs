@@ -364,6 +364,10 @@ fn plot_frames(
         });
     };
     selection.component(field.components).map_err(PlotError::BadInput)?;
+    let mut selection = selection;
+    if field.components == 3 && selection.component.is_none() {
+        selection.component = Some("magnitude".into());
+    }
     // walls from the case, where summary.json names a readable case file
     let walls = match summary.and_then(|s| s.case_file.clone()) {
         Some(case) if geometry.formulation != ModelKind::ThreeD => match walls::walls_of_case(&case) {
