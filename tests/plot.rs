@@ -195,3 +195,29 @@ fn run_writes_its_report() {
     assert_eq!(s["monitor_units"]["tip_uy"], "m");
     assert!(s["end"]["reason"].as_str().unwrap().starts_with("reached the end time"));
 }
+
+/// A run that stops on a step that fails still writes its report, saying why, with the
+/// results so far.
+#[test]
+fn failed_run_writes_its_report() {
+    let text = std::fs::read_to_string(root().join("cases/cantilever_fem.json")).unwrap();
+    let mut case: serde_json::Value = serde_json::from_str(&text).unwrap();
+    // one Newton iteration cannot converge the large-deflection step, and no cut is allowed
+    case["solver"]["max_iterations"] = 1.into();
+    case["analysis"]["max_step_cuts"] = 0.into();
+    let dir = temp_dir("failed");
+    let path = dir.join("failing.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&case).unwrap()).unwrap();
+    let out = dir.join("out");
+    let status = loam().arg("run").arg(&path).args(["--quiet", "--out"]).arg(&out).status().unwrap();
+    assert_eq!(status.code(), Some(1));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    println!("{}", s["end"]);
+    assert_eq!(s["status"], "failed");
+    assert_eq!(s["case"], "failing");
+    assert_eq!(s["steps"], 0);
+    assert!(s["end"]["reason"].as_str().unwrap().starts_with("stopped at step 1"), "{}", s["end"]);
+    assert_eq!(s["end"]["time"], 0.0);
+    assert!(out.join("monitors.csv").is_file() && out.join("beam.pvd").is_file());
+}
