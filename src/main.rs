@@ -50,7 +50,7 @@ enum Command {
     },
     /// Draw a run's results as PNG files: the bodies coloured by a field at chosen times,
     /// and the monitors (one picture per group of one unit).
-    Plot(PlotArgs),
+    Plot(Box<PlotArgs>),
     /// Drive one material point of a law along a laboratory path and write path.csv.
     Law {
         /// The path file (JSON), e.g. cases/laws/mc_triaxial_drained.json.
@@ -175,7 +175,7 @@ fn plot_results(a: PlotArgs) -> ExitCode {
         frames: !a.no_frames,
         monitor_plots: !a.no_monitors,
     };
-    if let Some((min, max)) = options.range.filter(|(min, max)| !(min < max)) {
+    if let Some((min, max)) = options.range.filter(|(min, max)| min >= max) {
         eprintln!("error: --range {min},{max}: MIN must be below MAX");
         return ExitCode::from(2);
     }
@@ -269,7 +269,7 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Plot(args) => plot_results(args),
+        Command::Plot(args) => plot_results(*args),
         Command::Law { path, out } => {
             let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "law".into());
             let out = out.unwrap_or_else(|| default_out_dir(&name));

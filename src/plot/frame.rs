@@ -244,7 +244,7 @@ fn tick_time(t: f64) -> String {
 /// About `n` round tick values in `[min, max]`.
 pub fn nice_ticks(min: f64, max: f64, n: usize) -> Vec<f64> {
     let span = max - min;
-    if !(span > 0.0) || !span.is_finite() {
+    if span.is_nan() || span <= 0.0 || span.is_infinite() {
         return vec![min];
     }
     let raw = span / n.max(1) as f64;
