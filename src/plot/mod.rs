@@ -28,6 +28,7 @@ pub mod walls;
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
 use std::time::Instant;
 
 use plotters::prelude::*;
@@ -210,6 +211,15 @@ pub fn write_png(path: &Path, rgb: &[u8], size: (u32, u32)) -> Result<(), PlotEr
 
 /// Plots the results in `dir`.
 pub fn plot(dir: &Path, options: &PlotOptions) -> Result<PlotReport, PlotError> {
+    if let Some((min, max)) = options.range.filter(|(min, max)| min >= max) {
+        return Err(PlotError::BadInput(format!("--range {min},{max}: MIN must be below MAX")));
+    }
+    if let Some(v) = options.view.filter(|v| v[0] >= v[1] || v[2] >= v[3]) {
+        return Err(PlotError::BadInput(format!(
+            "--view {},{},{},{}: expected XMIN < XMAX and YMIN < YMAX",
+            v[0], v[1], v[2], v[3]
+        )));
+    }
     if !dir.is_dir() {
         return Err(PlotError::NoDirectory(dir.to_path_buf()));
     }
@@ -262,11 +272,20 @@ fn nearest(times: &[f64], t: f64) -> usize {
     (0..times.len()).min_by(|&a, &b| (times[a] - t).abs().total_cmp(&(times[b] - t).abs())).unwrap_or(0)
 }
 
+/// One series at one frame: its name, kind and file content (shared between frames that
+/// show the same file).
+type FramePiece = (String, SeriesKind, Rc<Piece>);
+
+/// Whether a series shows a body (material points or a mesh), which a field colours.
+fn is_body(kind: SeriesKind) -> bool {
+    matches!(kind, SeriesKind::MaterialPoints | SeriesKind::Mesh)
+}
+
 /// The model's geometry from `summary.json`; without it, plane with unit thickness (3D if a
 /// point lies off z = 0).
 fn geometry(
     summary: Option<&RunSummary>,
-    first: &[(SeriesKind, Piece)],
+    first: &[FramePiece],
     options: &PlotOptions,
     notes: &mut Vec<String>,
 ) -> Geometry {
@@ -281,7 +300,7 @@ fn geometry(
             Geometry { formulation: kind, thickness: s.thickness, plane, max_stretch }
         }
         None => {
-            let three_d = first.iter().any(|(_, p)| p.points.iter().any(|x| x[2] != 0.0));
+            let three_d = first.iter().any(|(_, _, p)| p.points.iter().any(|x| x[2] != 0.0));
             notes.push(format!(
                 "no summary.json: drawn as a {} model{}",
                 if three_d { "3D" } else { "plane" },
@@ -298,10 +317,9 @@ fn geometry(
 }
 
 /// The fields of the bodies (material points and meshes), with their kind, for messages.
-fn available_fields(pieces: &[(SeriesKind, Piece)]) -> String {
+fn available_fields(pieces: &[FramePiece]) -> String {
     let mut names: BTreeMap<String, usize> = BTreeMap::new();
-    for (kind, p) in pieces.iter().filter(|(k, _)| matches!(k, SeriesKind::MaterialPoints | SeriesKind::Mesh)) {
-        let _ = kind;
+    for (_, _, p) in pieces.iter().filter(|(_, k, _)| is_body(*k)) {
         for f in p.point_fields.iter().chain(&p.cell_fields) {
             names.insert(f.name.clone(), f.components);
         }
@@ -330,17 +348,17 @@ fn plot_frames(
     let timeline = series.iter().filter(|s| !s.is_grid).max_by_key(|s| s.steps.len()).unwrap_or(&series[0]);
     let times: Vec<f64> = timeline.steps.iter().map(|s| s.0).collect();
     let frames = select(&times, &options.times);
-    let mut cache: HashMap<PathBuf, std::rc::Rc<Piece>> = HashMap::new();
-    let mut read = |path: &Path| -> Result<std::rc::Rc<Piece>, PlotError> {
+    let mut cache: HashMap<PathBuf, Rc<Piece>> = HashMap::new();
+    let mut read = |path: &Path| -> Result<Rc<Piece>, PlotError> {
         if let Some(p) = cache.get(path) {
             return Ok(p.clone());
         }
-        let p = std::rc::Rc::new(results::read_vtu(path)?);
+        let p = Rc::new(results::read_vtu(path)?);
         cache.insert(path.to_path_buf(), p.clone());
         Ok(p)
     };
     // the pieces of every series at each frame
-    let mut pieces_at: Vec<Vec<(String, SeriesKind, std::rc::Rc<Piece>)>> = Vec::new();
+    let mut pieces_at: Vec<Vec<FramePiece>> = Vec::new();
     for &f in &frames {
         let t = times[f];
         let mut pieces = Vec::new();
@@ -352,15 +370,15 @@ fn plot_frames(
         }
         pieces_at.push(pieces);
     }
-    let first: Vec<(SeriesKind, Piece)> = pieces_at[0].iter().map(|(_, k, p)| (*k, (**p).clone())).collect();
-    let geometry = geometry(summary, &first, options, &mut report.notes);
+    let first = &pieces_at[0];
+    let geometry = geometry(summary, first, options, &mut report.notes);
     let selection = FieldSelection::parse(options.field.as_deref().unwrap_or("displacement"));
-    let bodies = || first.iter().filter(|(k, _)| matches!(k, SeriesKind::MaterialPoints | SeriesKind::Mesh));
-    let Some((field, _)) = bodies().find_map(|(_, p)| p.field(&selection.name)) else {
+    let bodies = || first.iter().filter(|(_, k, _)| is_body(*k));
+    let Some((field, _)) = bodies().find_map(|(_, _, p)| p.field(&selection.name)) else {
         return Err(PlotError::UnknownField {
             field: selection.name.clone(),
             dir: dir.to_path_buf(),
-            available: available_fields(&first),
+            available: available_fields(first),
         });
     };
     selection.component(field.components).map_err(PlotError::BadInput)?;
