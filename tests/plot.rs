@@ -221,3 +221,67 @@ fn failed_run_writes_its_report() {
     assert_eq!(s["end"]["time"], 0.0);
     assert!(out.join("monitors.csv").is_file() && out.join("beam.pvd").is_file());
 }
+
+/// 3D: an MPM cantilever on a hex8 grid projected on the x–z plane, seen from −y: at the
+/// pixel of a point of the front layer (smallest y) the picture has that point's colour of
+/// `displacement:x`, which bending makes differ from the layers behind it.
+#[test]
+fn three_d_points_are_projected_nearest_in_front() {
+    let case = r#"{
+        "description": "3D MPM cantilever", "formulation": "3d",
+        "materials": {"beam": {"law": "neo_hookean", "density": 1000, "young_modulus": 9.0e7, "poisson_ratio": 0.0}},
+        "domains": [{"name": "beam", "type": "mpm", "material": "beam",
+            "grid": {"origin": [0, -1, 0], "size": [8, 2.5, 1], "cells": [16, 5, 2], "element": "hex8"},
+            "material_points": {"cells": {"mesh": {"box": {"origin": [0, 0, 0], "size": [7, 1, 1], "cells": [14, 2, 2], "element": "hex8"}},
+                                          "points_per_cell": 8}}}],
+        "regions": {"clamp": {"x": 0.0}},
+        "boundary_conditions": [{"region": "clamp", "displacement": [0, 0, 0]}],
+        "gravity": {"acceleration": [0, -9.81, 0]},
+        "analysis": {"type": "static", "time_step": 1, "end_time": 1},
+        "monitors": [{"name": "tip_uy", "type": "material_point_displacement", "point": [7, 0.5, 0.5], "component": "y"}]
+    }"#;
+    let dir = temp_dir("3d");
+    std::fs::write(dir.join("beam3d.json"), case).unwrap();
+    let out = dir.join("out");
+    let status = loam().arg("run").arg(dir.join("beam3d.json")).args(["--quiet", "--out"]).arg(&out).status().unwrap();
+    assert!(status.success());
+    let size = (800u32, 500u32);
+    let view = [-0.2, 7.2, -0.5, 1.5];
+    let o = plot(
+        &out,
+        &[
+            "--field",
+            "displacement:x",
+            "--last",
+            "--plane",
+            "xz",
+            "--range",
+            "-0.06,0.06",
+            "--view",
+            "-0.2,7.2,-0.5,1.5",
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let png = frame_file(&o.stdout);
+    let piece = read_vtu(&read_pvd(&out.join("beam.pvd")).unwrap().steps.last().unwrap().1).unwrap();
+    let u = &piece.field("displacement").unwrap().0.values;
+    // the front point of the column of points around x = 3.6, z = 0.6
+    let p = (0..piece.points.len())
+        .filter(|&k| (piece.points[k][0] - 3.6).abs() < 0.13 && (piece.points[k][2] - 0.6).abs() < 0.13)
+        .min_by(|&a, &b| piece.points[a][1].total_cmp(&piece.points[b][1]))
+        .expect("a point there");
+    let x = piece.points[p];
+    let at = pixel_of(size, &fit_view(view, 0.0, size).unwrap(), x[0], x[2]).unwrap();
+    let back = (0..piece.points.len())
+        .filter(|&k| (piece.points[k][0] - 3.6).abs() < 0.13 && (piece.points[k][2] - 0.6).abs() < 0.13)
+        .max_by(|&a, &b| piece.points[a][1].total_cmp(&piece.points[b][1]))
+        .unwrap();
+    println!(
+        "front point {p} at {x:?}, u_x {:.5} m (back point {back}: {:.5} m) → pixel {at:?}",
+        u[3 * p],
+        u[3 * back]
+    );
+    let color = |ux: f64| Colormap::Viridis.at((ux + 0.06) / 0.12);
+    assert_ne!(color(u[3 * p]), color(u[3 * back]));
+    assert_eq!(pixel(&png, at), color(u[3 * p]));
+}
