@@ -335,6 +335,91 @@ fn available_fields(pieces: &[FramePiece]) -> String {
         .join(", ")
 }
 
+/// The pieces of every series at each selected output (`frames` index `times`), each file
+/// read once.
+fn read_frames(series: &[Series], times: &[f64], frames: &[usize]) -> Result<Vec<Vec<FramePiece>>, PlotError> {
+    let mut cache: HashMap<PathBuf, Rc<Piece>> = HashMap::new();
+    let mut pieces_at = Vec::with_capacity(frames.len());
+    for &f in frames {
+        let mut pieces = Vec::with_capacity(series.len());
+        for s in series {
+            let step_times: Vec<f64> = s.steps.iter().map(|x| x.0).collect();
+            let path = &s.steps[nearest(&step_times, times[f])].1;
+            let piece = match cache.get(path) {
+                Some(p) => p.clone(),
+                None => {
+                    let p = Rc::new(results::read_vtu(path)?);
+                    cache.insert(path.clone(), p.clone());
+                    p
+                }
+            };
+            pieces.push((s.name.clone(), piece.kind(s.is_grid), piece));
+        }
+        pieces_at.push(pieces);
+    }
+    Ok(pieces_at)
+}
+
+/// The field to colour by (`--field`, default `displacement`), checked against the bodies
+/// of the first frame; a vector without a component is its magnitude.
+fn resolve_field(dir: &Path, field: Option<&str>, first: &[FramePiece]) -> Result<FieldSelection, PlotError> {
+    let mut selection = FieldSelection::parse(field.unwrap_or("displacement"));
+    let found = first.iter().filter(|(_, k, _)| is_body(*k)).find_map(|(_, _, p)| p.field(&selection.name));
+    let Some((field, _)) = found else {
+        return Err(PlotError::UnknownField {
+            field: selection.name.clone(),
+            dir: dir.to_path_buf(),
+            available: available_fields(first),
+        });
+    };
+    selection.component(field.components).map_err(PlotError::BadInput)?;
+    if field.components == 3 && selection.component.is_none() {
+        selection.component = Some("magnitude".into());
+    }
+    Ok(selection)
+}
+
+/// Penalty walls as lines from the case file that `summary.json` names (2D); none, with a
+/// note, where it cannot be read (their penalty points are drawn instead).
+fn case_walls(summary: Option<&RunSummary>, geometry: &Geometry, notes: &mut Vec<String>) -> Vec<walls::WallLine> {
+    match summary.and_then(|s| s.case_file.clone()) {
+        Some(case) if geometry.formulation != ModelKind::ThreeD => walls::walls_of_case(&case).unwrap_or_else(|e| {
+            notes.push(format!("walls drawn as their penalty points: case file {e}"));
+            Vec::new()
+        }),
+        _ => Vec::new(),
+    }
+}
+
+/// The view holding every frame and reference curve (`--view` if given), at equal scales.
+fn common_view(scenes: &[Scene], overlays: &[Overlay], options: &PlotOptions) -> Result<View, PlotError> {
+    if let Some(v) = options.view {
+        return fit_view(v, 0.0, options.size);
+    }
+    let empty = [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY];
+    let union = |a: [f64; 4], b: [f64; 4]| [a[0].min(b[0]), a[1].max(b[1]), a[2].min(b[2]), a[3].max(b[3])];
+    let curves = overlays.iter().map(|o| o.points.iter().fold(empty, |b, p| union(b, [p[0], p[0], p[1], p[1]])));
+    let b = scenes.iter().filter_map(Scene::bounds).chain(curves).fold(empty, union);
+    fit_view(if b[0] <= b[1] { b } else { [0.0, 1.0, 0.0, 1.0] }, 0.03, options.size)
+}
+
+/// The colour range: `--range`, or the values' range over all frames.
+fn common_range(scenes: &[Scene], options: &PlotOptions) -> (f64, f64) {
+    let (min, max) = options.range.unwrap_or_else(|| {
+        scenes
+            .iter()
+            .filter_map(Scene::value_range)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (c, d)| (a.min(c), b.max(d)))
+    });
+    if min <= max {
+        (min, max)
+    } else {
+        (0.0, 1.0)
+    }
+}
+
+/// The frames: read the selected outputs, turn them into scenes, fix one view and one
+/// colour range for all, draw and write each (and the GIF).
 fn plot_frames(
     dir: &Path,
     series: &[Series],
@@ -348,63 +433,18 @@ fn plot_frames(
     let timeline = series.iter().filter(|s| !s.is_grid).max_by_key(|s| s.steps.len()).unwrap_or(&series[0]);
     let times: Vec<f64> = timeline.steps.iter().map(|s| s.0).collect();
     let frames = select(&times, &options.times);
-    let mut cache: HashMap<PathBuf, Rc<Piece>> = HashMap::new();
-    let mut read = |path: &Path| -> Result<Rc<Piece>, PlotError> {
-        if let Some(p) = cache.get(path) {
-            return Ok(p.clone());
-        }
-        let p = Rc::new(results::read_vtu(path)?);
-        cache.insert(path.to_path_buf(), p.clone());
-        Ok(p)
-    };
-    // the pieces of every series at each frame
-    let mut pieces_at: Vec<Vec<FramePiece>> = Vec::new();
-    for &f in &frames {
-        let t = times[f];
-        let mut pieces = Vec::new();
-        for s in series {
-            let step_times: Vec<f64> = s.steps.iter().map(|x| x.0).collect();
-            let piece = read(&s.steps[nearest(&step_times, t)].1)?;
-            let kind = piece.kind(s.is_grid);
-            pieces.push((s.name.clone(), kind, piece));
-        }
-        pieces_at.push(pieces);
-    }
-    let first = &pieces_at[0];
-    let geometry = geometry(summary, first, options, &mut report.notes);
-    let selection = FieldSelection::parse(options.field.as_deref().unwrap_or("displacement"));
-    let bodies = || first.iter().filter(|(_, k, _)| is_body(*k));
-    let Some((field, _)) = bodies().find_map(|(_, _, p)| p.field(&selection.name)) else {
-        return Err(PlotError::UnknownField {
-            field: selection.name.clone(),
-            dir: dir.to_path_buf(),
-            available: available_fields(first),
-        });
-    };
-    selection.component(field.components).map_err(PlotError::BadInput)?;
-    let mut selection = selection;
-    if field.components == 3 && selection.component.is_none() {
-        selection.component = Some("magnitude".into());
-    }
-    // walls from the case, where summary.json names a readable case file
-    let walls = match summary.and_then(|s| s.case_file.clone()) {
-        Some(case) if geometry.formulation != ModelKind::ThreeD => match walls::walls_of_case(&case) {
-            Ok(w) => w,
-            Err(e) => {
-                report.notes.push(format!("walls drawn as their penalty points: case file {e}"));
-                Vec::new()
-            }
-        },
-        _ => Vec::new(),
-    };
+    let pieces_at = read_frames(series, &times, &frames)?;
+    let geometry = geometry(summary, &pieces_at[0], options, &mut report.notes);
+    let selection = resolve_field(dir, options.field.as_deref(), &pieces_at[0])?;
+    let walls = case_walls(summary, &geometry, &mut report.notes);
     let mut scenes = Vec::with_capacity(frames.len());
-    for (k, &f) in frames.iter().enumerate() {
+    for (pieces, &f) in pieces_at.iter().zip(&frames) {
         let mut scene = Scene { time: times[f], ..Scene::default() };
-        for (name, kind, piece) in &pieces_at[k] {
-            if *kind == SeriesKind::WallPoints && walls.iter().any(|w| w.name.as_deref() == Some(name.as_str())) {
-                continue;
+        for (name, kind, piece) in pieces {
+            let drawn_as_line = walls.iter().any(|w| w.name.as_deref() == Some(name.as_str()));
+            if !(*kind == SeriesKind::WallPoints && drawn_as_line) {
+                add_piece(&mut scene, piece, *kind, &selection, &geometry).map_err(PlotError::BadInput)?;
             }
-            add_piece(&mut scene, piece, *kind, &selection, &geometry).map_err(PlotError::BadInput)?;
         }
         scene.walls = walls.iter().map(|w| w.at(scene.time)).collect();
         scenes.push(scene);
@@ -417,40 +457,14 @@ fn plot_frames(
             overlay::read_overlay(&path, label)
         })
         .collect::<Result<_, _>>()?;
-    let view = match options.view {
-        Some(v) => fit_view(v, 0.0, options.size)?,
-        None => {
-            let mut b = [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY];
-            let boxes = scenes.iter().filter_map(Scene::bounds).chain(overlays.iter().map(|o| {
-                o.points.iter().fold([f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY], |b, p| {
-                    [b[0].min(p[0]), b[1].max(p[0]), b[2].min(p[1]), b[3].max(p[1])]
-                })
-            }));
-            for c in boxes {
-                b = [b[0].min(c[0]), b[1].max(c[1]), b[2].min(c[2]), b[3].max(c[3])];
-            }
-            if b[0] > b[1] {
-                b = [0.0, 1.0, 0.0, 1.0];
-            }
-            fit_view(b, 0.03, options.size)?
-        }
-    };
-    let (min, max) = match options.range {
-        Some(r) => r,
-        None => scenes
-            .iter()
-            .filter_map(Scene::value_range)
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (c, d)| (a.min(c), b.max(d))),
-    };
-    let (min, max) = if min <= max { (min, max) } else { (0.0, 1.0) };
+    let (min, max) = common_range(&scenes, options);
     let scale = ColorScale::new(options.colormap, min, max);
     let unit = field::unit(&selection.name).unwrap_or("");
     let display = DisplayUnit::for_range(unit, scale.min.abs().max(scale.max.abs()));
     let (h, v) = geometry.axis_names();
-    let projection = if geometry.formulation == ModelKind::ThreeD {
-        format!(" ({})", geometry.plane.describe())
-    } else {
-        String::new()
+    let projection = match geometry.formulation {
+        ModelKind::ThreeD => format!(" ({})", geometry.plane.describe()),
+        _ => String::new(),
     };
     let case =
         summary.map_or_else(|| dir.file_name().unwrap_or_default().to_string_lossy().into_owned(), |s| s.case.clone());
@@ -461,11 +475,10 @@ fn plot_frames(
         scale,
         label: display.label(&selection.label()),
         unit: display,
-        view,
+        view: common_view(&scenes, &overlays, options)?,
     };
     let slug = selection.slug();
-    let (w, hpx) = options.size;
-    let mut buffer = vec![255u8; 3 * w as usize * hpx as usize];
+    let mut buffer = vec![255u8; 3 * options.size.0 as usize * options.size.1 as usize];
     for (scene, &f) in scenes.iter().zip(&frames) {
         {
             let root = BitMapBackend::with_buffer(&mut buffer, options.size).into_drawing_area();
