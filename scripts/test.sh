@@ -24,6 +24,9 @@ echo "== Python: VTK output read by meshio"
 cargo build --release --quiet
 .venv/bin/python scripts/check_vtk.py
 
+echo "== C: fmu/src/ffi.rs types compiled against the FMI 3.0 headers (fmpy's)"
+.venv/bin/python scripts/check_fmi_header.py
+
 echo "== Python: FMI 3.0 FMUs run by fmpy (loam fmu, tests/fmu)"
 cargo build --release --quiet -p loam -p loam-fmu
 .venv/bin/python tests/fmu/test_fmu.py

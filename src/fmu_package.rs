@@ -380,53 +380,18 @@ pub fn package(case_path: &Path, out: &Path, library: &Path) -> Result<PackageSu
     })
 }
 
-/// A ZIP archive (deflate) of `(path, contents)` entries: local headers, data, central
-/// directory (PKWARE APPNOTE 4.3), no ZIP64 (entries below 4 GiB).
+/// A ZIP archive (deflate) of `(path, contents)` entries, files readable by all
+/// (`rw-r--r--`), as FMI 3.0 section 2.5 asks.
 fn zip(files: &[(String, Vec<u8>)]) -> std::io::Result<Vec<u8>> {
-    let mut out = Vec::new();
-    let mut central = Vec::new();
+    use zip::write::SimpleFileOptions;
+    let mut archive = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let options =
+        SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated).unix_permissions(0o644);
     for (name, data) in files {
-        let mut enc = flate2::write::DeflateEncoder::new(Vec::new(), flate2::Compression::default());
-        enc.write_all(data)?;
-        let compressed = enc.finish()?;
-        let crc = crc32fast::hash(data);
-        let offset = out.len() as u32;
-        let common = |v: &mut Vec<u8>| {
-            v.extend_from_slice(&20u16.to_le_bytes()); // version needed: 2.0 (deflate)
-            v.extend_from_slice(&0u16.to_le_bytes()); // flags
-            v.extend_from_slice(&8u16.to_le_bytes()); // method: deflate
-            v.extend_from_slice(&0u16.to_le_bytes()); // time
-            v.extend_from_slice(&0x21u16.to_le_bytes()); // date 1980-01-01
-            v.extend_from_slice(&crc.to_le_bytes());
-            v.extend_from_slice(&(compressed.len() as u32).to_le_bytes());
-            v.extend_from_slice(&(data.len() as u32).to_le_bytes());
-            v.extend_from_slice(&(name.len() as u16).to_le_bytes());
-            v.extend_from_slice(&0u16.to_le_bytes()); // extra length
-        };
-        out.extend_from_slice(&0x0403_4b50u32.to_le_bytes());
-        common(&mut out);
-        out.extend_from_slice(name.as_bytes());
-        out.extend_from_slice(&compressed);
-        central.extend_from_slice(&0x0201_4b50u32.to_le_bytes());
-        central.extend_from_slice(&(3u16 << 8 | 20).to_le_bytes()); // made by: Unix, 2.0
-        common(&mut central);
-        central.extend_from_slice(&0u16.to_le_bytes()); // comment length
-        central.extend_from_slice(&0u16.to_le_bytes()); // disk
-        central.extend_from_slice(&0u16.to_le_bytes()); // internal attributes
-        central.extend_from_slice(&(0o100644u32 << 16).to_le_bytes()); // external: rw-r--r--
-        central.extend_from_slice(&offset.to_le_bytes());
-        central.extend_from_slice(name.as_bytes());
+        archive.start_file(name.as_str(), options).map_err(std::io::Error::other)?;
+        archive.write_all(data)?;
     }
-    let cd_offset = out.len() as u32;
-    out.extend_from_slice(&central);
-    out.extend_from_slice(&0x0605_4b50u32.to_le_bytes());
-    out.extend_from_slice(&[0; 4]); // disk numbers
-    out.extend_from_slice(&(files.len() as u16).to_le_bytes());
-    out.extend_from_slice(&(files.len() as u16).to_le_bytes());
-    out.extend_from_slice(&(central.len() as u32).to_le_bytes());
-    out.extend_from_slice(&cd_offset.to_le_bytes());
-    out.extend_from_slice(&0u16.to_le_bytes());
-    Ok(out)
+    Ok(archive.finish().map_err(std::io::Error::other)?.into_inner())
 }
 
 #[cfg(test)]
@@ -443,11 +408,22 @@ mod tests {
     }
 
     #[test]
-    fn zip_entries_have_their_crc_and_sizes() {
-        let z = zip(&[("a.txt".into(), b"hello hello hello".to_vec())]).unwrap();
-        assert_eq!(&z[..4], b"PK\x03\x04");
-        assert_eq!(u32::from_le_bytes(z[14..18].try_into().unwrap()), crc32fast::hash(b"hello hello hello"));
-        assert_eq!(u32::from_le_bytes(z[22..26].try_into().unwrap()), 17);
-        assert_eq!(&z[z.len() - 22..z.len() - 18], b"PK\x05\x06");
+    fn zip_entries_read_back() {
+        use std::io::Read;
+        let files = [
+            ("modelDescription.xml".to_string(), b"hello hello hello".to_vec()),
+            ("resources/a.json".into(), b"{}".to_vec()),
+        ];
+        let z = zip(&files).unwrap();
+        let mut archive = zip::ZipArchive::new(std::io::Cursor::new(z)).unwrap();
+        assert_eq!(archive.len(), 2);
+        for (name, data) in &files {
+            let mut f = archive.by_name(name).unwrap();
+            assert_eq!(f.compression(), zip::CompressionMethod::Deflated);
+            assert_eq!(f.unix_mode().map(|m| m & 0o777), Some(0o644));
+            let mut back = Vec::new();
+            f.read_to_end(&mut back).unwrap();
+            assert_eq!(&back, data);
+        }
     }
 }

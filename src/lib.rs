@@ -10,6 +10,7 @@ pub mod fmu_package;
 pub mod model_builder;
 pub mod monitor;
 pub mod output;
+pub mod plot;
 pub mod run;
 pub mod simulation;
 

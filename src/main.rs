@@ -48,6 +48,9 @@ enum Command {
         /// The case file (JSON).
         case: PathBuf,
     },
+    /// Draw a run's results as PNG files: the bodies coloured by a field at chosen times,
+    /// and the monitors (one picture per group of one unit).
+    Plot(Box<PlotArgs>),
     /// Drive one material point of a law along a laboratory path and write path.csv.
     Law {
         /// The path file (JSON), e.g. cases/laws/mc_triaxial_drained.json.
@@ -56,6 +59,147 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+}
+
+/// `loam plot` arguments.
+#[derive(clap::Args)]
+struct PlotArgs {
+    /// The results directory (the --out of `loam run`).
+    dir: PathBuf,
+    /// Field colouring the bodies: NAME (scalar), NAME:x|y|z|magnitude (vector),
+    /// NAME:xx|yy|zz|xy|yz|xz (tensor), e.g. accumulated_plastic_deviatoric_strain,
+    /// cauchy_stress:yy. Default displacement (magnitude).
+    #[arg(long)]
+    field: Option<String>,
+    /// Draw the outputs nearest to these times (s), e.g. 0.6,0.88,1.28,2.
+    #[arg(long, value_delimiter = ',', conflicts_with_all = ["every", "last"])]
+    times: Option<Vec<f64>>,
+    /// Draw every N-th output (and the last).
+    #[arg(long, conflicts_with = "last")]
+    every: Option<usize>,
+    /// Draw the last output only.
+    #[arg(long)]
+    last: bool,
+    /// Where the pictures go (default DIR/plots).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Also write an animated GIF of the frames.
+    #[arg(long)]
+    gif: bool,
+    /// Delay between GIF frames (ms).
+    #[arg(long, default_value_t = 150)]
+    delay: u32,
+    /// Colour range MIN,MAX (default: the range of the values over the frames drawn).
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_numbers::<2>)]
+    range: Option<[f64; 2]>,
+    /// Colour map.
+    #[arg(long, value_enum, default_value_t = loam::plot::colormap::Colormap::Viridis)]
+    colormap: loam::plot::colormap::Colormap,
+    /// Picture size WIDTHxHEIGHT in pixels.
+    #[arg(long, default_value = "800x500", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Reference curve FILE.csv[:LABEL] drawn on the frames (x,y in m per line); repeatable.
+    #[arg(long)]
+    overlay: Vec<String>,
+    /// Monitor plots against this monitor instead of time (e.g. force against settlement).
+    #[arg(long)]
+    x: Option<String>,
+    /// Monitors drawn (default all).
+    #[arg(long, value_delimiter = ',')]
+    monitors: Option<Vec<String>>,
+    /// Plane of 3D pictures (a projection, nearer material in front).
+    #[arg(long, value_enum, default_value_t = loam::plot::scene::Plane::Xy)]
+    plane: loam::plot::scene::Plane,
+    /// Extent drawn XMIN,XMAX,YMIN,YMAX in m (widened to equal scales).
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_numbers::<4>)]
+    view: Option<[f64; 4]>,
+    /// Draw the MPM background grid (written with output.grid).
+    #[arg(long)]
+    grid: bool,
+    /// Draw a material point no larger than this many times the side of its initial volume
+    /// (V / det F): degenerate points with a huge det F otherwise cover their neighbours.
+    #[arg(long)]
+    max_stretch: Option<f64>,
+    /// No frames, monitor plots only.
+    #[arg(long, conflicts_with = "no_monitors")]
+    no_frames: bool,
+    /// No monitor plots, frames only.
+    #[arg(long)]
+    no_monitors: bool,
+}
+
+/// `N` comma-separated finite numbers.
+fn parse_numbers<const N: usize>(s: &str) -> Result<[f64; N], String> {
+    let values: Vec<f64> =
+        s.split(',').map(|v| v.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|e| format!("`{s}`: {e}"))?;
+    match <[f64; N]>::try_from(values) {
+        Ok(v) if v.iter().all(|x| x.is_finite()) => Ok(v),
+        _ => Err(format!("`{s}`: expected {N} comma-separated finite numbers")),
+    }
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once('x').ok_or_else(|| format!("`{s}`: expected WIDTHxHEIGHT, e.g. 800x500"))?;
+    let px = |v: &str| v.trim().parse::<u32>().ok().filter(|&p| (100..=8000).contains(&p));
+    match (px(w), px(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(format!("`{s}`: width and height must be whole numbers of pixels in [100, 8000]")),
+    }
+}
+
+/// `loam plot`: draws, prints what it wrote, and maps errors to exit codes.
+fn plot_results(a: PlotArgs) -> ExitCode {
+    use loam::plot::{plot, PlotOptions, TimeSelection};
+    let times = match (a.times, a.every, a.last) {
+        (Some(t), _, _) => TimeSelection::Times(t),
+        (_, Some(n), _) => TimeSelection::Every(n),
+        (_, _, true) => TimeSelection::Last,
+        _ => TimeSelection::All,
+    };
+    let options = PlotOptions {
+        field: a.field,
+        times,
+        out: a.out,
+        gif: a.gif,
+        delay_ms: a.delay,
+        range: a.range.map(|[min, max]| (min, max)),
+        colormap: a.colormap,
+        size: a.size,
+        overlays: a.overlay,
+        x: a.x,
+        monitors: a.monitors,
+        plane: a.plane,
+        view: a.view,
+        grid: a.grid,
+        max_stretch: a.max_stretch,
+        frames: !a.no_frames,
+        monitor_plots: !a.no_monitors,
+    };
+    match plot(&a.dir, &options) {
+        Ok(report) => {
+            for note in &report.notes {
+                eprintln!("note: {note}");
+            }
+            for (file, time) in &report.files {
+                match time {
+                    Some(t) => println!("loam: wrote {} (t = {t} s)", file.display()),
+                    None => println!("loam: wrote {}", file.display()),
+                }
+            }
+            if let Some((field, min, max, unit)) = &report.field {
+                println!(
+                    "loam: {field} from {min:.4e} to {max:.4e}{}; {:.3} s per frame",
+                    if unit.is_empty() || unit == "1" { String::new() } else { format!(" {unit}") },
+                    report.seconds_per_frame
+                );
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(e.exit_code())
+        }
+    }
 }
 
 fn bad_input(e: &CaseError) -> ExitCode {
@@ -133,6 +277,7 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Command::Plot(args) => plot_results(*args),
         Command::Law { path, out } => {
             let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "law".into());
             let out = out.unwrap_or_else(|| default_out_dir(&name));

@@ -1,5 +1,7 @@
 //! The CLI run loop: steps a [`Simulation`] to its end time with a progress bar, writes
-//! results as it goes, and on failure keeps everything converged so far.
+//! results as it goes, and on failure keeps everything converged so far. The run report
+//! `summary.json` is written when the loop starts and rewritten when it ends, however it
+//! ends.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -7,6 +9,7 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::output::results::ResultWriter;
+use crate::output::summary::{seconds, RunEndReport, RunStatus, RunSummary, WallTimeReport};
 use crate::simulation::{RunError, Simulation};
 
 /// How a run ended.
@@ -19,10 +22,49 @@ pub enum RunEnd {
 }
 
 /// Runs `sim` to its end time writing into `out_dir`; `progress` shows a progress bar.
+/// Returns how the run ended and its wall time (s).
 pub fn run(sim: &mut Simulation, out_dir: &Path, progress: bool) -> std::io::Result<(RunEnd, f64)> {
     let start = Instant::now();
+    let mut output_time = 0.0;
+    let result = run_loop(sim, out_dir, progress, &mut output_time);
+    let wall = start.elapsed().as_secs_f64();
+    let mut summary =
+        RunSummary::of(sim, RunStatus::Running, WallTimeReport::new(wall, &sim.stats.timings, output_time));
+    let (status, reason) = match &result {
+        Ok(RunEnd::Finished) if sim.at_rest => {
+            (RunStatus::AtRest, format!("at rest (analysis.stop_at_rest) at t = {}", seconds(sim.time())))
+        }
+        Ok(RunEnd::Finished) => (RunStatus::Finished, format!("reached the end time {}", seconds(sim.end_time()))),
+        Ok(RunEnd::Failed(e)) => (RunStatus::Failed, format!("stopped at {e}")),
+        Err(e) => (RunStatus::OutputError, format!("writing results to {}: {e}", out_dir.display())),
+    };
+    summary.status = status;
+    summary.end = Some(RunEndReport { reason, time: sim.time(), end_time: sim.end_time() });
+    match result {
+        Ok(end) => {
+            summary.write(out_dir)?;
+            Ok((end, wall))
+        }
+        Err(e) => {
+            // best effort: the directory may be what failed
+            let _ = summary.write(out_dir);
+            Err(e)
+        }
+    }
+}
+
+/// The steps and the results written after each; `output_time` accumulates the time spent
+/// writing.
+fn run_loop(sim: &mut Simulation, out_dir: &Path, progress: bool, output_time: &mut f64) -> std::io::Result<RunEnd> {
+    let timed = |output_time: &mut f64, f: &mut dyn FnMut() -> std::io::Result<()>| {
+        let t = Instant::now();
+        let r = f();
+        *output_time += t.elapsed().as_secs_f64();
+        r
+    };
     let mut writer = ResultWriter::create(out_dir, sim)?;
-    writer.write_step(sim, true)?;
+    RunSummary::of(sim, RunStatus::Running, WallTimeReport::default()).write(out_dir)?;
+    timed(output_time, &mut || writer.write_step(sim, true))?;
     // fixed steps: progress in steps; adaptive steps: in per mille of the end time
     let adaptive = sim.case.analysis.adaptive.is_some();
     let length = if adaptive { 1000 } else { sim.total_steps() as u64 };
@@ -59,16 +101,16 @@ pub fn run(sim: &mut Simulation, out_dir: &Path, progress: bool) -> std::io::Res
                     s.residual
                 ));
                 let last = sim.finished();
-                writer.write_step(sim, last)?;
+                timed(output_time, &mut || writer.write_step(sim, last))?;
             }
             Err(e) => break RunEnd::Failed(e),
         }
     };
     if let RunEnd::Failed(_) = end {
-        writer.write_final_state(sim)?;
+        timed(output_time, &mut || writer.write_final_state(sim))?;
     }
     bar.finish_and_clear();
-    Ok((end, start.elapsed().as_secs_f64()))
+    Ok(end)
 }
 
 /// Default output directory `out/<case name>`.

@@ -3,7 +3,10 @@
 //!
 //! C types by hand: `fmi3Instance` = `*mut c_void`, `fmi3Status` = [`Status`] (C enum,
 //! `int`), `fmi3Boolean` = `bool` (C `_Bool`), `fmi3ValueReference` = `u32`,
-//! `fmi3Float64` = `f64`, `fmi3String` = `*const c_char`, `size_t` = `usize`.
+//! `fmi3Float64` = `f64`, `fmi3String` = `*const c_char`, `size_t` = `usize`, the
+//! callbacks as `Option` of `extern "C" fn` types. `scripts/check_fmi_header.py` (run by
+//! `scripts/test.sh`) compiles every signature here against the standard's
+//! `fmi3Functions.h`, so a type that differs fails the test suite.
 //!
 //! Implemented: `fmi3GetVersion`, `fmi3SetDebugLogging`, `fmi3InstantiateCoSimulation`,
 //! `fmi3FreeInstance`, `fmi3EnterInitializationMode`, `fmi3ExitInitializationMode`,
@@ -17,6 +20,25 @@ use std::ffi::{c_char, c_void, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use crate::instance::{Instance, LogMessage, Logger, Status};
+
+/// `fmi3IntermediateUpdateCallback` (not called: intermediate updates are not supported).
+pub type IntermediateUpdate = extern "C" fn(
+    env: *mut c_void,
+    time: f64,
+    set_requested: bool,
+    get_allowed: bool,
+    finished: bool,
+    can_return_early: bool,
+    early_return_requested: *mut bool,
+    early_return_time: *mut f64,
+);
+
+/// `fmi3ClockUpdateCallback` (scheduled execution; not provided).
+pub type ClockUpdate = extern "C" fn(env: *mut c_void);
+
+/// `fmi3LockPreemptionCallback` and `fmi3UnlockPreemptionCallback` (scheduled execution;
+/// not provided).
+pub type Preemption = extern "C" fn();
 
 /// Text of a C string, or `default` for NULL.
 ///
@@ -115,7 +137,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
     _n_required_intermediate_variables: usize,
     instance_environment: *mut c_void,
     log_message: Option<LogMessage>,
-    _intermediate_update: *const c_void,
+    _intermediate_update: Option<IntermediateUpdate>,
 ) -> *mut c_void {
     let result = catch_unwind(AssertUnwindSafe(|| {
         let name = c_str(instance_name, "loam");
@@ -174,6 +196,9 @@ pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
     logging_on: bool,
     instance_environment: *mut c_void,
     log_message: Option<LogMessage>,
+    _clock_update: Option<ClockUpdate>,
+    _lock_preemption: Option<Preemption>,
+    _unlock_preemption: Option<Preemption>,
 ) -> *mut c_void {
     fmi3InstantiateModelExchange(
         instance_name,

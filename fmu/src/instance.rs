@@ -1,7 +1,7 @@
 //! One FMU instance: a [`Simulation`] of the packaged case, the FMI mode it is in, and the
 //! importer's logger. Safe Rust; `ffi` turns C arguments into calls on it.
 
-use std::ffi::{c_char, c_int, c_void, CString};
+use std::ffi::{c_char, c_void, CString};
 use std::path::Path;
 
 use loam::fmu_package::{fmu_variables, Causality, FmuManifest, FmuVariable, MANIFEST};
@@ -24,7 +24,7 @@ pub enum Status {
 }
 
 /// `fmi3LogMessageCallback`.
-pub type LogMessage = extern "C" fn(env: *mut c_void, status: c_int, category: *const c_char, message: *const c_char);
+pub type LogMessage = extern "C" fn(env: *mut c_void, status: Status, category: *const c_char, message: *const c_char);
 
 /// The importer's `logMessage` callback (FMI 3.0 section 3.2.1 "Creation, Destruction
 /// and Logging of FMU Instances"):
@@ -55,7 +55,7 @@ impl Logger {
         if let Some(cb) = self.callback {
             let msg = CString::new(message.replace('\0', " ")).unwrap_or_default();
             let cat = CString::new(category).unwrap_or_default();
-            cb(self.environment, status as c_int, cat.as_ptr(), msg.as_ptr());
+            cb(self.environment, status, cat.as_ptr(), msg.as_ptr());
         }
     }
 }

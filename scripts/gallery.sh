@@ -1,0 +1,89 @@
+#!/usr/bin/env bash
+# The pictures of docs/gallery.md: runs every bundled case into out/gallery/<case> (a run
+# that finished or came to rest there is reused) and draws it with `loam plot` into
+# docs/img/gallery/. About 20 minutes on 2 cores for the runs (collapse_bui2008_tri_h2
+# alone 10 min), seconds for the pictures.
+#   cargo build --release && scripts/gallery.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+LOAM=${LOAM:-target/release/loam}
+OUT=out/gallery
+IMG=docs/img/gallery
+BUI=tests/data/bui2008
+mkdir -p "$IMG"
+
+run() {
+  if ! grep -qs '"status": "\(finished\|at_rest\)"' "$OUT/$1/summary.json"; then
+    nice "$LOAM" run "cases/$1.json" --out "$OUT/$1" --quiet
+  fi
+}
+
+# frames NAME CASE [loam plot options]: the frames drawn, as NAME.png (one frame) or
+# NAME_<k>.png (k = 1, 2, … in time order)
+frames() {
+  local name=$1 case=$2 tmp
+  shift 2
+  run "$case"
+  tmp=$(mktemp -d)
+  "$LOAM" plot "$OUT/$case" --out "$tmp" --no-monitors "$@" > /dev/null
+  mapfile -t files < <(ls "$tmp"/*.png | sort)
+  if [ "${#files[@]}" = 1 ]; then
+    cp "${files[0]}" "$IMG/$name.png"
+  else
+    for k in "${!files[@]}"; do cp "${files[$k]}" "$IMG/${name}_$((k + 1)).png"; done
+  fi
+  rm -r "$tmp"
+}
+
+# monitors NAME CASE FILE [loam plot options]: the monitor plot FILE as NAME.png
+monitors() {
+  local name=$1 case=$2 file=$3 tmp
+  shift 3
+  run "$case"
+  tmp=$(mktemp -d)
+  "$LOAM" plot "$OUT/$case" --out "$tmp" --no-frames "$@" > /dev/null
+  cp "$tmp/$file" "$IMG/$name.png"
+  rm -r "$tmp"
+}
+
+KAPPA=accumulated_plastic_deviatoric_strain
+
+# benchmark 1: cantilever
+frames cantilever_fem cantilever_fem --field von_mises_stress --last
+frames cantilever_fem_dynamic cantilever_fem_dynamic --field displacement:y --times 0.5
+monitors cantilever_fem_dynamic_tip cantilever_fem_dynamic monitors_length.png --monitors tip_uy
+monitors cantilever_fmu cantilever_fmu monitors_length.png --monitors tip_uy
+frames cantilever_mpm cantilever_mpm --field displacement:y --last
+frames cantilever_mpm_point_load cantilever_mpm_point_load --field displacement:y --last
+frames cantilever_mpm_dynamic cantilever_mpm_dynamic --field displacement:y --times 0.5
+# benchmark 2: axisymmetric plate; 3: vibrating bar; 4: disks; 5: hydrostatic column
+frames plate_axisym_mpm plate_axisym_mpm --field displacement:y --last
+frames vibrating_bar_mpm vibrating_bar_mpm --field velocity:x --times 0
+monitors vibrating_bar_mpm_energy vibrating_bar_mpm monitors_energy.png
+frames disk_collision_mpm disk_collision_mpm --field velocity --times 1,1.9,2.8 --range 0,0.15
+monitors disk_collision_mpm_energy disk_collision_mpm monitors_energy.png
+frames hydrostatic_column_mpm hydrostatic_column_mpm --field cauchy_stress:yy --last --grid
+# benchmarks 6 and 7: penalty walls and slip boundaries
+frames cylinder_incline_slip_mpm cylinder_incline_slip_mpm --field velocity --last
+frames cylinder_incline_noslip_mpm cylinder_incline_noslip_mpm --field velocity --last
+frames slip_flat_mpm slip_flat_mpm --field cauchy_stress:yy --last
+frames slip_slope_mpm slip_slope_mpm --field velocity --last
+# benchmark 8: Bui et al. 2008 collapse, with the experiment's surface and failure line
+for c in collapse_bui2008_quad collapse_bui2008_quad_h10 collapse_bui2008_quad_h2.5 collapse_bui2008_tri collapse_bui2008_tri_h2; do
+  frames "$c" "$c" --field $KAPPA --last --range 0,2 --max-stretch 2 \
+    --overlay "$BUI/surface.csv:experiment, surface" --overlay "$BUI/failure.csv:experiment, failure line"
+done
+monitors collapse_bui2008_quad_runout collapse_bui2008_quad monitors_length.png
+frames collapse_two_layers collapse_two_layers --field $KAPPA --last --range 0,2 --max-stretch 2
+# benchmark 9: cohesive soil
+frames collapse_cohesive collapse_cohesive --field $KAPPA --times 0.6,0.88,1.28,2.0 --range 0,1
+frames vertical_cut_1m vertical_cut_1m --field $KAPPA --last
+frames vertical_cut_3m vertical_cut_3m --field $KAPPA --last --range 0,1
+# granular flows: repose, discharge
+for c in repose_phi20 repose_phi35; do frames "$c" "$c" --field $KAPPA --last --range 0,2 --max-stretch 2; done
+for c in discharge_d08 discharge_d12 discharge_d12_coarse discharge_d18; do frames "$c" "$c" --field velocity --times 0.15; done
+# localisation: biaxial compression, FEM and MPM
+for c in biaxial_mc_softening biaxial_mcc biaxial_mc_softening_mpm biaxial_mcc_mpm; do frames "$c" "$c" --field $KAPPA --last; done
+monitors biaxial_mc_softening_force biaxial_mc_softening monitors_force_vs_top_uy.png --x top_uy --monitors top_force
+monitors footing_fmu footing_fmu monitors_force_vs_footing_uy.png --x footing_uy --monitors footing_force
+echo "gallery: $(ls "$IMG" | wc -l) pictures in $IMG ($(du -sh "$IMG" | cut -f1))"

@@ -1,0 +1,311 @@
+//! `summary.json`: the run report that a batch user or a script reads instead of parsing
+//! the terminal.
+//!
+//! Written when the run starts (`"status": "running"`, so that an interrupted run still says
+//! what it was: case, formulation, thickness) and rewritten when it ends, whether it
+//! finished, came to rest or stopped on a step that failed (results so far are kept):
+//!
+//! ```json
+//! {
+//!   "case": "collapse_bui2008_quad", "case_file": "/…/cases/collapse_bui2008_quad.json",
+//!   "version": "0.1.0", "threads": 2,
+//!   "formulation": "plane_strain", "thickness": 1.0,
+//!   "status": "at_rest",
+//!   "end": { "reason": "at rest (analysis.stop_at_rest) at t = 0.68 s", "time": 0.68, "end_time": 2.0 },
+//!   "steps": 781,
+//!   "newton": { "iterations": 4711, "step_cuts": 3 },
+//!   "linear_solver": { "factorisations": 4711, "krylov_solves": 0, "krylov_iterations": 0 },
+//!   "wall_time": { "total": 53.1, "search": 1.2, "pattern": 0.4, "assembly": 20.3,
+//!                  "factorisation": 25.0, "symbolic": 0.3, "solve": 2.1, "commit": 0.5,
+//!                  "output": 1.0, "other": 2.6 },
+//!   "monitors": { "runout": 0.416, "height_at_wall": 0.1002 },
+//!   "monitor_units": { "runout": "m", "height_at_wall": "m" }
+//! }
+//! ```
+//!
+//! `wall_time` is in seconds: the model's phases ([`PhaseTimings`], accumulated over the
+//! converged steps; `symbolic` is part of `factorisation`), `output` the writing of results,
+//! and `other` the rest of `total` (failed Newton attempts, monitors, set-up). `newton` is
+//! the place for the per-block (soil, interface, structure) residual norms once the run
+//! statistics carry them.
+
+use std::path::{Path, PathBuf};
+
+use loam_fem::formulation::Formulation;
+use loam_fem::model::PhaseTimings;
+use serde::{Deserialize, Serialize};
+
+use crate::model_builder::monitor_unit;
+use crate::simulation::Simulation;
+
+/// File name of the report in the output directory.
+pub const SUMMARY_FILE: &str = "summary.json";
+
+/// How a run stands or why it ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RunStatus {
+    /// Started; not ended (or the process was stopped from outside).
+    Running,
+    /// Reached the end time.
+    Finished,
+    /// Ended early because the bodies came to rest (`analysis.stop_at_rest`).
+    AtRest,
+    /// A step failed after all cuts; results up to `end.time` are written.
+    Failed,
+    /// Writing the results failed.
+    OutputError,
+}
+
+/// Why the run ended, and when.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunEndReport {
+    /// One line: the end time reached, rest, or the failure with its step and residual.
+    pub reason: String,
+    /// Time of the last converged state (s).
+    pub time: f64,
+    /// End time of the case (s).
+    pub end_time: f64,
+}
+
+/// Newton counters. Per-block residual norms (soil, interface, structure) belong here.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct NewtonReport {
+    /// Newton iterations (linear solves) over the converged steps.
+    pub iterations: usize,
+    /// Step halvings after failed steps.
+    pub step_cuts: usize,
+}
+
+/// Linear-solver counters.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct LinearSolverReport {
+    /// Numeric factorisations.
+    pub factorisations: usize,
+    /// Solves done by GMRES.
+    pub krylov_solves: usize,
+    /// GMRES iterations.
+    pub krylov_iterations: usize,
+}
+
+/// Wall time per phase (s).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct WallTimeReport {
+    /// From the start of the run loop to its end.
+    pub total: f64,
+    /// Domains' per-step preparation (point search, projection to the grid).
+    pub search: f64,
+    /// Sparsity patterns and DOF maps.
+    pub pattern: f64,
+    /// Element kernels and gather.
+    pub assembly: f64,
+    /// Symbolic and numeric factorisation.
+    pub factorisation: f64,
+    /// Of `factorisation`: symbolic analyses.
+    pub symbolic: f64,
+    /// Triangular solves.
+    pub solve: f64,
+    /// Commit of converged steps (convective phase).
+    pub commit: f64,
+    /// Writing `monitors.csv` and the VTK files.
+    pub output: f64,
+    /// The rest of `total`: failed Newton attempts, monitors, set-up.
+    pub other: f64,
+}
+
+impl WallTimeReport {
+    /// The phases of `t`, `output` and the rest of `total`.
+    pub fn new(total: f64, t: &PhaseTimings, output: f64) -> Self {
+        let accounted = t.search + t.pattern + t.assembly + t.factorisation + t.solve + t.commit + output;
+        Self {
+            total,
+            search: t.search,
+            pattern: t.pattern,
+            assembly: t.assembly,
+            factorisation: t.factorisation,
+            symbolic: t.symbolic,
+            solve: t.solve,
+            commit: t.commit,
+            output,
+            other: (total - accounted).max(0.0),
+        }
+    }
+}
+
+/// The content of `summary.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunSummary {
+    /// Case name (stem of the case file).
+    pub case: String,
+    /// The case file, absolute (`loam plot` reads its walls); absent for a case not loaded
+    /// from a file.
+    pub case_file: Option<PathBuf>,
+    /// Loam version.
+    pub version: String,
+    /// Worker threads.
+    pub threads: usize,
+    /// `plane_strain`, `plane_stress`, `axisymmetric` or `3d`.
+    pub formulation: String,
+    /// Out-of-plane thickness of plane problems (m).
+    pub thickness: f64,
+    /// How the run stands or ended.
+    pub status: RunStatus,
+    /// Why it ended (absent while running).
+    pub end: Option<RunEndReport>,
+    /// Converged steps (sub-steps included).
+    pub steps: usize,
+    /// Newton counters.
+    pub newton: NewtonReport,
+    /// Linear-solver counters.
+    pub linear_solver: LinearSolverReport,
+    /// Wall time per phase (s).
+    pub wall_time: WallTimeReport,
+    /// Monitor values at the last converged state, by name in case order (`null` where not
+    /// finite).
+    pub monitors: NamedValues<Option<f64>>,
+    /// SI unit of each monitor (`m`, `N`, `Pa`, `J`, `1`, …).
+    pub monitor_units: NamedValues<String>,
+}
+
+/// Values by name, written as a JSON object in their order (monitors in case order).
+#[derive(Debug, Clone, PartialEq)]
+pub struct NamedValues<T>(pub Vec<(String, T)>);
+
+impl<T> Default for NamedValues<T> {
+    fn default() -> Self {
+        Self(Vec::new())
+    }
+}
+
+impl<T> NamedValues<T> {
+    /// The value of `name`.
+    pub fn get(&self, name: &str) -> Option<&T> {
+        self.0.iter().find(|(n, _)| n == name).map(|(_, v)| v)
+    }
+}
+
+impl<T: Serialize> Serialize for NamedValues<T> {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (name, value) in &self.0 {
+            map.serialize_entry(name, value)?;
+        }
+        map.end()
+    }
+}
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for NamedValues<T> {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Visitor<T>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for Visitor<T> {
+            type Value = NamedValues<T>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an object of named values")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+                let mut values = Vec::new();
+                while let Some(entry) = map.next_entry::<String, T>()? {
+                    values.push(entry);
+                }
+                Ok(NamedValues(values))
+            }
+        }
+        deserializer.deserialize_map(Visitor(std::marker::PhantomData))
+    }
+}
+
+/// A time in seconds for a message: six significant digits, no trailing zeros (`0.68 s`).
+pub fn seconds(t: f64) -> String {
+    let digits = (5 - t.abs().log10().floor().max(-12.0) as i32).clamp(0, 17) as usize;
+    let s = format!("{t:.digits$}");
+    let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.') } else { &s };
+    format!("{s} s")
+}
+
+/// The case-file name of a formulation.
+pub fn formulation_name(f: Formulation) -> &'static str {
+    match f {
+        Formulation::PlaneStrain => "plane_strain",
+        Formulation::PlaneStress => "plane_stress",
+        Formulation::Axisymmetric => "axisymmetric",
+        Formulation::ThreeD => "3d",
+    }
+}
+
+impl RunSummary {
+    /// The report of `sim` as it stands, with `status` and the wall times measured so far.
+    pub fn of(sim: &Simulation, status: RunStatus, wall_time: WallTimeReport) -> Self {
+        let solver = sim.model.solver_timings();
+        let monitors = NamedValues(
+            sim.monitors
+                .iter()
+                .zip(sim.monitor_values())
+                .map(|(m, v)| (m.name.clone(), v.is_finite().then_some(v)))
+                .collect(),
+        );
+        let monitor_units =
+            NamedValues(sim.monitors.iter().map(|m| (m.name.clone(), monitor_unit(&m.kind).to_string())).collect());
+        Self {
+            case: sim.case.name.clone(),
+            case_file: std::fs::canonicalize(sim.case.directory.join(format!("{}.json", sim.case.name))).ok(),
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            threads: rayon::current_num_threads(),
+            formulation: formulation_name(sim.case.formulation).to_string(),
+            thickness: sim.case.thickness,
+            status,
+            end: None,
+            steps: sim.stats.steps,
+            newton: NewtonReport { iterations: sim.stats.iterations, step_cuts: sim.stats.cuts },
+            linear_solver: LinearSolverReport {
+                factorisations: solver.factorisations,
+                krylov_solves: solver.krylov_solves,
+                krylov_iterations: solver.krylov_iterations,
+            },
+            wall_time,
+            monitors,
+            monitor_units,
+        }
+    }
+
+    /// Writes the report to `dir/summary.json` (to a temporary file, then renamed, so that a
+    /// reader never sees half a report).
+    pub fn write(&self, dir: &Path) -> std::io::Result<()> {
+        let path = dir.join(SUMMARY_FILE);
+        let tmp = dir.join(format!("{SUMMARY_FILE}.tmp"));
+        let text = serde_json::to_string_pretty(self).map_err(std::io::Error::other)?;
+        std::fs::write(&tmp, text + "\n")?;
+        std::fs::rename(&tmp, &path)
+    }
+
+    /// Reads `dir/summary.json`.
+    pub fn read(dir: &Path) -> Result<Self, String> {
+        let path = dir.join(SUMMARY_FILE);
+        let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn named_values_keep_their_order() {
+        let m = NamedValues(vec![("z".to_string(), Some(1.5)), ("a".into(), None), ("m".into(), Some(-2.0))]);
+        let text = serde_json::to_string(&m).unwrap();
+        assert_eq!(text, r#"{"z":1.5,"a":null,"m":-2.0}"#);
+        let back: NamedValues<Option<f64>> = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, m);
+        assert_eq!(back.get("m"), Some(&Some(-2.0)));
+    }
+
+    #[test]
+    fn seconds_are_short() {
+        assert_eq!(seconds(1.0), "1 s");
+        assert_eq!(seconds(0.6800000000000005), "0.68 s");
+        assert_eq!(seconds(2.5e-4), "0.00025 s");
+        assert_eq!(seconds(1234.5678), "1234.57 s");
+        assert_eq!(seconds(0.0), "0 s");
+    }
+}
