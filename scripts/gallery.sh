@@ -86,4 +86,15 @@ for c in discharge_d08 discharge_d12 discharge_d12_coarse discharge_d18; do fram
 for c in biaxial_mc_softening biaxial_mcc biaxial_mc_softening_mpm biaxial_mcc_mpm; do frames "$c" "$c" --field $KAPPA --last; done
 monitors biaxial_mc_softening_force biaxial_mc_softening monitors_force_vs_top_uy.png --x top_uy --monitors top_force
 monitors footing_fmu footing_fmu monitors_force_vs_footing_uy.png --x footing_uy --monitors footing_force
+# soil-structure interaction: MPM soil and FEM structures in one Newton system
+frames coupled_beam_split coupled_beam_split --field displacement:y --last
+frames coupled_beam_split_mpm_clamped coupled_beam_split_mpm_clamped --field displacement:y --last
+frames coupled_beam_split_dynamic coupled_beam_split_dynamic --field displacement:y --times 0.65
+for c in coupled_collapse_rubber coupled_collapse_concrete; do
+  frames "$c" "$c" --field $KAPPA --times 0.15,0.55 --range 0,2 --max-stretch 2
+  monitors "${c}_force" "$c" monitors_force.png
+done
+monitors coupled_wave_bar coupled_wave_bar monitors_energy.png
+monitors coupled_wave_bar_impedance coupled_wave_bar_impedance monitors_energy.png
+frames coupled_slip_block coupled_slip_block --field velocity:x --last
 echo "gallery: $(ls "$IMG" | wc -l) pictures in $IMG ($(du -sh "$IMG" | cut -f1))"

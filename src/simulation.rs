@@ -65,6 +65,8 @@ pub struct RunStats {
     pub timings: PhaseTimings,
     /// Largest converged residual per block (soil, interface, structure) over the run.
     pub max_block_residuals: BlockNorms,
+    /// Converged residual per block of the last step.
+    pub last_block_residuals: BlockNorms,
 }
 
 /// What one call to [`Simulation::step`] did.
@@ -317,6 +319,7 @@ impl Simulation {
                     summary.last_time_step = h;
                     summary.block_residual = report.block_residuals.last().copied().unwrap_or_default();
                     self.stats.max_block_residuals = self.stats.max_block_residuals.max(summary.block_residual);
+                    self.stats.last_block_residuals = summary.block_residual;
                     self.stats.steps += 1;
                     self.stats.iterations += report.iterations;
                     self.stats.timings += report.timings;

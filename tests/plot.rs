@@ -60,7 +60,7 @@ fn frame_file(stdout: &[u8]) -> PathBuf {
 #[test]
 fn fem_frame_shows_the_deformed_mesh_in_its_colours() {
     let dir = run_case("cantilever_fem", "frame");
-    let series = read_pvd(&dir.join("beam.pvd")).unwrap();
+    let series = read_pvd(&dir.join("beam.pvd")).unwrap().expect("a series");
     let piece = read_vtu(&series.steps.last().unwrap().1).unwrap();
     let Cells::Mesh { connectivity, .. } = &piece.cells else { panic!("a mesh") };
     let u = &piece.field("displacement").unwrap().0.values;
@@ -119,7 +119,7 @@ fn mpm_frame_shows_the_points_in_their_colours() {
     let img = image::open(&png).unwrap();
     assert_eq!((img.width(), img.height()), size);
 
-    let series = read_pvd(&dir.join("beam.pvd")).unwrap();
+    let series = read_pvd(&dir.join("beam.pvd")).unwrap().expect("a series");
     let piece = read_vtu(&series.steps.last().unwrap().1).unwrap();
     let u = &piece.field("displacement").unwrap().0.values;
     let view = fit_view(view, 0.0, size).unwrap();
@@ -263,7 +263,7 @@ fn three_d_points_are_projected_nearest_in_front() {
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let png = frame_file(&o.stdout);
-    let piece = read_vtu(&read_pvd(&out.join("beam.pvd")).unwrap().steps.last().unwrap().1).unwrap();
+    let piece = read_vtu(&read_pvd(&out.join("beam.pvd")).unwrap().expect("a series").steps.last().unwrap().1).unwrap();
     let u = &piece.field("displacement").unwrap().0.values;
     // the front point of the column of points around x = 3.6, z = 0.6
     let p = (0..piece.points.len())

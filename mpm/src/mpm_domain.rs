@@ -59,8 +59,8 @@ struct CellBlocks {
     in_pattern: Vec<bool>,
     /// For each block: the first body with points in its cell, or [`NONE`].
     first_body: Vec<u8>,
-    /// For each block: bit `a` set if it carries the unit diagonal of its node `a`, which no
-    /// active cell touches (an identity equation, `δu = 0`).
+    /// For each block: bit `a` set if it carries the equation `Δu = 0` of its node `a`, which
+    /// no active cell touches (residual `Δu`, unit diagonal).
     orphans: Vec<u8>,
     /// Rings of cells around the active ones in the pattern (0: the pattern is the active
     /// set and is rebuilt whenever it changes).
@@ -326,8 +326,9 @@ impl MpmDomain {
         let nd = nn * dim;
         let (grid, node_ids, name, blocks) = (&self.grid, &self.node_ids, &self.name, &self.blocks);
         let attachment = self.attachment.as_ref();
-        // blocks without points: zero, with the identity rows of their orphan nodes (the
-        // tangential rows only at the soil node of a slip pair)
+        // blocks without points: zero, but for the orphan nodes' equations `r = Δu` (`K = I`:
+        // they keep their place; at the soil node of a slip pair only the tangential part,
+        // `r = (I − n⊗n) Δu`, its normal component belongs to the structure's equation)
         matrices
             .par_chunks_mut(nd * nd)
             .zip(vectors.par_chunks_mut(nd))
@@ -336,10 +337,9 @@ impl MpmDomain {
             .filter(|(b, _)| blocks.first_body[*b] == NONE)
             .for_each(|(b, (km, fv))| {
                 fv.fill(0.0);
-                if !input.with_tangent {
-                    return;
+                if input.with_tangent {
+                    km.fill(0.0);
                 }
-                km.fill(0.0);
                 for (a, &node) in grid.mesh.cell(blocks.pattern[b]).iter().enumerate() {
                     if blocks.orphans[b] & (1 << a) == 0 {
                         continue;
@@ -348,10 +348,14 @@ impl MpmDomain {
                         Some(GridNodeKind::Slip { normal, .. }) => Some(normal),
                         _ => None,
                     };
+                    let dof = node_ids[node] * dim;
                     for i in 0..dim {
                         for j in 0..dim {
-                            let delta = if i == j { 1.0 } else { 0.0 };
-                            km[(a * dim + i) * nd + a * dim + j] = delta - normal.map_or(0.0, |n| n[i] * n[j]);
+                            let p = if i == j { 1.0 } else { 0.0 } - normal.map_or(0.0, |n| n[i] * n[j]);
+                            fv[a * dim + i] += p * (input.state.u[dof + j] - input.committed.u[dof + j]);
+                            if input.with_tangent {
+                                km[(a * dim + i) * nd + a * dim + j] = p;
+                            }
                         }
                     }
                 }

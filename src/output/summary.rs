@@ -13,7 +13,8 @@
 //!   "status": "at_rest",
 //!   "end": { "reason": "at rest (analysis.stop_at_rest) at t = 0.68 s", "time": 0.68, "end_time": 2.0 },
 //!   "steps": 781,
-//!   "newton": { "iterations": 4711, "step_cuts": 3 },
+//!   "newton": { "iterations": 4711, "step_cuts": 3,
+//!               "residual_per_block": { "last": [2.1e-7, 3.0e-9, 1.1e-8], "max": [6.9e-2, 3.0e-5, 2.3e-5] } },
 //!   "linear_solver": { "factorisations": 4711, "krylov_solves": 0, "krylov_iterations": 0 },
 //!   "wall_time": { "total": 53.1, "search": 1.2, "pattern": 0.4, "assembly": 20.3,
 //!                  "factorisation": 25.0, "symbolic": 0.3, "solve": 2.1, "commit": 0.5,
@@ -25,9 +26,10 @@
 //!
 //! `wall_time` is in seconds: the model's phases ([`PhaseTimings`], accumulated over the
 //! converged steps; `symbolic` is part of `factorisation`), `output` the writing of results,
-//! and `other` the rest of `total` (failed Newton attempts, monitors, set-up). `newton` is
-//! the place for the per-block (soil, interface, structure) residual norms once the run
-//! statistics carry them.
+//! and `other` the rest of `total` (failed Newton attempts, monitors, set-up). `newton` also gives
+//! the converged residual norms per block of the monolithic system (soil, interface,
+//! structure: the rows of grid, shared and FEM nodes) of the last step and the largest over
+//! the run.
 
 use std::path::{Path, PathBuf};
 
@@ -68,13 +70,30 @@ pub struct RunEndReport {
     pub end_time: f64,
 }
 
-/// Newton counters. Per-block residual norms (soil, interface, structure) belong here.
+/// Newton counters, and the converged residual norms per block of the monolithic system.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct NewtonReport {
     /// Newton iterations (linear solves) over the converged steps.
     pub iterations: usize,
     /// Step halvings after failed steps.
     pub step_cuts: usize,
+    /// Converged residual norms (N) per block, of the last step and the largest over the
+    /// run: soil (grid nodes), interface (shared nodes), structure (FEM nodes).
+    #[serde(default)]
+    pub residual_per_block: BlockResiduals,
+}
+
+fn blocks(b: loam_fem::convergence::BlockNorms) -> [f64; 3] {
+    [b.soil, b.interface, b.structure]
+}
+
+/// Converged residual norms per block (see [`NewtonReport`]).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct BlockResiduals {
+    /// Of the last converged step: `[soil, interface, structure]`.
+    pub last: [f64; 3],
+    /// Largest over the converged steps: `[soil, interface, structure]`.
+    pub max: [f64; 3],
 }
 
 /// Linear-solver counters.
@@ -256,7 +275,14 @@ impl RunSummary {
             status,
             end: None,
             steps: sim.stats.steps,
-            newton: NewtonReport { iterations: sim.stats.iterations, step_cuts: sim.stats.cuts },
+            newton: NewtonReport {
+                iterations: sim.stats.iterations,
+                step_cuts: sim.stats.cuts,
+                residual_per_block: BlockResiduals {
+                    last: blocks(sim.stats.last_block_residuals),
+                    max: blocks(sim.stats.max_block_residuals),
+                },
+            },
             linear_solver: LinearSolverReport {
                 factorisations: solver.factorisations,
                 krylov_solves: solver.krylov_solves,

@@ -55,8 +55,10 @@ fn attribute(tag: &str, name: &str) -> Option<String> {
 }
 
 /// Reads a `.pvd` collection: the `timestep` and `file` of every `DataSet`, in file order
-/// (paths relative to the `.pvd`'s directory).
-pub fn read_pvd(path: &Path) -> Result<Series, PlotError> {
+/// (paths relative to the `.pvd`'s directory). A collection of several parts (the
+/// `<case>.pvd` that lists every output of a run for ParaView) is not a series of its own:
+/// `None`.
+pub fn read_pvd(path: &Path) -> Result<Option<Series>, PlotError> {
     let bad = |reason: String| PlotError::Read { file: path.to_path_buf(), reason };
     let text = std::fs::read_to_string(path).map_err(|e| bad(e.to_string()))?;
     let dir = path.parent().unwrap_or(Path::new(""));
@@ -69,10 +71,13 @@ pub fn read_pvd(path: &Path) -> Result<Series, PlotError> {
             .parse::<f64>()
             .map_err(|e| bad(format!("timestep: {e}")))?;
         let file = attribute(tag, "file").ok_or_else(|| bad("a DataSet has no file".into()))?;
+        if attribute(tag, "part").is_some_and(|p| p.trim() != "0") {
+            return Ok(None);
+        }
         steps.push((time, dir.join(file)));
     }
     let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    Ok(Series { is_grid: name.ends_with("_grid"), name, steps })
+    Ok(Some(Series { is_grid: name.ends_with("_grid"), name, steps }))
 }
 
 /// The `.pvd` series in `dir`, sorted by name.
@@ -84,7 +89,7 @@ pub fn find_series(dir: &Path) -> Result<Vec<Series>, PlotError> {
         .filter(|p| p.extension().is_some_and(|x| x == "pvd"))
         .collect();
     paths.sort();
-    paths.iter().map(|p| read_pvd(p)).collect()
+    Ok(paths.iter().map(|p| read_pvd(p)).collect::<Result<Vec<_>, _>>()?.into_iter().flatten().collect())
 }
 
 /// A named field: `components` values per point or cell, back to back.
@@ -280,7 +285,7 @@ mod tests {
              </Collection></VTKFile>",
         )
         .unwrap();
-        let s = read_pvd(&path).unwrap();
+        let s = read_pvd(&path).unwrap().unwrap();
         assert_eq!(s.name, "soil");
         assert!(!s.is_grid);
         assert_eq!(s.steps, vec![(0.0, dir.join("soil_000000.vtu")), (0.015, dir.join("a&b.vtu"))]);
