@@ -143,6 +143,27 @@ pub(super) fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh
     Ok(mesh)
 }
 
+/// Every cell of a grid must have a positive, finite Jacobian determinant at its corners: a
+/// degenerate or inverted cell (or sizes beyond floating point) is refused before the run.
+fn check_cells(grid: &Grid, loc: &str) -> Result<(), CaseError> {
+    let element = grid.mesh.element;
+    for c in 0..grid.mesh.num_cells() {
+        let coords = grid.cell_coords(c);
+        let det = element.min_corner_det_j(&coords[..element.num_nodes()]);
+        if !(det > 0.0 && det.is_finite()) {
+            let centre = grid.reference_centre(c);
+            return Err(CaseError::new(
+                loc,
+                format!(
+                    "cell {c} at ({}) is degenerate or inverted (det J = {det:.3e}): nodes counter-clockwise, sizes finite",
+                    centre[..element.dim()].iter().map(|v| format!("{v:.4e}")).collect::<Vec<_>>().join(", ")
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Checks the keys of domain `k` against its kind.
 fn check_keys(case: &Case, k: usize) -> Result<(), CaseError> {
     let d = &case.domains[k];
@@ -389,12 +410,14 @@ pub(super) fn discretise(
                 let g = match groups.iter().position(|g| g.key == key) {
                     Some(g) => g,
                     None => {
-                        let grid = match &key {
-                            GridKey::Structured(g) => structured_grid(case, &loc, g)?,
-                            GridKey::Mesh(spec) => {
-                                Grid::unstructured(build_mesh(case, &format!("{loc}.grid_mesh"), spec)?)
-                            }
+                        let (grid, key_loc) = match &key {
+                            GridKey::Structured(g) => (structured_grid(case, &loc, g)?, format!("{loc}.grid")),
+                            GridKey::Mesh(spec) => (
+                                Grid::unstructured(build_mesh(case, &format!("{loc}.grid_mesh"), spec)?),
+                                format!("{loc}.grid_mesh"),
+                            ),
                         };
+                        check_cells(&grid, &key_loc)?;
                         groups.push(GridGroup {
                             key,
                             grid,
