@@ -7,6 +7,7 @@
 
 pub mod case;
 pub mod fmu_package;
+pub mod input;
 pub mod model_builder;
 pub mod monitor;
 pub mod output;

@@ -279,9 +279,13 @@ fn main() -> ExitCode {
         }
         Command::Plot(args) => plot_results(*args),
         Command::Law { path, out } => {
-            let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "law".into());
-            let out = out.unwrap_or_else(|| default_out_dir(&name));
-            match loam_laws::driver::run_path_file(&path, &out) {
+            let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            let out = out.unwrap_or_else(|| default_out_dir(&loam::case::output_name(&name)));
+            let file = match read_path_file(&path) {
+                Ok(f) => f,
+                Err(e) => return bad_input(&e),
+            };
+            match loam_laws::driver::run_parsed_path(&file, &out) {
                 Ok(s) => {
                     println!(
                         "loam: {} ({} rows): peak q = {:.4} kPa, final p = {:.4} kPa, final q = {:.4} kPa; wrote {}",
@@ -295,13 +299,36 @@ fn main() -> ExitCode {
                     ExitCode::SUCCESS
                 }
                 Err(e) => {
-                    eprintln!("error: {e}");
-                    let write_failure = matches!(e, loam_laws::driver::DriverError::Write { .. });
-                    ExitCode::from(if write_failure { 1 } else { 2 })
+                    use loam_laws::driver::DriverError;
+                    eprintln!("error: {}", loam::input::compact_numbers(&e.to_string()));
+                    // bad input 2; a material point that cannot follow the path, or a write
+                    // failure, 1 (issue 16: a divergence was reported as bad input)
+                    ExitCode::from(match e {
+                        DriverError::Input { .. } | DriverError::Read { .. } => 2,
+                        DriverError::Law { .. }
+                        | DriverError::ControlNotConverged { .. }
+                        | DriverError::Write { .. } => 1,
+                    })
                 }
             }
         }
     }
+}
+
+/// Reads a `loam law` path file as strictly as a case file (size limit, duplicate keys,
+/// text after the object, full JSON paths: [`loam::input`]).
+fn read_path_file(path: &std::path::Path) -> Result<loam_laws::driver::PathFile, CaseError> {
+    let text = loam::input::read_json_text(path, "path file")?;
+    loam::input::parse(&text).map(|(file, _)| file).map_err(|mut e| {
+        e.location = if e.location.is_empty() {
+            path.display().to_string()
+        } else if e.location.starts_with("line") {
+            format!("{}:{}", path.display(), e.location)
+        } else {
+            e.location
+        };
+        e
+    })
 }
 
 /// `loam run`: builds the case, runs it with output to `out` and prints the summary line.

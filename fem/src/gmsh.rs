@@ -83,6 +83,14 @@ pub enum GmshError {
         /// File name as given.
         file: String,
     },
+    /// The file, or the mesh it declares, is larger than the [`GmshLimits`] allow.
+    #[error("{file}: {what}")]
+    TooLarge {
+        /// File name as given.
+        file: String,
+        /// What exceeds which limit.
+        what: String,
+    },
     /// The file is malformed, truncated or inconsistent.
     #[error("{file}: cannot read: {reason}")]
     Parse {
@@ -93,17 +101,58 @@ pub enum GmshError {
     },
 }
 
-/// Read a Gmsh MSH 4.1 file (ASCII or binary) into a [`Mesh`].
+/// Bounds on what [`read_gmsh_limited`] reads, checked before the file is read (its size)
+/// and before its sections are parsed (the counts their headers declare), so that a huge
+/// or hostile file (`/dev/zero`, a header declaring 10¹⁸ nodes) is refused instead of
+/// exhausting memory.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GmshLimits {
+    /// Largest file in bytes (default 2 GiB; an ASCII mesh of two million hexahedra is
+    /// about 0.3 GB). Only regular files are read: a device or pipe is refused.
+    pub max_bytes: u64,
+    /// Largest number of nodes, and of elements (of any dimension), the file may declare
+    /// (default: no bound).
+    pub max_entries: u64,
+}
+
+impl Default for GmshLimits {
+    fn default() -> Self {
+        Self { max_bytes: 2 << 30, max_entries: u64::MAX }
+    }
+}
+
+/// Read a Gmsh MSH 4.1 file (ASCII or binary) into a [`Mesh`], within the default
+/// [`GmshLimits`].
 pub fn read_gmsh(path: &Path) -> Result<Mesh, GmshError> {
+    read_gmsh_limited(path, &GmshLimits::default())
+}
+
+/// Read a Gmsh MSH 4.1 file (ASCII or binary) into a [`Mesh`], refusing files and meshes
+/// larger than `limits`.
+pub fn read_gmsh_limited(path: &Path, limits: &GmshLimits) -> Result<Mesh, GmshError> {
     let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| GmshError::Io { file: file.clone(), reason: e.to_string() })?;
-    parse_named(&bytes, &file)
+    let io = |e: std::io::Error| GmshError::Io { file: file.clone(), reason: e.to_string() };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(GmshError::Io { file: file.clone(), reason: "not a regular file".into() });
+    }
+    if meta.len() > limits.max_bytes {
+        return Err(GmshError::TooLarge {
+            file: file.clone(),
+            what: format!("{} bytes, more than the limit of {} bytes for a mesh file", meta.len(), limits.max_bytes),
+        });
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| std::io::Read::read_to_end(&mut std::io::Read::take(f, limits.max_bytes), &mut bytes))
+        .map_err(io)?;
+    parse_limited(&bytes, &file, limits)
 }
 
 /// Parse the contents of a Gmsh MSH 4.1 file (ASCII or binary) into a [`Mesh`]. Errors name
 /// the input `<msh data>`.
 pub fn parse_gmsh(bytes: &[u8]) -> Result<Mesh, GmshError> {
-    parse_named(bytes, "<msh data>")
+    parse_limited(bytes, "<msh data>", &GmshLimits::default())
 }
 
 /// `$MeshFormat` as far as this module needs it.
@@ -115,7 +164,7 @@ struct Format {
     size_t: usize,
 }
 
-fn parse_named(bytes: &[u8], file: &str) -> Result<Mesh, GmshError> {
+fn parse_limited(bytes: &[u8], file: &str, limits: &GmshLimits) -> Result<Mesh, GmshError> {
     let parse_err = |reason: String| GmshError::Parse { file: file.to_string(), reason };
     let format = read_format(bytes, file)?;
     let names = read_physical_names(bytes).map_err(parse_err)?;
@@ -132,11 +181,14 @@ fn parse_named(bytes: &[u8], file: &str) -> Result<Mesh, GmshError> {
         if num_nodes == 0 {
             return Err(GmshError::NoCells { file: file.to_string() });
         }
+        check_count(file, "nodes", num_nodes, limits)?;
     }
     if let Some(at) = section_body(&patched, b"$Elements") {
-        if patch_section_header(&mut patched, at, &format, false).map_err(parse_err)? == 0 {
+        let num_elements = patch_section_header(&mut patched, at, &format, false).map_err(parse_err)?;
+        if num_elements == 0 {
             return Err(GmshError::NoCells { file: file.to_string() });
         }
+        check_count(file, "elements", num_elements, limits)?;
     } else {
         return Err(GmshError::NoCells { file: file.to_string() });
     }
@@ -155,6 +207,18 @@ fn parse_named(bytes: &[u8], file: &str) -> Result<Mesh, GmshError> {
         Err(_) => return Err(parse_err("malformed file (the MSH parser gave up)".into())),
     };
     build_mesh(&msh, &names, file)
+}
+
+/// A section header may declare at most `limits.max_entries` entries.
+fn check_count(file: &str, what: &str, declared: u64, limits: &GmshLimits) -> Result<(), GmshError> {
+    if declared > limits.max_entries {
+        let n = if declared < 1_000_000 { declared.to_string() } else { format!("{:.3e}", declared as f64) };
+        return Err(GmshError::TooLarge {
+            file: file.to_string(),
+            what: format!("declares {n} {what}, more than the limit of {}", limits.max_entries),
+        });
+    }
+    Ok(())
 }
 
 /// Check `$MeshFormat`: version 4.1, file type, `size_t` width and, for binary files, the

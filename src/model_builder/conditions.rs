@@ -249,6 +249,10 @@ fn build_penalty_wall(
             "needs at least two points, consecutive points distinct",
         ));
     }
+    let length: f64 = vertices.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum();
+    if !length.is_finite() {
+        return Err(CaseError::new(format!("{loc}.penalty.{key}"), "coordinates too large: its length overflows"));
+    }
     let spacing = match (spec.spacing, spec.contact) {
         (Some(_), true) => {
             return Err(CaseError::new(
@@ -264,6 +268,19 @@ fn build_penalty_wall(
         }
         (Some(s), false) => {
             check_positive(&format!("{loc}.penalty.spacing"), s)?;
+            // boundary particles: ceil(length / spacing) per segment
+            let n: f64 = vertices.windows(2).map(|w| ((w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]) / s).ceil()).sum();
+            let limit = case.limits.material_points;
+            if !super::within(n, limit) {
+                return Err(CaseError::new(
+                    format!("{loc}.penalty.spacing"),
+                    format!(
+                        "{s} m along {length} m of wall makes {} boundary particles, more than limits.material_points = {limit} \
+                         (a quarter of a grid cell is the usual spacing)",
+                        super::meshes::count(n)
+                    ),
+                ));
+            }
             s
         }
         (None, true) => 0.0,
@@ -279,7 +296,6 @@ fn build_penalty_wall(
         }
     }
     bc.amplitude.check().map_err(|m| CaseError::new(format!("{loc}.amplitude"), m))?;
-    let length: f64 = vertices.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum();
     let samples = BoundaryParticles::on_polyline(&vertices, 1e-3 * length, case.formulation, case.thickness);
     if !samples.position.iter().any(|x| grid.locate(x).is_some()) {
         return Err(CaseError::new(

@@ -14,10 +14,11 @@ use loam_coupling::interface::{self as coupling, InterfaceNode, InterfaceRequest
 use loam_fem::dofs::NodeRole;
 use loam_fem::element::ElementType;
 use loam_fem::formulation::Formulation;
+use loam_fem::gmsh::{GmshError, GmshLimits};
 use loam_fem::mesh::Mesh;
 use loam_fem::model::Model;
 use loam_fem::solid_domain::FemDomain;
-use loam_laws::ConstitutiveLaw;
+use loam_laws::{ConstitutiveLaw, Kinematics, TangentRequest};
 use loam_mpm::body::{Body, VelocityBlend};
 use loam_mpm::grid::Grid;
 use loam_mpm::material_points::{self, MaterialPoints};
@@ -112,6 +113,7 @@ pub(super) fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh
             if element.dim() != 2 {
                 return Err(CaseError::new(format!("{loc}.rectangle.element"), "a rectangle takes quad4 or tri3"));
             }
+            check_block_size(case, &format!("{loc}.rectangle.cells"), cells, *element)?;
             Mesh::rectangle(*origin, *size, *cells, *element)
         }
         MeshSpec::Box { origin, size, cells, element } => {
@@ -124,11 +126,16 @@ pub(super) fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh
             if element.dim() != 3 {
                 return Err(CaseError::new(format!("{loc}.box.element"), "a box takes hex8 or tet4"));
             }
+            check_block_size(case, &format!("{loc}.box.cells"), cells, *element)?;
             Mesh::cuboid(*origin, *size, *cells, *element)
         }
         MeshSpec::Gmsh(file) => {
             let path = case.directory.join(file);
-            loam_fem::gmsh::read_gmsh(&path).map_err(|e| CaseError::new(format!("{loc}.gmsh"), e.to_string()))?
+            let limits = GmshLimits { max_entries: case.limits.cells as u64, ..GmshLimits::default() };
+            loam_fem::gmsh::read_gmsh_limited(&path, &limits).map_err(|e| {
+                let hint = if matches!(e, GmshError::TooLarge { .. }) { " (limits.cells)" } else { "" };
+                CaseError::new(format!("{loc}.gmsh"), format!("{e}{hint}"))
+            })?
         }
     };
     if mesh.element.dim() != dim {
@@ -141,6 +148,45 @@ pub(super) fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh
         return Err(CaseError::new(loc, "axisymmetric meshes need r = x ≥ 0"));
     }
     Ok(mesh)
+}
+
+/// A structured block of `cells` (per direction) of `element`s must fit `limits.cells` in
+/// cells and in nodes, checked before anything is allocated (issue 16: `"cells":
+/// [1000000000, 1]` aborted on a failed allocation of 48 GB).
+fn check_block_size(case: &Case, loc: &str, cells: &[usize], element: ElementType) -> Result<(), CaseError> {
+    let per_block = match element {
+        ElementType::Tri3 => 2.0,
+        ElementType::Tet4 => 6.0,
+        ElementType::Quad4 | ElementType::Hex8 => 1.0,
+    };
+    let n_cells: f64 = per_block * cells.iter().map(|&c| c as f64).product::<f64>();
+    let n_nodes: f64 = cells.iter().map(|&c| c as f64 + 1.0).product();
+    let limit = case.limits.cells;
+    if !super::within(n_cells, limit) || !super::within(n_nodes, limit) {
+        let counts: Vec<String> = cells.iter().map(|c| c.to_string()).collect();
+        return Err(CaseError::new(
+            loc,
+            format!(
+                "[{}] makes {} {} cells and {} nodes, more than limits.cells = {limit} (raise it in the case's \"limits\" for a larger model)",
+                counts.join(", "),
+                count(n_cells),
+                element.name(),
+                count(n_nodes)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A count for messages: in full up to a million, else `1.000e9`.
+pub(super) fn count(n: f64) -> String {
+    if !n.is_finite() {
+        "more than 1e308".into()
+    } else if n < 1e6 {
+        format!("{n}")
+    } else {
+        format!("{n:.3e}")
+    }
 }
 
 /// Every cell of a grid must have a positive, finite Jacobian determinant at its corners: a
@@ -236,25 +282,81 @@ fn check_keys(case: &Case, k: usize) -> Result<(), CaseError> {
     Ok(())
 }
 
+/// The region a body fills, as its case file gives it: the cells of its body mesh, a disk
+/// or a polygon. Two bodies overlap where the points of one lie in the region of the other.
+enum BodyRegion {
+    /// The body mesh, as a locator.
+    Mesh(Box<Grid>),
+    /// Centre and radius.
+    Disk([f64; 2], f64),
+    /// Vertices in order.
+    Polygon(Vec<[f64; 2]>),
+}
+
+impl BodyRegion {
+    /// Whether `x` lies in the region (strictly inside a disk or polygon; within 1e-9 of a
+    /// cell in local coordinates for a mesh).
+    fn contains(&self, x: &[f64; 3]) -> bool {
+        match self {
+            BodyRegion::Mesh(locator) => locator.locate(x).is_some(),
+            BodyRegion::Disk(c, r) => (x[0] - c[0]).powi(2) + (x[1] - c[1]).powi(2) < r * r,
+            BodyRegion::Polygon(v) => point_in_polygon(v, x[0], x[1]),
+        }
+    }
+}
+
 /// The material points of the MPM domain `k` (`density` of its material), checked to lie
-/// in `grid`.
-fn material_points(case: &Case, k: usize, density: f64, grid: &Grid) -> Result<MaterialPoints, CaseError> {
+/// in `grid`, and the region they fill.
+fn material_points(
+    case: &Case,
+    k: usize,
+    density: f64,
+    grid: &Grid,
+) -> Result<(MaterialPoints, BodyRegion), CaseError> {
     let d = &case.domains[k];
     let dim = case.formulation.dim();
     let body_loc = format!("domains[{k}].material_points");
     let body = d.material_points.as_ref().expect("checked");
     let (f, t) = (case.formulation, case.thickness);
-    let points = match body {
+    let limit = case.limits.material_points;
+    let too_many = |loc: String, what: String| {
+        CaseError::new(
+            loc,
+            format!("{what}, more than limits.material_points = {limit} (raise it in the case's \"limits\" for a larger body)"),
+        )
+    };
+    let (points, region) = match body {
         BodySpec::Cells { mesh, points_per_cell } => {
             let m = build_mesh(case, &format!("{body_loc}.cells.mesh"), mesh)?;
-            material_points::from_mesh(&m, *points_per_cell, f, t, density)
-                .map_err(|e| CaseError::new(format!("{body_loc}.cells.points_per_cell"), e))?
+            let n = m.num_cells() as f64 * *points_per_cell as f64;
+            if !super::within(n, limit) {
+                return Err(too_many(
+                    format!("{body_loc}.cells.points_per_cell"),
+                    format!("{} cells × {points_per_cell} points make {} material points", m.num_cells(), count(n)),
+                ));
+            }
+            let points = material_points::from_mesh(&m, *points_per_cell, f, t, density)
+                .map_err(|e| CaseError::new(format!("{body_loc}.cells.points_per_cell"), e))?;
+            (points, BodyRegion::Mesh(Box::new(Grid::unstructured(m))))
         }
         BodySpec::Disk { centre, radius, spacing } => {
             check_positive(&format!("{body_loc}.disk.radius"), *radius)?;
             check_positive(&format!("{body_loc}.disk.spacing"), *spacing)?;
+            let n = (2.0 * radius / spacing).ceil().powi(2);
+            if !super::within(n, limit)
+                || !(centre[0].abs() + radius).is_finite()
+                || !(centre[1].abs() + radius).is_finite()
+            {
+                return Err(too_many(
+                    format!("{body_loc}.disk.spacing"),
+                    format!(
+                        "a disk of radius {radius} m at spacing {spacing} m takes a lattice of {} positions",
+                        count(n)
+                    ),
+                ));
+            }
             let (c, r) = (*centre, *radius);
-            material_points::from_lattice_2d(
+            let points = material_points::from_lattice_2d(
                 [c[0] - r, c[1] - r],
                 [c[0] + r, c[1] + r],
                 *spacing,
@@ -262,7 +364,8 @@ fn material_points(case: &Case, k: usize, density: f64, grid: &Grid) -> Result<M
                 t,
                 density,
                 |x, y| (x - c[0]).powi(2) + (y - c[1]).powi(2) <= r * r,
-            )
+            );
+            (points, BodyRegion::Disk(c, r))
         }
         BodySpec::Polygon { vertices, spacing } => {
             check_positive(&format!("{body_loc}.polygon.spacing"), *spacing)?;
@@ -271,7 +374,22 @@ fn material_points(case: &Case, k: usize, density: f64, grid: &Grid) -> Result<M
             }
             let lo = [0, 1].map(|d| vertices.iter().map(|v| v[d]).fold(f64::MAX, f64::min));
             let hi = [0, 1].map(|d| vertices.iter().map(|v| v[d]).fold(f64::MIN, f64::max));
-            material_points::from_lattice_2d(lo, hi, *spacing, f, t, density, |x, y| point_in_polygon(vertices, x, y))
+            let n = ((hi[0] - lo[0]) / spacing).ceil() * ((hi[1] - lo[1]) / spacing).ceil();
+            if !super::within(n, limit) {
+                return Err(too_many(
+                    format!("{body_loc}.polygon.spacing"),
+                    format!(
+                        "a polygon of {} m × {} m at spacing {spacing} m takes a lattice of {} positions",
+                        hi[0] - lo[0],
+                        hi[1] - lo[1],
+                        count(n)
+                    ),
+                ));
+            }
+            let points = material_points::from_lattice_2d(lo, hi, *spacing, f, t, density, |x, y| {
+                point_in_polygon(vertices, x, y)
+            });
+            (points, BodyRegion::Polygon(vertices.clone()))
         }
     };
     if points.is_empty() {
@@ -283,7 +401,66 @@ fn material_points(case: &Case, k: usize, density: f64, grid: &Grid) -> Result<M
             format!("material point at {:?} lies outside the grid", &points.position[p][..dim]),
         ));
     }
-    Ok(points)
+    Ok((points, region))
+}
+
+/// Two domains must not fill the same space (issue 16: two overlapping domains were
+/// accepted silently, doubling mass and stiffness there): no material point of one body
+/// lies in the region of another (whatever their grids), and no cell centre of one FEM
+/// mesh lies in a cell of another (FEM domains may share nodes along a common boundary).
+fn check_overlaps(
+    case: &Case,
+    fem_meshes: &BTreeMap<usize, Mesh>,
+    bodies: &[(usize, &MaterialPoints, &BodyRegion)],
+) -> Result<(), CaseError> {
+    let dim = case.formulation.dim();
+    let at = |x: &[f64; 3]| x[..dim].iter().map(|v| format!("{v:.6e}")).collect::<Vec<_>>().join(", ");
+    let overlap = |a: usize, b: usize, x: &[f64; 3]| {
+        let (a, b) = (a.min(b), a.max(b));
+        CaseError::new(
+            format!("domains[{b}]"),
+            format!(
+                "'{}' overlaps '{}' (domains[{a}]) at ({}): two domains must not fill the same space",
+                case.domains[b].name,
+                case.domains[a].name,
+                at(x)
+            ),
+        )
+    };
+    for (i, &(a, _, region)) in bodies.iter().enumerate() {
+        for (j, &(b, points, _)) in bodies.iter().enumerate() {
+            if i != j {
+                if let Some(x) = points.position.iter().find(|x| region.contains(x)) {
+                    return Err(overlap(a, b, x));
+                }
+            }
+        }
+    }
+    let locators: Vec<(usize, Grid)> = if fem_meshes.len() > 1 {
+        fem_meshes.iter().map(|(&k, m)| (k, Grid::unstructured(m.clone()))).collect()
+    } else {
+        Vec::new()
+    };
+    for (a, locator) in &locators {
+        for (&b, mesh) in fem_meshes {
+            if b == *a {
+                continue;
+            }
+            for e in 0..mesh.num_cells() {
+                let cell = mesh.cell(e);
+                let mut c = [0.0; 3];
+                for &n in cell {
+                    for d in 0..3 {
+                        c[d] += mesh.coords[n][d] / cell.len() as f64;
+                    }
+                }
+                if locator.locate(&c).is_some() {
+                    return Err(overlap(*a, b, &c));
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The structured grid of `g` (at JSON path `loc`), checked.
@@ -298,6 +475,7 @@ fn structured_grid(case: &Case, loc: &str, g: &GridSpec) -> Result<Grid, CaseErr
     if g.cells.contains(&0) {
         return Err(CaseError::new(format!("{loc}.grid.cells"), "needs at least one cell in each direction"));
     }
+    check_block_size(case, &format!("{loc}.grid.cells"), &g.cells, g.element)?;
     if g.element.dim() != dim || g.element == ElementType::Tet4 {
         return Err(CaseError::new(
             format!("{loc}.grid.element"),
@@ -394,6 +572,7 @@ pub(super) fn discretise(
     let mut fem_meshes: BTreeMap<usize, Mesh> = BTreeMap::new();
     let mut groups: Vec<GridGroup<'_>> = Vec::new();
     let mut group_of: HashMap<usize, usize> = HashMap::new();
+    let mut regions: Vec<(usize, BodyRegion)> = Vec::new();
     for (k, d) in case.domains.iter().enumerate() {
         let loc = format!("domains[{k}]");
         match d.kind {
@@ -429,12 +608,21 @@ pub(super) fn discretise(
                         groups.len() - 1
                     }
                 };
-                let points = material_points(case, k, laws[d.material.as_str()].density(), &groups[g].grid)?;
+                let (points, region) = material_points(case, k, laws[d.material.as_str()].density(), &groups[g].grid)?;
                 groups[g].bodies.push((k, points));
+                regions.push((k, region));
                 group_of.insert(k, g);
             }
         }
     }
+    let bodies: Vec<(usize, &MaterialPoints, &BodyRegion)> = regions
+        .iter()
+        .map(|(k, region)| {
+            let points = groups[group_of[k]].bodies.iter().find(|(b, _)| b == k).map(|(_, p)| p).expect("listed");
+            (*k, points, region)
+        })
+        .collect();
+    check_overlaps(case, &fem_meshes, &bodies)?;
     couple_grids(case, &fem_meshes, &mut groups, &group_of)?;
     number(case, laws, fem_meshes, groups)
 }
@@ -656,6 +844,9 @@ fn grid_domain(
             }
         }
         let density = law.density();
+        if let Some(InitialStressSpec::Geostatic { surface, .. }) = d.initial_stress {
+            check_geostatic_surface(k, surface, &points, dim)?;
+        }
         let offset = domain.as_ref().map_or(0, MpmDomain::next_point_id);
         let mut body = Body::new(&d.name, law, points, offset);
         body.set_velocity_blend(velocity_blend(case, k)?);
@@ -672,13 +863,15 @@ fn grid_domain(
                 ));
             }
             let vertical = dim - 1;
-            body.set_initial_stress(|x| {
+            let stress = |x: &[f64; 3]| {
                 let sigma_v = density * g * (surface - x[vertical]).max(0.0);
                 let mut s = Matrix3::from_diagonal_element(k0 * sigma_v);
                 s[(vertical, vertical)] = sigma_v;
                 s
-            })
-            .map_err(|(p, e)| CaseError::new(&loc, format!("material point {p}: {e}")))?;
+            };
+            body.set_initial_stress(stress)
+                .map_err(|(p, e)| CaseError::new(&loc, format!("material point {p}: {e}")))?;
+            check_initial_state(&loc, &*laws[d.material.as_str()], &body.points, &stress)?;
         }
         match domain.as_mut() {
             Some(domain) => domain.add_body(body),
@@ -695,6 +888,72 @@ fn grid_domain(
         indices.push(k);
     }
     Ok((domain.expect("a grid has a body"), indices))
+}
+
+/// Every material point must be able to carry its initial stress: the law is evaluated at
+/// rest (`F = I`) from the state that stress gave it. A material too soft for its stress
+/// (E = 1 Pa under a geostatic column) needs an elastic strain the law cannot represent;
+/// refused here, it used to stop the run at its first step with "inverted deformation
+/// gradient (det F = 1)" (issue 16).
+fn check_initial_state(
+    loc: &str,
+    law: &dyn ConstitutiveLaw,
+    points: &MaterialPoints,
+    stress: &dyn Fn(&[f64; 3]) -> Matrix3<f64>,
+) -> Result<(), CaseError> {
+    let n = law.state_len();
+    let mut trial = vec![0.0; n];
+    for p in 0..points.len() {
+        let state = &points.state[p * n..(p + 1) * n];
+        trial.copy_from_slice(state);
+        let kinematics = Kinematics {
+            deformation_gradient: Matrix3::identity(),
+            previous_deformation_gradient: Matrix3::identity(),
+            time_step: 0.0,
+            tangent: TangentRequest::None,
+        };
+        let sigma = stress(&points.position[p]);
+        let failure = match law.stress_response(&kinematics, state, &mut trial) {
+            Err(e) => Some(e.to_string()),
+            Ok(r)
+                if (r.first_piola - sigma).amax() > 1e-6 * sigma.amax().max(1.0)
+                    || !r.first_piola.amax().is_finite() =>
+            {
+                Some(format!("it gives back σ_yy = {:.3e} Pa", r.first_piola[(1, 1)]))
+            }
+            Ok(_) => None,
+        };
+        if let Some(f) = failure {
+            let x = points.position[p];
+            return Err(CaseError::new(
+                loc,
+                format!(
+                    "material point {p} at ({:.4e}, {:.4e}) cannot start at rest under its initial stress (largest component {:.3e} Pa): the law fails on it ({f}): the elastic strain this stress needs is beyond the law's range; is the material too soft for it?",
+                    x[0],
+                    x[1],
+                    sigma.amax()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A geostatic `surface` must not lie below the body's highest material point: the points
+/// above it would start without any stress (issue 16: a surface below the whole body gave
+/// zero stress everywhere without a word).
+fn check_geostatic_surface(k: usize, surface: f64, points: &MaterialPoints, dim: usize) -> Result<(), CaseError> {
+    let top = points.position.iter().map(|x| x[dim - 1]).fold(f64::NEG_INFINITY, f64::max);
+    if surface < top {
+        let axis = if dim == 2 { "y" } else { "z" };
+        return Err(CaseError::new(
+            format!("domains[{k}].initial_stress.geostatic.surface"),
+            format!(
+                "{surface} m lies below the body's highest material point ({axis} = {top:.6} m): the points above it would start without stress"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The PIC blend of the MPM domain `k`.

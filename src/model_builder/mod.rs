@@ -92,6 +92,7 @@ pub struct ModelOutput {
 pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     let dim = case.formulation.dim();
     let scheme = settings::check(case)?;
+    check_output_names(case)?;
     let laws = materials(case)?;
     let discretisation = meshes::discretise(case, &laws)?;
     let mut model = Model::new(dim, discretisation.coords.clone(), scheme, case.solver);
@@ -117,6 +118,74 @@ fn materials(case: &Case) -> Result<BTreeMap<&str, Arc<dyn ConstitutiveLaw>>, Ca
         laws.insert(name, Arc::from(law));
     }
     Ok(laws)
+}
+
+/// Longest name that becomes a file name, in bytes (file systems allow 255; the step
+/// number and suffix take up to 18).
+const MAX_FILE_NAME_BYTES: usize = 100;
+
+/// A name that becomes an output file name (`<name>.pvd`, `<name>_<step>.vtu`): domains,
+/// bodies, penalty walls. Refused (issue 16) if it could write outside the output directory
+/// or hide its files: empty, starting with `.`, ending with `.` or a space, longer than
+/// [`MAX_FILE_NAME_BYTES`], with a path separator, control character or one of
+/// `<>:"|?*` (not allowed in Windows file names), or ending in `_grid` (the suffix of the
+/// background grids' output, which `loam plot` recognises).
+fn check_file_name(location: &str, name: &str) -> Result<(), CaseError> {
+    let problem = if name.is_empty() {
+        Some("must not be empty")
+    } else if name.starts_with('.') {
+        Some("must not start with '.'")
+    } else if name.ends_with('.') || name.ends_with(' ') || name.starts_with(' ') {
+        Some("must not start with a space or end with '.' or a space")
+    } else if name.len() > MAX_FILE_NAME_BYTES {
+        Some("is too long (at most 100 bytes)")
+    } else if name.chars().any(|c| c.is_control() || "/\\<>:\"|?*".contains(c)) {
+        Some("must not contain / \\ < > : \" | ? * or control characters")
+    } else if name.ends_with("_grid") {
+        Some("must not end in '_grid' (the suffix of the background grids' output)")
+    } else {
+        None
+    };
+    match problem {
+        Some(p) => Err(CaseError::new(location, format!("{name:?} names output files ({name}.pvd): it {p}"))),
+        None => Ok(()),
+    }
+}
+
+/// The names of the case's output series (domains, bodies, penalty walls; with
+/// `output.grid` also `<domain>_grid`) must be valid file names ([`check_file_name`]) and
+/// distinct even where case does not count (`Soil` and `soil` are one file on Windows
+/// and macOS).
+fn check_output_names(case: &Case) -> Result<(), CaseError> {
+    let mut seen: BTreeMap<String, String> = BTreeMap::new();
+    let mut add = |loc: String, name: &str| -> Result<(), CaseError> {
+        check_file_name(&loc, name)?;
+        if let Some(first) = seen.insert(name.to_lowercase(), loc.clone()) {
+            return Err(CaseError::new(
+                loc,
+                format!("{name:?} names the same output files as {first} (names must differ in more than case)"),
+            ));
+        }
+        Ok(())
+    };
+    for (k, d) in case.domains.iter().enumerate() {
+        add(format!("domains[{k}].name"), &d.name)?;
+    }
+    for (k, bc) in case.boundary_conditions.iter().enumerate() {
+        if bc.penalty.is_some() {
+            match &bc.name {
+                Some(name) => add(format!("boundary_conditions[{k}].name"), name)?,
+                None => add(format!("boundary_conditions[{k}]"), &format!("penalty_{k}"))?,
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Whether a count `n` estimated in floating point (possibly infinite or NaN after an
+/// overflow) is at most `limit`.
+fn within(n: f64, limit: usize) -> bool {
+    n.is_finite() && n <= limit as f64
 }
 
 fn check_positive(location: &str, value: f64) -> Result<(), CaseError> {

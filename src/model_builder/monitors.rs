@@ -24,8 +24,16 @@ pub(super) fn build(
     let mut monitors = Vec::new();
     for (k, m) in case.monitors.iter().enumerate() {
         let loc = format!("monitors[{k}]");
-        if m.name() == "time" || m.name().is_empty() || m.name().contains(',') {
-            return Err(CaseError::new(format!("{loc}.name"), "must be non-empty, not 'time', without commas"));
+        // a column of monitors.csv: a comma, a quote or a line break would break the file
+        if m.name() == "time" || m.name().is_empty() || m.name().chars().any(|c| c == ',' || c == '"' || c.is_control())
+        {
+            return Err(CaseError::new(
+                format!("{loc}.name"),
+                format!(
+                    "{:?} names a column of monitors.csv: it must be non-empty, not 'time', without commas, quotes or control characters",
+                    m.name()
+                ),
+            ));
         }
         if !monitor_names.insert(m.name().to_string()) {
             return Err(CaseError::new(format!("{loc}.name"), format!("duplicate monitor name '{}'", m.name())));

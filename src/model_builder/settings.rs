@@ -5,6 +5,14 @@ use loam_fem::scheme::TimeScheme;
 use super::check_positive;
 use crate::case::{AnalysisType, Case, CaseError};
 
+/// Most halvings of a failed step (`analysis.max_step_cuts`) or of a Newton correction
+/// (`solver.line_search_max_cuts`): 2^-50 of a step is at the round-off of its time.
+pub(super) const MAX_STEP_CUTS: u32 = 50;
+
+/// Most Newton iterations per step (`solver.max_iterations`): a Newton iteration that has
+/// not converged in a thousand iterations will not.
+pub(super) const MAX_NEWTON_ITERATIONS: usize = 1000;
+
 /// Checks the case's scalar settings and returns its time scheme.
 pub(super) fn check(case: &Case) -> Result<TimeScheme, CaseError> {
     check_positive("thickness", case.thickness)?;
@@ -15,6 +23,30 @@ pub(super) fn check(case: &Case) -> Result<TimeScheme, CaseError> {
     }
     check_positive("solver.residual_relative_tolerance", case.solver.residual_relative_tolerance)?;
     check_positive("solver.residual_absolute_tolerance", case.solver.residual_absolute_tolerance)?;
+    check_positive("solver.displacement_relative_tolerance", case.solver.displacement_relative_tolerance)?;
+    check_positive("solver.displacement_absolute_tolerance", case.solver.displacement_absolute_tolerance)?;
+    if case.analysis.max_step_cuts > MAX_STEP_CUTS {
+        return Err(CaseError::new(
+            "analysis.max_step_cuts",
+            format!(
+                "must be at most {MAX_STEP_CUTS} (2^-{MAX_STEP_CUTS} of a step is below round-off), got {}",
+                case.analysis.max_step_cuts
+            ),
+        ));
+    }
+    if case.solver.line_search_max_cuts > MAX_STEP_CUTS {
+        return Err(CaseError::new(
+            "solver.line_search_max_cuts",
+            format!("must be at most {MAX_STEP_CUTS}, got {}", case.solver.line_search_max_cuts),
+        ));
+    }
+    if case.solver.max_iterations > MAX_NEWTON_ITERATIONS {
+        return Err(CaseError::new(
+            "solver.max_iterations",
+            format!("must be at most {MAX_NEWTON_ITERATIONS}, got {}", case.solver.max_iterations),
+        ));
+    }
+    check_limits(case)?;
     if let Some(a) = &case.analysis.adaptive {
         check_positive("analysis.adaptive.min_time_step", a.min_time_step)?;
         check_positive("analysis.adaptive.max_time_step", a.max_time_step)?;
@@ -48,7 +80,14 @@ pub(super) fn check(case: &Case) -> Result<TimeScheme, CaseError> {
         if k > 0 && t <= case.output.times[k - 1] {
             return Err(CaseError::new(format!("output.times[{k}]"), "times must increase"));
         }
+        if t > case.analysis.end_time * (1.0 + 1e-12) {
+            return Err(CaseError::new(
+                format!("output.times[{k}]"),
+                format!("{t} s lies after analysis.end_time = {} s", case.analysis.end_time),
+            ));
+        }
     }
+    check_step_count(case)?;
     if case.solver.max_iterations == 0 {
         return Err(CaseError::new("solver.max_iterations", "must be at least 1"));
     }
@@ -64,4 +103,40 @@ pub(super) fn check(case: &Case) -> Result<TimeScheme, CaseError> {
     };
     scheme.check().map_err(|(k, m)| CaseError::new(format!("analysis.scheme.{k}"), m))?;
     Ok(scheme)
+}
+
+/// The bounds of `limits` themselves must be positive.
+fn check_limits(case: &Case) -> Result<(), CaseError> {
+    let l = &case.limits;
+    for (key, v) in [("cells", l.cells), ("material_points", l.material_points), ("steps", l.steps)] {
+        if v == 0 {
+            return Err(CaseError::new(format!("limits.{key}"), "must be at least 1"));
+        }
+    }
+    Ok(())
+}
+
+/// A run may take at most `limits.steps` steps: `end_time / time_step` with fixed steps,
+/// `end_time / max_time_step` (the fewest possible) with adaptive ones, plus one step per
+/// `output.times` entry (steps are shortened to land on them).
+fn check_step_count(case: &Case) -> Result<(), CaseError> {
+    let a = &case.analysis;
+    let (step, key) = match &a.adaptive {
+        Some(adaptive) => (adaptive.max_time_step, "analysis.adaptive.max_time_step"),
+        None => (a.time_step, "analysis.time_step"),
+    };
+    let steps = (a.end_time / step * (1.0 - 1e-12)).ceil() + case.output.times.len() as f64;
+    let limit = case.limits.steps;
+    if !super::within(steps, limit) {
+        return Err(CaseError::new(
+            key,
+            format!(
+                "{step} s steps to analysis.end_time = {} s take {} steps, more than limits.steps = {limit} \
+                 (raise it in the case's \"limits\" if the run is meant to be that long)",
+                a.end_time,
+                super::meshes::count(steps)
+            ),
+        ));
+    }
+    Ok(())
 }

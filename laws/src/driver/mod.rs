@@ -151,12 +151,37 @@ pub fn parse_path_file(text: &str) -> Result<PathFile, DriverError> {
     })
 }
 
-/// Reads the path file `path`, drives the material point and writes `out_dir/path.csv`.
+/// Largest path file read by [`run_path_file`]: 16 MiB (a table of 100 000 strain
+/// increments is about 10 MB).
+pub const MAX_PATH_FILE_BYTES: u64 = 16 << 20;
+
+/// Most steps of a path (`path.steps`, or rows of `path.increments`): a million steps of one
+/// material point is beyond any laboratory test, and the table of results is kept in memory
+/// (issue 16: `"steps": 1000000000` grew to 8 GB).
+pub const MAX_PATH_STEPS: usize = 1_000_000;
+
+/// Reads the path file `path` (at most [`MAX_PATH_FILE_BYTES`]), drives the material point
+/// and writes `out_dir/path.csv`.
 pub fn run_path_file(path: &Path, out_dir: &Path) -> Result<PathSummary, DriverError> {
-    let text = std::fs::read_to_string(path).map_err(|source| DriverError::Read { file: path.into(), source })?;
+    let read_error = |source| DriverError::Read { file: path.into(), source };
+    let mut text = String::new();
+    let file = std::fs::File::open(path).map_err(read_error)?;
+    std::io::Read::read_to_string(&mut std::io::Read::take(file, MAX_PATH_FILE_BYTES + 1), &mut text)
+        .map_err(read_error)?;
+    if text.len() as u64 > MAX_PATH_FILE_BYTES {
+        return Err(read_error(std::io::Error::other(format!(
+            "larger than the limit of {} MiB for a path file",
+            MAX_PATH_FILE_BYTES >> 20
+        ))));
+    }
     let file = parse_path_file(&text)?;
+    run_parsed_path(&file, out_dir)
+}
+
+/// Drives the material point of a parsed path file and writes `out_dir/path.csv`.
+pub fn run_parsed_path(file: &PathFile, out_dir: &Path) -> Result<PathSummary, DriverError> {
     let law = file.material.build()?;
-    let table = run_path(law.as_ref(), &file)?;
+    let table = run_path(law.as_ref(), file)?;
     std::fs::create_dir_all(out_dir).map_err(|source| DriverError::Write { file: out_dir.into(), source })?;
     let csv = out_dir.join("path.csv");
     std::fs::write(&csv, table.to_csv()).map_err(|source| DriverError::Write { file: csv.clone(), source })?;
@@ -314,7 +339,9 @@ fn check(json_path: &str, ok: bool, problem: impl FnOnce() -> String) -> Result<
 }
 
 fn check_steps(steps: usize) -> Result<(), DriverError> {
-    check("path.steps", steps >= 1, || format!("must be >= 1, got {steps}"))
+    check("path.steps", (1..=MAX_PATH_STEPS).contains(&steps), || {
+        format!("must lie in [1, {MAX_PATH_STEPS}], got {steps}")
+    })
 }
 
 fn check_strain(key: &str, value: f64, max: f64) -> Result<(), DriverError> {
@@ -440,6 +467,9 @@ pub fn run_path(law: &dyn ConstitutiveLaw, file: &PathFile) -> Result<PathTable,
         }
         PathSpec::StrainIncrements { increments } => {
             check("path.increments", !increments.is_empty(), || "must hold at least one increment".into())?;
+            check("path.increments", increments.len() <= MAX_PATH_STEPS, || {
+                format!("must hold at most {MAX_PATH_STEPS} increments, got {}", increments.len())
+            })?;
             F0 = point.F;
             let mut F = F0;
             for (k, d) in increments.iter().enumerate() {
