@@ -122,6 +122,10 @@ fn syntax_error(e: &serde_json::Error, path: &str) -> CaseError {
 /// path (module doc). A missing key at the top level has the location `""`.
 pub fn parse<T: DeserializeOwned>(text: &str) -> Result<(T, Value), CaseError> {
     let value = parse_value(text)?;
+    if !value.is_object() {
+        let got = describe(&value).unwrap_or_default().replace("unit value", "null").replace("sequence", "an array");
+        return Err(CaseError::new("", format!("must be one JSON object {{ ... }}, got {got}")));
+    }
     let typed = from_value(&value)?;
     Ok((typed, value))
 }
