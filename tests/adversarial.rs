@@ -863,3 +863,158 @@ fn adversarial_corpus_is_refused_cleanly() {
     assert!(inputs.len() >= 300);
     assert!(failures.is_empty(), "{} of {} inputs failed", failures.len(), inputs.len());
 }
+
+/// Property tests of the case parser and model builder, in process (issue 16): any text,
+/// any JSON value and any single-leaf mutation of a bundled case give a case or a one-line
+/// error with a location, never a panic. Sizes are bounded by the case's `limits` (set
+/// small here, so that a mutated size costs no memory).
+mod properties {
+    use loam::case::Case;
+    use loam::simulation::Simulation;
+    use proptest::prelude::*;
+    use serde_json::{json, Value};
+
+    use super::{root, walk, Step};
+
+    /// JSON values built from the words of the case schema, extreme numbers and short
+    /// strings.
+    fn value() -> impl Strategy<Value = Value> {
+        let words = prop_oneof![
+            Just("fem"),
+            Just("mpm"),
+            Just("quad4"),
+            Just("tri3"),
+            Just("hex8"),
+            Just("x"),
+            Just("y"),
+            Just("beam"),
+            Just("clamp"),
+            Just("static"),
+            Just("dynamic"),
+            Just("plane_strain"),
+            Just("3d"),
+            Just("rectangle"),
+            Just("newmark"),
+            Just("displacement"),
+            Just("magnitude"),
+            Just("neo_hookean"),
+            Just("../x"),
+            Just(""),
+            Just("a\nb"),
+        ];
+        let leaf = prop_oneof![
+            Just(Value::Null),
+            any::<bool>().prop_map(Value::from),
+            any::<i64>().prop_map(Value::from),
+            prop_oneof![Just(0.0), Just(-1.0), Just(1e300), Just(-1e-300), Just(0.5), Just(7.0), Just(1e9)]
+                .prop_map(|f: f64| json!(f)),
+            (-1e6f64..1e6).prop_map(|f| json!(f)),
+            words.prop_map(Value::from),
+        ];
+        leaf.prop_recursive(4, 48, 6, |inner| {
+            prop_oneof![
+                proptest::collection::vec(inner.clone(), 0..6).prop_map(Value::Array),
+                proptest::collection::btree_map("[a-z_]{1,12}", inner, 0..6)
+                    .prop_map(|m| Value::Object(m.into_iter().collect())),
+            ]
+        })
+    }
+
+    fn one_line(result: Result<Simulation, loam::case::CaseError>) -> Result<(), TestCaseError> {
+        if let Err(e) = result {
+            let m = e.to_string();
+            prop_assert!(!m.contains('\n'), "message of more than one line: {m:?}");
+            prop_assert!(!m.is_empty());
+        }
+        Ok(())
+    }
+
+    fn bases() -> Vec<Value> {
+        ["cantilever_fem", "cantilever_mpm", "cylinder_incline_slip_mpm", "coupled_beam_split", "disk_collision_mpm"]
+            .iter()
+            .map(|n| {
+                let text = std::fs::read_to_string(root().join(format!("cases/{n}.json"))).unwrap();
+                let mut v: Value = serde_json::from_str(&text).unwrap();
+                v["limits"] = json!({"cells": 20000, "material_points": 20000, "steps": 100000});
+                v
+            })
+            .collect()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
+
+        /// Any text: a case or a one-line error.
+        #[test]
+        fn any_text_is_parsed_or_refused(bytes in proptest::collection::vec(any::<u8>(), 0..512)) {
+            let text = String::from_utf8_lossy(&bytes);
+            if let Err(e) = Case::parse(&text) {
+                prop_assert!(!e.to_string().contains('\n'));
+            }
+        }
+
+        /// Any JSON value as a case: parsed and built, or a one-line error.
+        #[test]
+        fn any_json_value_is_built_or_refused(v in value()) {
+            one_line(Case::parse(&v.to_string()).and_then(Simulation::new))?;
+        }
+
+        /// A bundled case with one leaf replaced by any value: built or refused, never a panic.
+        #[test]
+        fn mutated_cases_are_built_or_refused(base in 0usize..5, leaf in any::<prop::sample::Index>(), v in value()) {
+            let mut case = bases()[base].clone();
+            let (mut leaves, mut objects) = (Vec::new(), Vec::new());
+            walk(&case, &mut Vec::new(), &mut leaves, &mut objects);
+            let steps: &Vec<Step> = leaf.get(&leaves);
+            let mut target = &mut case;
+            for s in steps {
+                target = match s {
+                    Step::Key(k) => &mut target[k.as_str()],
+                    Step::Index(i) => &mut target[*i],
+                };
+            }
+            *target = v;
+            one_line(Case::parse(&case.to_string()).and_then(Simulation::new))?;
+        }
+
+        /// A bundled case with one number replaced by another (extreme, zero, negative,
+        /// fractional where an integer is expected): built or refused, never a panic. These
+        /// reach the model builder's checks rather than the parser's.
+        #[test]
+        fn cases_with_a_changed_number_are_built_or_refused(
+            base in 0usize..5,
+            leaf in any::<prop::sample::Index>(),
+            x in prop_oneof![
+                Just(0.0), Just(-1.0), Just(1e300), Just(-1e300), Just(1e-300), Just(4294967296.0),
+                -100.0f64..100.0, (0u32..100).prop_map(f64::from),
+            ],
+        ) {
+            let mut case = bases()[base].clone();
+            let (mut leaves, mut objects) = (Vec::new(), Vec::new());
+            walk(&case, &mut Vec::new(), &mut leaves, &mut objects);
+            let numeric: Vec<&Vec<Step>> = leaves
+                .iter()
+                .filter(|steps| {
+                    let mut v = &case;
+                    for s in steps.iter() {
+                        v = match s {
+                            Step::Key(k) => &v[k.as_str()],
+                            Step::Index(i) => &v[*i],
+                        };
+                    }
+                    v.is_number()
+                })
+                .collect();
+            let steps = leaf.get(&numeric).to_vec();
+            let mut target = &mut case;
+            for s in &steps {
+                target = match s {
+                    Step::Key(k) => &mut target[k.as_str()],
+                    Step::Index(i) => &mut target[*i],
+                };
+            }
+            *target = if x.fract() == 0.0 && x.abs() < 1e15 { json!(x as i64) } else { json!(x) };
+            one_line(Case::parse(&case.to_string()).and_then(Simulation::new))?;
+        }
+    }
+}

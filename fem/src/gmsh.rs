@@ -899,4 +899,103 @@ $EndElements
         let err = read_gmsh(Path::new("/nonexistent/mesh.msh")).unwrap_err();
         assert!(err.to_string().starts_with("/nonexistent/mesh.msh: cannot open: "), "{err}");
     }
+
+    /// A header declaring more nodes or elements than the limits allow is refused before the
+    /// sections are parsed (issue 16).
+    #[test]
+    fn declared_sizes_beyond_the_limits_are_refused() {
+        let limits = GmshLimits { max_entries: 5, ..GmshLimits::default() };
+        let err = parse_limited(TWO_QUADS.as_bytes(), "m.msh", &limits).unwrap_err();
+        assert_eq!(err.to_string(), "m.msh: declares 8 nodes, more than the limit of 5");
+        let huge = TWO_QUADS.replace("4 8 10 99", "4 100000000000000000 10 99");
+        let err = parse_limited(huge.as_bytes(), "m.msh", &GmshLimits { max_entries: 1000, ..GmshLimits::default() });
+        assert_eq!(err.unwrap_err().to_string(), "m.msh: declares 1.000e17 nodes, more than the limit of 1000");
+        let err = read_gmsh(Path::new("/dev/zero")).unwrap_err();
+        assert_eq!(err.to_string(), "/dev/zero: cannot open: not a regular file");
+    }
+
+    mod properties {
+        use proptest::prelude::*;
+
+        use super::*;
+
+        /// An edit of a valid file: a byte replaced, a run deleted, digits inserted, or the
+        /// file truncated.
+        #[derive(Debug, Clone)]
+        enum Edit {
+            Replace(usize, u8),
+            Delete(usize, usize),
+            Insert(usize, String),
+            Truncate(usize),
+        }
+
+        fn edit() -> impl Strategy<Value = Edit> {
+            prop_oneof![
+                (any::<usize>(), any::<u8>()).prop_map(|(i, b)| Edit::Replace(i, b)),
+                (any::<usize>(), 1usize..40).prop_map(|(i, n)| Edit::Delete(i, n)),
+                (any::<usize>(), "[0-9 .e\\-\\n$]{1,12}").prop_map(|(i, s)| Edit::Insert(i, s)),
+                any::<usize>().prop_map(Edit::Truncate),
+            ]
+        }
+
+        fn apply(mut bytes: Vec<u8>, edits: &[Edit]) -> Vec<u8> {
+            for e in edits {
+                let n = bytes.len().max(1);
+                match e {
+                    Edit::Replace(i, b) => {
+                        if !bytes.is_empty() {
+                            bytes[i % n] = *b
+                        }
+                    }
+                    Edit::Delete(i, k) => {
+                        let start = (i % n).min(bytes.len());
+                        let end = (start + k).min(bytes.len());
+                        bytes.drain(start..end);
+                    }
+                    Edit::Insert(i, s) => {
+                        let at = (i % n).min(bytes.len());
+                        bytes.splice(at..at, s.bytes());
+                    }
+                    Edit::Truncate(i) => bytes.truncate(i % n),
+                }
+            }
+            bytes
+        }
+
+        fn one_line(result: Result<Mesh, GmshError>) -> Result<(), TestCaseError> {
+            if let Err(e) = result {
+                let m = e.to_string();
+                prop_assert!(!m.contains('\n'), "message of more than one line: {m:?}");
+            }
+            Ok(())
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
+
+            /// Issue 16: no byte string makes the reader panic.
+            #[test]
+            fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..2048)) {
+                one_line(parse_gmsh(&bytes))?;
+                let mut with_header = b"$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n".to_vec();
+                with_header.extend_from_slice(&bytes);
+                one_line(parse_gmsh(&with_header))?;
+            }
+
+            /// Issue 16: edits of valid ASCII and binary files (headers, counts, tags,
+            /// coordinates, truncations) give a mesh or a one-line error, never a panic.
+            #[test]
+            fn edited_files_never_panic(edits in proptest::collection::vec(edit(), 1..6), binary in any::<bool>()) {
+                let base = if binary {
+                    let mesh = Mesh::rectangle([0.0, 0.0], [2.0, 1.0], [2, 2], ElementType::Quad4);
+                    encode(&mesh, true, |i| 7 * i as u64 + 3)
+                } else {
+                    TWO_QUADS.as_bytes().to_vec()
+                };
+                let bytes = apply(base, &edits);
+                let limits = GmshLimits { max_entries: 10_000, ..GmshLimits::default() };
+                one_line(parse_limited(&bytes, "edited.msh", &limits))?;
+            }
+        }
+    }
 }
