@@ -30,3 +30,6 @@ echo "== C: fmu/src/ffi.rs types compiled against the FMI 3.0 headers (fmpy's)"
 echo "== Python: FMI 3.0 FMUs run by fmpy (loam fmu, tests/fmu)"
 cargo build --release --quiet -p loam -p loam-fmu
 .venv/bin/python tests/fmu/test_fmu.py
+
+echo "== Python: FMU robustness (reset, 100 instantiations, NaN/inf, bad steps, failing steps)"
+.venv/bin/python tests/fmu/test_fmu_robustness.py
