@@ -173,6 +173,22 @@ impl Instance {
         if !(h.is_finite() && h > 0.0) {
             return (self.fail(Status::Error, &format!("communicationStepSize must be > 0 and finite, got {h}")), now);
         }
+        // a communication step of more steps than the case allows a whole run would hold the
+        // host for ever (issue 16: a step of 1e300 s)
+        let dt = self.sim.case.analysis.time_step;
+        let limit = self.sim.case.limits.steps;
+        if h / dt > limit as f64 {
+            return (
+                self.fail(
+                    Status::Error,
+                    &format!(
+                        "communicationStepSize {h:e} s takes {:.3e} steps of {dt:e} s, more than the case's limits.steps = {limit}",
+                        h / dt
+                    ),
+                ),
+                now,
+            );
+        }
         let eps = 1e-9 * self.sim.case.analysis.time_step;
         if !t.is_finite() || (t - now).abs() > eps.max(1e-12 * now.abs()) {
             return (

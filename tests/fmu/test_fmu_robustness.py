@@ -11,7 +11,8 @@ clamp_reaction_y) is driven through:
   after a discarded step works too;
 - NaN, +inf, -inf inputs: fmi3Error, the input unchanged; a huge finite input (1e300 N) that
   no Newton iteration survives: fmi3Discard at the last converged time, never a crash;
-- communication steps negative, zero, NaN, infinite, or from a wrong or NaN time: fmi3Error;
+- communication steps negative, zero, NaN, infinite, of more case steps than `limits.steps`
+  (1e300 s, 1e5 s), or from a wrong or NaN time: fmi3Error;
 - a failing step: fmi3Discard with lastSuccessfulTime and terminateSimulation set; further
   steps are refused with fmi3Error/fmi3Discard until a reset, after which the instance runs
   again;
@@ -190,7 +191,8 @@ def check_bad_steps():
     h = Harness(package(CASE, "robust_steps"))
     fmu = h.ready()
     for t, step in [(0.0, -DT), (0.0, 0.0), (0.0, math.nan), (0.0, math.inf), (0.0, -math.inf),
-                    (0.5, DT), (math.nan, DT), (-DT, DT), (math.inf, DT), (0.0, 1e-300)]:
+                    (0.0, 1e300), (0.0, 1e5), (0.5, DT), (math.nan, DT), (-DT, DT), (math.inf, DT),
+                    (0.0, 1e-300)]:
         if step == 1e-300:
             # a positive step far below the case's step: accepted (lands on t + h) or refused, never a crash
             try:
@@ -207,7 +209,9 @@ def check_bad_steps():
     assert fmu.getFloat64([h.vr["time"]]) == [DT]
     fmu.terminate()
     fmu.freeInstance()
-    return "10 bad (t, h) pairs refused or handled; the instance then steps normally"
+    errors = [m for s, c, m in h.messages if s == 3 and "limits.steps" in m]
+    assert errors, "a step of 1e300 s names limits.steps"
+    return f"12 bad (t, h) pairs refused or handled, e.g. '{errors[0]}'; the instance then steps normally"
 
 
 def check_failing_step():
