@@ -205,12 +205,19 @@ fn locate(value: &Value, segments: &[Segment], message: &str) -> CaseError {
     if message.ends_with("expected map with a single key") {
         if let Some(Value::Object(m)) = here {
             let keys: Vec<&str> = m.keys().map(String::as_str).collect();
-            message = format!("takes exactly one key naming its kind, got {}: {}", keys.len(), keys.join(", "));
+            message = match keys.len() {
+                0 => "takes exactly one key naming its kind, got none".to_string(),
+                n => format!("takes exactly one key naming its kind, got {n}: {}", keys.join(", ")),
+            };
         }
     }
     message = message
         .replace("expected string or map", "expected a name in quotes or an object with one key")
-        .replace("expected fewer elements in array", "expected fewer entries");
+        .replace("expected fewer elements in array", "expected fewer entries")
+        .replace("expected variant identifier", "expected the name of a kind in quotes");
+    if let Some(i) = message.find("expected internally tagged enum ") {
+        message = format!("{}expected an object naming its kind (\"type\" or \"law\")", &message[..i]);
+    }
     if let Some(rest) = message.strip_prefix("data did not match any variant of untagged enum Amplitude") {
         message = format!("expected a number or a table [[t, f], ...] of increasing times{rest}");
     }

@@ -20,7 +20,8 @@
 //!   case or mesh file, broken Gmsh files, and the rest (see [`named_inputs`]).
 //!
 //! It runs in the default suite in about 20 s (four workers). The figures are printed:
-//! `cargo test --release --test adversarial -- --nocapture`.
+//! `cargo test --release --test adversarial -- --nocapture`; with `LOAM_ADVERSARIAL_DUMP=FILE`
+//! every input's name, exit code and message are appended to FILE.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -609,6 +610,24 @@ fn named_inputs(dir: &Path, inputs: &mut Vec<Input>) {
         let cut = TWO_QUADS.len() * k / 20;
         mesh_case(&format!("mesh truncated at {cut}"), "cut.msh", Some(&TWO_QUADS.as_bytes()[..cut]), gmsh(), inputs);
     }
+    // a background grid from Gmsh with a degenerate cell (node 5 moved onto node 2)
+    let sub = dir.join("degenerate_grid");
+    std::fs::create_dir_all(&sub).unwrap();
+    std::fs::write(sub.join("grid.msh"), TWO_QUADS.replace("1 0 0\n2 0 0\n1 1 0\n", "1 0 0\n2 0 0\n1 0 0\n")).unwrap();
+    let grid_case = json!({
+        "description": "MPM disk on a Gmsh grid with a degenerate cell",
+        "materials": {"m": {"law": "linear_elastic", "density": 1000, "young_modulus": 1e7, "poisson_ratio": 0.3}},
+        "domains": [{"name": "disk", "type": "mpm", "material": "m", "grid_mesh": {"gmsh": "grid.msh"},
+                     "material_points": {"disk": {"centre": [1.5, 0.5], "radius": 0.2, "spacing": 0.05}}}],
+        "analysis": {"type": "static", "time_step": 1, "end_time": 1}
+    });
+    std::fs::write(sub.join("case.json"), grid_case.to_string()).unwrap();
+    inputs.push(Input {
+        name: "degenerate grid_mesh cell".into(),
+        command: "check",
+        file: sub.join("case.json"),
+        expect: Expect::Bad { path: "domains[0].grid_mesh".into(), exact: true, mention: Some("degenerate".into()) },
+    });
     // loam law
     let law = |name: &str, value: Value, expect: Expect, inputs: &mut Vec<Input>| {
         let file = dir.join(format!("law_{}.json", inputs.len()));
@@ -684,6 +703,13 @@ fn judge(input: &Input, dir: &Path) -> Outcome {
         }
     };
     let err = reader.join().unwrap();
+    if let Ok(dump) = std::env::var("LOAM_ADVERSARIAL_DUMP") {
+        use std::io::Write;
+        // one write per input: appends of the four workers do not interleave
+        let line = format!("{}\t{:?}\t{}\n", input.name.replace('\n', "\\n"), status.code(), err.trim_end());
+        let mut f = std::fs::OpenOptions::new().create(true).append(true).open(dump).unwrap();
+        let _ = f.write_all(line.as_bytes());
+    }
     if err.contains("panicked") {
         return Outcome::Panic(err.lines().take(2).collect::<Vec<_>>().join(" | "));
     }
@@ -714,7 +740,7 @@ fn judge(input: &Input, dir: &Path) -> Outcome {
     let verdict = match &input.expect {
         Expect::Survives => match code {
             0 => Ok(()),
-            2 => one_line().map(|_| ()),
+            2 => one_line().and_then(located),
             1 if input.command == "law" => one_line().map(|_| ()),
             _ => Err(format!("exit {code}: {}", err.trim())),
         },
@@ -733,6 +759,15 @@ fn judge(input: &Input, dir: &Path) -> Outcome {
     match verdict {
         Ok(()) => Outcome::Ok,
         Err(e) => Outcome::Wrong(e),
+    }
+}
+
+/// A refusal's line must start with a location (a JSON path, or a file and line) before
+/// its message.
+fn located(line: &str) -> Result<(), String> {
+    match line.split_once(": ") {
+        Some((location, message)) if !location.is_empty() && !message.is_empty() => Ok(()),
+        _ => Err(format!("no location: {line}")),
     }
 }
 

@@ -225,7 +225,8 @@ fn material_volume_and_mass_monitors() {
     use serde_json::json;
     bad(&|j| j["monitors"][0]["box"]["min"] = json!([0.0, 0.0, 0.0]), "monitors[0].box.min");
     bad(&|j| j["monitors"][1]["box"]["max"] = json!([-0.01, 0.1]), "monitors[1].box.max[0]");
-    bad(&|j| j["monitors"][1]["box"]["lower"] = json!([0.0, 0.0]), "monitors[1]: unknown field `lower`");
+    // the unknown key named at its own path inside the tagged monitor (issue 16)
+    bad(&|j| j["monitors"][1]["box"]["lower"] = json!([0.0, 0.0]), "monitors[1].box.lower: unknown field `lower`");
     let mut fem = case("cantilever_fem.json");
     fem.monitors.push(MonitorSpec::MaterialMass { name: "m".into(), within: None });
     let err = Simulation::new(fem).err().expect("no material points is an error");

@@ -666,10 +666,12 @@ fn couple_grids(
         let tol = line_tolerance(&mesh.coords);
         let nodes =
             select_region(&spec.region, region_spec, &mesh.coords, dim, &mesh.node_groups, tol).map_err(|e| {
-                CaseError::new(
-                    format!("{loc}.region"),
-                    format!("selects no node of '{}' ({})", spec.structure, e.message),
-                )
+                let message = if e.message.starts_with("selects no node") {
+                    format!("selects no node of '{}' (check the coordinates against its mesh)", spec.structure)
+                } else {
+                    format!("region '{}' on '{}': {}", spec.region, spec.structure, e.message)
+                };
+                CaseError::new(format!("{loc}.region"), message)
             })?;
         if let Some(band) = spec.band {
             check_positive(&format!("{loc}.band"), band)?;
