@@ -47,7 +47,7 @@ fn run_cantilever_writes_monitors_and_vtk() {
 
 /// Issue 3 acceptance: `loam law cases/laws/mc_triaxial_drained.json --out D` writes
 /// D/path.csv whose largest q is within 1 % of the closed-form Mohr–Coulomb peak
-/// σ₃ (1 + sin φ)/(1 − sin φ) + 2 c cos φ/(1 − sin φ) − σ₃ = 162.146 kPa.
+/// σ₃ (1 + sin φ)/(1 − sin φ) + 2 c cos φ/(1 − sin φ) − σ₃ = 162.088 kPa.
 #[test]
 fn law_driver_mohr_coulomb_triaxial_peak() {
     let out = temp_dir("law");

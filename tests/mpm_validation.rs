@@ -59,6 +59,13 @@ fn cantilever_mpm_static_beside_fem() {
         100.0 * (e_point - e_grid).abs()
     );
     assert_abs_diff_eq!(e_point, e_grid, epsilon = 1e-3);
+    let e_wrong = u_p[1] / timoshenko(7.0) - 1.0;
+    println!(
+        "the point against the beam at x = 7 instead: {:+.3} %, {:.3} points from the tip node's",
+        100.0 * e_wrong,
+        100.0 * (e_wrong - e_grid).abs()
+    );
+    assert!((e_wrong - e_grid).abs() > 1e-3, "the agreement check must reject the un-fixed measurement point");
     let (wm, wf) = (last(&mpm, &hm, "strain_energy"), last(&fem, &hf, "strain_energy"));
     println!("strain energy: FEM {wf:.9} J, MPM {wm:.9} J (consistency, 1e-9)");
     assert_relative_eq!(wm, wf, max_relative = 1e-9);
