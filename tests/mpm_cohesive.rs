@@ -210,7 +210,7 @@ fn output_times_are_hit_exactly() {
     c.output.times = vec![0.123, 0.25];
     let mut sim = Simulation::new(c).expect("case builds");
     let dir = std::env::temp_dir().join(format!("loam_output_times_{}", std::process::id()));
-    let (end, _) = loam::run::run(&mut sim, &dir, false).expect("output written");
+    let (end, _) = loam::run::run(&mut sim, &dir, &loam::run::RunOptions::default()).expect("output written");
     assert!(matches!(end, loam::run::RunEnd::Finished));
     let pvd = std::fs::read_to_string(dir.join("soil.pvd")).expect("series written");
     std::fs::remove_dir_all(&dir).ok();

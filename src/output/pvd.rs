@@ -55,6 +55,14 @@ impl PvdSeries {
         Ok(())
     }
 
+    /// A series to be written to `path` that already holds `steps` (a resumed run); the
+    /// `.pvd` is rewritten with them.
+    pub fn resume(path: impl Into<PathBuf>, steps: Vec<(f64, String, usize)>) -> Result<Self, OutputError> {
+        let series = Self { path: path.into(), steps };
+        series.write()?;
+        Ok(series)
+    }
+
     /// Path of the `.pvd` file.
     pub fn path(&self) -> &Path {
         &self.path
