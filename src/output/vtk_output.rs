@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use loam_fem::domain::Field;
 
-use super::pvd::PvdSeries;
+use super::pvd::{DataSet, PvdSeries};
 use super::vtk::{write_vtu, VtuCells, VtuField};
 use crate::simulation::Simulation;
 
@@ -17,8 +17,8 @@ use crate::simulation::Simulation;
 /// the `<case>.pvd` of all parts.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct VtkState {
-    series: Vec<(String, Vec<(f64, String, usize)>)>,
-    all: Option<Vec<(f64, String, usize)>>,
+    series: Vec<(String, Vec<DataSet>)>,
+    all: Option<Vec<DataSet>>,
 }
 
 /// One `.pvd` series per output name, in the order the model first gave them.
