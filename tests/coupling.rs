@@ -514,3 +514,40 @@ fn concrete_plate_equals_a_fixed_obstacle() {
     );
     report("peak force on the plate (10 ms mean), concrete vs held [N/m]", fc, ff, 0.10);
 }
+
+/// Issue 14 item 9 (and 16): a background grid with a degenerate cell — a Gmsh quad with two
+/// nodes at one place, or a structured grid whose size overflows — is refused by `loam check`
+/// with one line naming the JSON path and the cell (exit 2), not a panic in the middle of a run.
+#[test]
+fn degenerate_grid_cells_are_refused_at_check() {
+    let dir = std::env::temp_dir().join(format!("loam_degenerate_grid_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("grid.msh"),
+        "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4 1 4\n2 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n1 0 0\n0 1 0\n$EndNodes\n\
+         $Elements\n1 1 1 1\n2 1 3 1\n1 1 2 3 4\n$EndElements\n",
+    )
+    .unwrap();
+    let base: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/cases/cantilever_mpm.json")).unwrap(),
+    )
+    .unwrap();
+    let mut gmsh = base.clone();
+    let d = &mut gmsh["domains"][0];
+    d.as_object_mut().unwrap().remove("grid");
+    d["grid_mesh"] = serde_json::json!({ "gmsh": "grid.msh" });
+    d["material_points"] = serde_json::json!({ "disk": { "centre": [0.3, 0.3], "radius": 0.1, "spacing": 0.05 } });
+    gmsh["monitors"] = serde_json::json!([]);
+    let mut huge = base;
+    huge["domains"][0]["grid"]["size"] = serde_json::json!([1e160, 1e160]);
+    for (name, case, path) in [("gmsh", gmsh, "domains[0].grid_mesh"), ("huge", huge, "domains[0].grid")] {
+        let file = dir.join(format!("{name}.json"));
+        std::fs::write(&file, case.to_string()).unwrap();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_loam")).arg("check").arg(&file).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        println!("{name}: exit {:?}: {stderr}", out.status.code());
+        assert_eq!(out.status.code(), Some(2));
+        assert_eq!(stderr.trim().lines().count(), 1);
+        assert!(stderr.contains(path) && stderr.contains("degenerate"), "{stderr}");
+    }
+}
