@@ -405,44 +405,26 @@ impl MpmDomain {
                         message: err.to_string(),
                     };
                     let body = body_ref;
+                    let mut contribute = |f: &mut [f64], k: Option<&mut [f64]>| {
+                        body.cell_contribution(&ctx, cell, &disp[..nn], &inertia[..nn], input, trial, out, f, k)
+                            .map_err(fail)
+                    };
                     if blocks.first_body[b] as usize == k {
-                        body.cell_contribution(
-                            &ctx,
-                            cell,
-                            &disp[..nn],
-                            &inertia[..nn],
-                            input,
-                            trial,
-                            out,
-                            fv,
-                            input.with_tangent.then_some(&mut *km),
-                        )
-                        .map_err(fail)
-                    } else {
-                        let mut f_scratch = [0.0; MAX_BLOCK];
-                        let mut k_scratch = [0.0; MAX_BLOCK * MAX_BLOCK];
-                        body.cell_contribution(
-                            &ctx,
-                            cell,
-                            &disp[..nn],
-                            &inertia[..nn],
-                            input,
-                            trial,
-                            out,
-                            &mut f_scratch[..nd],
-                            input.with_tangent.then_some(&mut k_scratch[..nd * nd]),
-                        )
-                        .map_err(fail)?;
-                        for (f, s) in fv.iter_mut().zip(&f_scratch) {
-                            *f += s;
-                        }
-                        if input.with_tangent {
-                            for (m, s) in km.iter_mut().zip(&k_scratch) {
-                                *m += s;
-                            }
-                        }
-                        Ok(())
+                        return contribute(fv, input.with_tangent.then_some(&mut *km));
                     }
+                    // a later body of the block: into scratch, then added
+                    let mut f_scratch = [0.0; MAX_BLOCK];
+                    let mut k_scratch = [0.0; MAX_BLOCK * MAX_BLOCK];
+                    contribute(&mut f_scratch[..nd], input.with_tangent.then_some(&mut k_scratch[..nd * nd]))?;
+                    for (f, s) in fv.iter_mut().zip(&f_scratch) {
+                        *f += s;
+                    }
+                    if input.with_tangent {
+                        for (m, s) in km.iter_mut().zip(&k_scratch) {
+                            *m += s;
+                        }
+                    }
+                    Ok(())
                 });
             body.restore_trial(trial);
             result?;
