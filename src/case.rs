@@ -573,6 +573,31 @@ pub struct AnalysisSpec {
     /// End the run before `end_time` once the bodies are at rest.
     #[serde(default)]
     pub stop_at_rest: Option<RestSpec>,
+    /// Periodic checkpoints of `loam run` (`DIR/checkpoints/step_<k>.ckpt`), from which
+    /// `loam run --resume` continues.
+    #[serde(default)]
+    pub checkpoint: Option<CheckpointSpec>,
+}
+
+/// When `loam run` writes checkpoints (`analysis.checkpoint`): every `every_steps` steps
+/// and/or every `every_seconds` of wall time (whichever comes first), keeping the newest
+/// `keep`. An interrupted run writes one whatever this says.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CheckpointSpec {
+    /// Steps between checkpoints.
+    #[serde(default)]
+    pub every_steps: Option<usize>,
+    /// Wall-clock seconds between checkpoints.
+    #[serde(default)]
+    pub every_seconds: Option<f64>,
+    /// How many checkpoints to keep (default 2).
+    #[serde(default = "default_keep")]
+    pub keep: usize,
+}
+
+fn default_keep() -> usize {
+    2
 }
 
 fn default_cuts() -> u32 {

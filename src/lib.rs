@@ -6,6 +6,7 @@
 //! live in the member crates `loam-laws`, `loam-fem`, `loam-mpm` and `loam-coupling`.
 
 pub mod case;
+pub mod checkpoint;
 pub mod fmu_package;
 pub mod input;
 pub mod model_builder;

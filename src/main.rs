@@ -2,10 +2,13 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 use clap::{Parser, Subcommand};
 use loam::case::CaseError;
-use loam::run::{default_out_dir, run, RunEnd};
+use loam::checkpoint;
+use loam::run::{default_out_dir, run, RunEnd, RunOptions};
 use loam::simulation::Simulation;
 
 /// Implicit MPM and Lagrangian FEM for large-deformation solid and soil mechanics.
@@ -42,6 +45,10 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Continue from a checkpoint: the given file, or without one the newest in
+        /// DIR/checkpoints (results in DIR continue without duplicate or missing rows).
+        #[arg(long, value_name = "CHECKPOINT", num_args = 0..=1)]
+        resume: Option<Option<PathBuf>>,
     },
     /// Check a case file (parse, parameters, mesh, regions) without running it.
     Check {
@@ -238,7 +245,7 @@ fn main() -> ExitCode {
             }
             Err(e) => bad_input(&e),
         },
-        Command::Run { case, out, threads, quiet } => {
+        Command::Run { case, out, threads, quiet, resume } => {
             if threads == Some(0) {
                 eprintln!("error: --threads must be at least 1");
                 return ExitCode::from(2);
@@ -247,7 +254,7 @@ fn main() -> ExitCode {
             // run there, without waking a worker and sleeping on every call (which cost about
             // 1 ms per step at 448 material points)
             match rayon::ThreadPoolBuilder::new().num_threads(threads.unwrap_or(0)).build() {
-                Ok(pool) => pool.install(|| run_case(&case, out, quiet)),
+                Ok(pool) => pool.install(|| run_case(&case, out, quiet, resume)),
                 Err(e) => {
                     eprintln!("error: thread pool: {e}");
                     ExitCode::from(1)
@@ -331,14 +338,63 @@ fn read_path_file(path: &std::path::Path) -> Result<loam_laws::driver::PathFile,
     })
 }
 
-/// `loam run`: builds the case, runs it with output to `out` and prints the summary line.
-fn run_case(case: &std::path::Path, out: Option<PathBuf>, quiet: bool) -> ExitCode {
+/// Exit code of a run stopped by SIGINT/SIGTERM after writing a checkpoint (128 + SIGINT).
+const INTERRUPTED: u8 = 130;
+
+/// A flag that SIGINT and SIGTERM set (the run finishes its step, checkpoints and stops); a
+/// second signal ends the process at once.
+fn interrupt_flag() -> Option<Arc<AtomicBool>> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let set = flag.clone();
+    let installed = ctrlc::set_handler(move || {
+        if set.swap(true, Ordering::SeqCst) {
+            eprintln!("\nloam: interrupted again: stopping now, without a checkpoint of the current step");
+            std::process::exit(i32::from(INTERRUPTED));
+        }
+        eprintln!("\nloam: interrupted: finishing the current step, then writing a checkpoint (again to stop now)");
+    });
+    installed.ok().map(|()| flag)
+}
+
+/// `loam run`: builds the case (and restores a checkpoint with `--resume`), runs it with
+/// output to `out` and prints the summary line.
+fn run_case(case: &std::path::Path, out: Option<PathBuf>, quiet: bool, resume: Option<Option<PathBuf>>) -> ExitCode {
     let mut sim = match Simulation::from_file(case) {
         Ok(s) => s,
         Err(e) => return bad_input(&e),
     };
     let out = out.unwrap_or_else(|| default_out_dir(&sim.case.name));
-    match run(&mut sim, &out, !quiet) {
+    let fingerprint = std::fs::read_to_string(case).map(|t| checkpoint::fingerprint(&t)).unwrap_or(0);
+    let mut options =
+        RunOptions { progress: !quiet, case_fingerprint: fingerprint, resume: None, interrupt: interrupt_flag() };
+    if let Some(given) = resume {
+        let path = match given.or_else(|| checkpoint::list(&out).pop()) {
+            Some(p) => p,
+            None => {
+                eprintln!("error: --resume: no checkpoint in {}", checkpoint::directory(&out).display());
+                return ExitCode::from(2);
+            }
+        };
+        let restored = checkpoint::read(&path, fingerprint).map_err(|e| e.to_string()).and_then(|c| {
+            sim.restore_state(c.simulation, c.model)
+                .map_err(|e| format!("{}: does not fit this case: {e}", path.display()))
+                .map(|()| c.writer)
+        });
+        match restored {
+            Ok(writer) => {
+                if !quiet {
+                    println!("loam: resuming from {} (step {}, t = {:.6e} s)", path.display(), sim.step, sim.time());
+                }
+                // a checkpoint without results (none written yet) starts them afresh
+                options.resume = writer;
+            }
+            Err(e) => {
+                eprintln!("error: --resume: {e}");
+                return ExitCode::from(2);
+            }
+        }
+    }
+    match run(&mut sim, &out, &options) {
         Ok((end, wall)) => {
             let t = &sim.stats.timings;
             let solver = sim.model.solver_timings();
@@ -380,6 +436,18 @@ fn run_case(case: &std::path::Path, out: Option<PathBuf>, quiet: bool) -> ExitCo
                         out.display()
                     );
                     ExitCode::from(1)
+                }
+                RunEnd::Interrupted(path) => {
+                    eprintln!(
+                        "loam: interrupted at t = {:.6e} s (step {}): results so far in {}, checkpoint {}; resume with: loam run {} --out {} --resume",
+                        sim.time(),
+                        sim.step,
+                        out.display(),
+                        path.display(),
+                        case.display(),
+                        out.display()
+                    );
+                    ExitCode::from(INTERRUPTED)
                 }
             }
         }

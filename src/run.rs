@@ -2,13 +2,23 @@
 //! results as it goes, and on failure keeps everything converged so far. The run report
 //! `summary.json` is written when the loop starts and rewritten when it ends, however it
 //! ends.
+//!
+//! Nothing converged is lost: checkpoints are written as `analysis.checkpoint` says; an
+//! interruption (SIGINT, SIGTERM) lets the current step finish, writes its results and a
+//! checkpoint, and ends the run ([`RunEnd::Interrupted`]); if writing the results fails
+//! (a full disk), the state is saved as a checkpoint in the system's temporary directory
+//! and the error says where.
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::output::results::ResultWriter;
+use crate::case::CheckpointSpec;
+use crate::checkpoint::{self, Checkpoint};
+use crate::output::results::{ResultWriter, WriterState};
 use crate::output::summary::{seconds, RunEndReport, RunStatus, RunSummary, WallTimeReport};
 use crate::simulation::{RunError, Simulation};
 
@@ -19,14 +29,30 @@ pub enum RunEnd {
     Finished,
     /// Stopped by a step that failed after all cuts; results up to `error.time` written.
     Failed(RunError),
+    /// Interrupted after a converged step; results so far and a checkpoint (this file)
+    /// written.
+    Interrupted(PathBuf),
 }
 
-/// Runs `sim` to its end time writing into `out_dir`; `progress` shows a progress bar.
-/// Returns how the run ended and its wall time (s).
-pub fn run(sim: &mut Simulation, out_dir: &Path, progress: bool) -> std::io::Result<(RunEnd, f64)> {
+/// How to run.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Show a progress bar.
+    pub progress: bool,
+    /// [`checkpoint::fingerprint`] of the case file (stored in checkpoints).
+    pub case_fingerprint: u32,
+    /// Continue the results of a checkpoint (the simulation is restored already).
+    pub resume: Option<WriterState>,
+    /// Set by a signal handler: finish the step, checkpoint and stop.
+    pub interrupt: Option<Arc<AtomicBool>>,
+}
+
+/// Runs `sim` to its end time writing into `out_dir` (see the module doc). Returns how the
+/// run ended and its wall time (s).
+pub fn run(sim: &mut Simulation, out_dir: &Path, options: &RunOptions) -> std::io::Result<(RunEnd, f64)> {
     let start = Instant::now();
     let mut output_time = 0.0;
-    let result = run_loop(sim, out_dir, progress, &mut output_time);
+    let result = run_loop(sim, out_dir, options, &mut output_time);
     let wall = start.elapsed().as_secs_f64();
     let mut summary =
         RunSummary::of(sim, RunStatus::Running, WallTimeReport::new(wall, &sim.stats.timings, output_time));
@@ -36,6 +62,10 @@ pub fn run(sim: &mut Simulation, out_dir: &Path, progress: bool) -> std::io::Res
         }
         Ok(RunEnd::Finished) => (RunStatus::Finished, format!("reached the end time {}", seconds(sim.end_time()))),
         Ok(RunEnd::Failed(e)) => (RunStatus::Failed, format!("stopped at {e}")),
+        Ok(RunEnd::Interrupted(path)) => (
+            RunStatus::Interrupted,
+            format!("interrupted at t = {}; checkpoint {}", seconds(sim.time()), path.display()),
+        ),
         Err(e) => (RunStatus::OutputError, format!("writing results to {}: {e}", out_dir.display())),
     };
     summary.status = status;
@@ -53,22 +83,109 @@ pub fn run(sim: &mut Simulation, out_dir: &Path, progress: bool) -> std::io::Res
     }
 }
 
+/// When the next checkpoint is due.
+struct CheckpointClock {
+    spec: Option<CheckpointSpec>,
+    last_step: usize,
+    last_time: Instant,
+}
+
+impl CheckpointClock {
+    fn due(&self, step: usize) -> bool {
+        let Some(spec) = self.spec else { return false };
+        spec.every_steps.is_some_and(|n| step >= self.last_step + n)
+            || spec.every_seconds.is_some_and(|s| self.last_time.elapsed().as_secs_f64() >= s)
+    }
+
+    fn reset(&mut self, step: usize) {
+        self.last_step = step;
+        self.last_time = Instant::now();
+    }
+}
+
+/// The checkpoint of `sim` with the writer's state `writer`.
+fn checkpoint_of(sim: &Simulation, writer: Option<WriterState>, fingerprint: u32) -> Checkpoint {
+    Checkpoint {
+        loam_version: env!("CARGO_PKG_VERSION").to_string(),
+        case_name: sim.case.name.clone(),
+        case_fingerprint: fingerprint,
+        simulation: sim.save_state(),
+        model: sim.model.save_state(),
+        writer,
+    }
+}
+
+/// Writes the checkpoint of the committed state to `out_dir/checkpoints` (keeping the
+/// newest `keep`) and returns its file.
+fn write_checkpoint(
+    sim: &Simulation,
+    writer: &mut ResultWriter,
+    out_dir: &Path,
+    fingerprint: u32,
+    keep: usize,
+) -> std::io::Result<PathBuf> {
+    let path = checkpoint::path_of(out_dir, sim.step);
+    let state = writer.state()?;
+    checkpoint::write(&path, &checkpoint_of(sim, Some(state), fingerprint)).map_err(std::io::Error::other)?;
+    checkpoint::prune(out_dir, keep);
+    Ok(path)
+}
+
+/// After a failure to write results: the committed state as a checkpoint in the system's
+/// temporary directory (the writer's state as of its last complete row), and the error
+/// with where it went.
+fn rescue(sim: &Simulation, writer: Option<WriterState>, fingerprint: u32, error: std::io::Error) -> std::io::Error {
+    let path =
+        std::env::temp_dir().join(format!("loam_{}_{}_step_{}.ckpt", sim.case.name, std::process::id(), sim.step));
+    match checkpoint::write(&path, &checkpoint_of(sim, writer, fingerprint)) {
+        Ok(()) => std::io::Error::new(
+            error.kind(),
+            format!(
+                "{error}; the state at t = {} (step {}) was saved to {} (free space, then resume with --resume {})",
+                seconds(sim.time()),
+                sim.step,
+                path.display(),
+                path.display()
+            ),
+        ),
+        Err(e) => std::io::Error::new(
+            error.kind(),
+            format!("{error}; saving the state at t = {} elsewhere failed too: {e}", seconds(sim.time())),
+        ),
+    }
+}
+
 /// The steps and the results written after each; `output_time` accumulates the time spent
 /// writing.
-fn run_loop(sim: &mut Simulation, out_dir: &Path, progress: bool, output_time: &mut f64) -> std::io::Result<RunEnd> {
+fn run_loop(
+    sim: &mut Simulation,
+    out_dir: &Path,
+    options: &RunOptions,
+    output_time: &mut f64,
+) -> std::io::Result<RunEnd> {
     let timed = |output_time: &mut f64, f: &mut dyn FnMut() -> std::io::Result<()>| {
         let t = Instant::now();
         let r = f();
         *output_time += t.elapsed().as_secs_f64();
         r
     };
-    let mut writer = ResultWriter::create(out_dir, sim)?;
+    let fingerprint = options.case_fingerprint;
+    let mut writer = match &options.resume {
+        Some(state) => ResultWriter::resume(out_dir, sim, state.clone())?,
+        None => ResultWriter::create(out_dir, sim)?,
+    };
     RunSummary::of(sim, RunStatus::Running, WallTimeReport::default()).write(out_dir)?;
-    timed(output_time, &mut || writer.write_step(sim, true))?;
+    if options.resume.is_none() {
+        timed(output_time, &mut || writer.write_step(sim, true))?;
+    }
+    let spec = sim.case.analysis.checkpoint;
+    let keep = spec.map_or(2, |s| s.keep);
+    let mut clock = CheckpointClock { spec, last_step: sim.step, last_time: Instant::now() };
+    let interrupted = || options.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst));
     // fixed steps: progress in steps; adaptive steps: in per mille of the end time
     let adaptive = sim.case.analysis.adaptive.is_some();
     let length = if adaptive { 1000 } else { sim.total_steps() as u64 };
-    let bar = if progress { ProgressBar::new(length) } else { ProgressBar::hidden() };
+    let bar = if options.progress { ProgressBar::new(length) } else { ProgressBar::hidden() };
     let template = if adaptive {
         "{bar:30} {percent}%  {msg}  [{elapsed_precise} < {eta}]"
     } else {
@@ -78,6 +195,10 @@ fn run_loop(sim: &mut Simulation, out_dir: &Path, progress: bool, output_time: &
     let end = loop {
         if sim.finished() {
             break RunEnd::Finished;
+        }
+        if interrupted() {
+            let path = write_checkpoint(sim, &mut writer, out_dir, fingerprint, keep)?;
+            break RunEnd::Interrupted(path);
         }
         match sim.step() {
             Ok(s) => {
@@ -101,7 +222,14 @@ fn run_loop(sim: &mut Simulation, out_dir: &Path, progress: bool, output_time: &
                     s.residual
                 ));
                 let last = sim.finished();
-                timed(output_time, &mut || writer.write_step(sim, last))?;
+                if let Err(e) = timed(output_time, &mut || writer.write_step(sim, last)) {
+                    bar.finish_and_clear();
+                    return Err(rescue(sim, writer.last_complete_state(), fingerprint, e));
+                }
+                if !last && clock.due(sim.step) {
+                    write_checkpoint(sim, &mut writer, out_dir, fingerprint, keep)?;
+                    clock.reset(sim.step);
+                }
             }
             Err(e) => break RunEnd::Failed(e),
         }

@@ -53,7 +53,7 @@ pub enum InputError {
 }
 
 /// Counters of a run.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RunStats {
     /// Converged steps (sub-steps included).
     pub steps: usize,
@@ -120,7 +120,65 @@ pub struct Simulation {
     pub at_rest: bool,
 }
 
+/// What a [`Simulation`] carries from step to step beside the model: counters and step
+/// control, for checkpoints.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct SimulationState {
+    /// Steps completed.
+    pub step: usize,
+    /// Counters.
+    pub stats: RunStats,
+    /// Whether the initial acceleration has been computed.
+    pub initialised: bool,
+    /// Values of the inputs, while set.
+    pub input_values: Vec<Option<f64>>,
+    /// Length of the next step.
+    pub time_step: f64,
+    /// Largest kinetic energy so far.
+    pub peak_kinetic_energy: f64,
+    /// Since when the kinetic energy has stayed below the rest threshold.
+    pub rest_since: Option<f64>,
+    /// Whether the rest criterion ended the run.
+    pub at_rest: bool,
+}
+
 impl Simulation {
+    /// The simulation's state beside the model ([`Simulation::restore_state`]).
+    pub fn save_state(&self) -> SimulationState {
+        SimulationState {
+            step: self.step,
+            stats: self.stats.clone(),
+            initialised: self.initialised,
+            input_values: self.input_values.clone(),
+            time_step: self.time_step,
+            peak_kinetic_energy: self.peak_kinetic_energy,
+            rest_since: self.rest_since,
+            at_rest: self.at_rest,
+        }
+    }
+
+    /// Restores a state of [`Simulation::save_state`] and the model's into a simulation
+    /// built from the same case (inputs set again to their saved values).
+    pub fn restore_state(&mut self, state: SimulationState, model: loam_fem::model::ModelState) -> Result<(), String> {
+        if state.input_values.len() != self.inputs.len() {
+            return Err(format!("{} inputs saved, the case has {}", state.input_values.len(), self.inputs.len()));
+        }
+        self.model.restore_state(model)?;
+        for (k, v) in state.input_values.iter().enumerate() {
+            if let Some(v) = v {
+                self.set_input_at(k, *v).map_err(|e| e.to_string())?;
+            }
+        }
+        self.step = state.step;
+        self.stats = state.stats;
+        self.initialised = state.initialised;
+        self.time_step = state.time_step;
+        self.peak_kinetic_energy = state.peak_kinetic_energy;
+        self.rest_since = state.rest_since;
+        self.at_rest = state.at_rest;
+        Ok(())
+    }
+
     /// Loads, checks and builds a case file.
     pub fn from_file(path: &Path) -> Result<Self, CaseError> {
         Self::new(Case::load(path)?)

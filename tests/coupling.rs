@@ -10,26 +10,29 @@ use loam::case::Case;
 use loam::simulation::Simulation;
 use loam_fem::dofs::Block;
 
-/// A slab of FEM (clamped at its base) under a block of Mohr–Coulomb soil as material
-/// points, joined on the slab's top face by an interface (`slip` or tied), dynamic.
-fn slab_and_soil(slip: bool) -> Case {
+/// A stiff FEM plate standing in Mohr–Coulomb soil (material points around it on a 6 × 4
+/// grid), joined on its two faces and top by an interface (`slip` or tied), dynamic, base
+/// fixed. Slip: the faces' and top's normals are along the axes (their components tied
+/// directly), the top corners' are inclined (both nodes in the normal's local frame).
+fn plate_in_soil(slip: bool) -> Case {
     let text = format!(
         r#"{{
-  "description": "FEM slab under MC soil, coupled on the slab's top face",
+  "description": "FEM plate in MC soil, coupled on its faces and top",
   "materials": {{
-    "slab": {{ "law": "neo_hookean", "density": 2500.0, "young_modulus": 3.0e7, "poisson_ratio": 0.2 }},
+    "plate": {{ "law": "neo_hookean", "density": 2500.0, "young_modulus": 3.0e7, "poisson_ratio": 0.2 }},
     "soil": {{ "law": "mohr_coulomb", "density": 1800.0, "young_modulus": 1.0e6, "poisson_ratio": 0.3,
               "friction_angle": 30.0, "cohesion": 1000.0, "dilatancy_angle": 5.0 }}
   }},
   "domains": [
-    {{ "name": "slab", "type": "fem", "material": "slab",
-       "mesh": {{ "rectangle": {{ "origin": [0.0, -0.1], "size": [0.4, 0.1], "cells": [4, 2], "element": "quad4" }} }} }},
+    {{ "name": "plate", "type": "fem", "material": "plate",
+       "mesh": {{ "rectangle": {{ "origin": [0.2, 0.0], "size": [0.2, 0.2], "cells": [2, 2], "element": "quad4" }} }} }},
     {{ "name": "soil", "type": "mpm", "material": "soil",
-       "grid": {{ "origin": [0.0, 0.0], "size": [0.4, 0.3], "cells": [4, 3], "element": "quad4" }},
-       "material_points": {{ "cells": {{ "mesh": {{ "rectangle": {{ "origin": [0.0, 0.0], "size": [0.4, 0.2], "cells": [4, 2], "element": "quad4" }} }}, "points_per_cell": 4 }} }} }}
+       "grid": {{ "origin": [0.0, 0.0], "size": [0.6, 0.4], "cells": [6, 4], "element": "quad4" }},
+       "material_points": {{ "polygon": {{ "vertices": [[0.0, 0.0], [0.2, 0.0], [0.2, 0.2], [0.4, 0.2], [0.4, 0.0], [0.6, 0.0], [0.6, 0.3], [0.0, 0.3]],
+                                          "spacing": 0.05 }} }} }}
   ],
-  "interfaces": [ {{ "name": "top", "soil": "soil", "structure": "slab", "region": "top", "slip": {slip} }} ],
-  "regions": {{ "base": {{ "y": -0.1 }}, "top": {{ "y": 0.0 }} }},
+  "interfaces": [ {{ "name": "faces", "soil": "soil", "structure": "plate", "region": "faces", "slip": {slip} }} ],
+  "regions": {{ "base": {{ "y": 0.0 }}, "faces": {{ "polyline": [[0.2, 0.0], [0.2, 0.2], [0.4, 0.2], [0.4, 0.0]] }} }},
   "boundary_conditions": [ {{ "region": "base", "displacement": [0.0, 0.0] }} ],
   "gravity": {{ "acceleration": [0.0, -9.81] }},
   "analysis": {{ "type": "dynamic", "time_step": 0.01, "end_time": 1.0 }},
@@ -42,11 +45,18 @@ fn slab_and_soil(slip: bool) -> Case {
 /// The consistent tangent of the coupled system is the derivative of its residual: central
 /// differences of `R(δu)` at a correction `δu₀` large enough to make the soil's points
 /// plastic (Mohr–Coulomb returns), compared entry by entry in every block row (soil,
-/// interface, structure), tied and slip; relative error < 1e-6 of the block's largest entry.
+/// interface, structure), tied and slip (ties along the axes and in local frames); relative
+/// error < 1e-6 of the block's largest entry.
 #[test]
 fn coupled_tangent_matches_finite_differences() {
     for slip in [false, true] {
-        let mut sim = Simulation::new(slab_and_soil(slip)).expect("builds");
+        let mut sim = Simulation::new(plate_in_soil(slip)).expect("builds");
+        let (ties, frames) = (sim.model.ties.len(), sim.model.frames.len());
+        println!("{} interface: {ties} tied DOFs, {frames} nodes in local frames", if slip { "slip" } else { "tied" });
+        if slip {
+            assert_eq!(frames, 4, "the two inclined top corners, soil and structure nodes");
+            assert!(ties > 2);
+        }
         let mut lin = sim.model.linearise(0.01).expect("step starts");
         let n = lin.num_equations();
         // a smooth deformation δu₀ of ~1e-3 m (strains ~1e-2: the soil yields)
@@ -83,54 +93,85 @@ fn coupled_tangent_matches_finite_differences() {
     }
 }
 
-/// A uniform stress state across the interface: a 1 m × 1 m FEM square tied to a 1 m × 1 m
-/// square of material points (4 per cell at the Gauss positions), stretched by 0.2 % along x
-/// with free top and roller base: every Gauss point and every material point carries the
-/// closed-form stress of the law to 1e-10. (The small-strain law gives the first
-/// Piola–Kirchhoff stress `P_xx = E/(1 − ν²) ε`, `P_yy = 0` with `ε_y = −ν/(1 − ν) ε`; the
-/// Cauchy stress is `σ_xx = P_xx / (1 + ε_y)`.)
+/// A uniform stress state across the interface: a unit FEM square (cube) joined to a unit
+/// square (cube) of material points at the Gauss positions of their cells, stretched by
+/// 0.2 % along x with free top and roller base (and back): every Gauss point and every
+/// material point carries the closed-form stress of the law to 1e-10 — quad4 and tri3 grids
+/// in plane strain, hex8 in 3D, tied and slip. (The small-strain law gives the first
+/// Piola–Kirchhoff stress `P_xx = E' ε` with the lateral strains that free the other
+/// directions; the Cauchy stress is `σ_xx = P_xx F_xx / J`: plane strain
+/// `E/(1 − ν²) ε / (1 − ν/(1 − ν) ε)`, 3D `E ε / (1 − ν ε)²`.)
 #[test]
 fn uniform_stress_patch_across_the_interface() {
-    let text = r#"{
+    let (e, nu, eps): (f64, f64, f64) = (1.0e7, 0.3, 0.002);
+    for (element, dim, points_per_cell) in [("quad4", 2, 4), ("tri3", 2, 3), ("hex8", 3, 8)] {
+        for slip in [false, true] {
+            let (mesh, size, cells, grid_origin) = if dim == 2 {
+                ("rectangle", "[1.0, 1.0]", "[4, 4]", "[1.0, 0.0]")
+            } else {
+                ("box", "[1.0, 1.0, 1.0]", "[3, 3, 3]", "[1.0, 0.0, 0.0]")
+            };
+            let origin = if dim == 2 { "[0.0, 0.0]" } else { "[0.0, 0.0, 0.0]" };
+            let (free, fixed_x, fixed_lateral) = if dim == 2 {
+                ("null", "[0.0, null]", "[null, 0.0]")
+            } else {
+                ("null, null", "[0.0, null, null]", "[null, 0.0, null]")
+            };
+            let (back_region, back) = if dim == 3 {
+                (r#", "back": { "z": 0.0 }"#, r#", { "region": "back", "displacement": [null, null, 0.0] }"#)
+            } else {
+                ("", "")
+            };
+            let text = format!(
+                r#"{{
   "description": "patch test across an MPM-FEM interface",
-  "materials": { "m": { "law": "linear_elastic", "density": 1000.0, "young_modulus": 1.0e7, "poisson_ratio": 0.3 } },
+  "formulation": "{formulation}",
+  "materials": {{ "m": {{ "law": "linear_elastic", "density": 1000.0, "young_modulus": {e}, "poisson_ratio": {nu} }} }},
   "domains": [
-    { "name": "left", "type": "fem", "material": "m",
-      "mesh": { "rectangle": { "origin": [0.0, 0.0], "size": [1.0, 1.0], "cells": [4, 4], "element": "quad4" } } },
-    { "name": "right", "type": "mpm", "material": "m",
-      "grid": { "origin": [1.0, 0.0], "size": [1.0, 1.0], "cells": [4, 4], "element": "quad4" },
-      "material_points": { "cells": { "mesh": { "rectangle": { "origin": [1.0, 0.0], "size": [1.0, 1.0], "cells": [4, 4], "element": "quad4" } }, "points_per_cell": 4 } } }
+    {{ "name": "left", "type": "fem", "material": "m",
+      "mesh": {{ "{mesh}": {{ "origin": {origin}, "size": {size}, "cells": {cells}, "element": "{element}" }} }} }},
+    {{ "name": "right", "type": "mpm", "material": "m",
+      "grid": {{ "origin": {grid_origin}, "size": {size}, "cells": {cells}, "element": "{element}" }},
+      "material_points": {{ "cells": {{ "mesh": {{ "{mesh}": {{ "origin": {grid_origin}, "size": {size}, "cells": {cells}, "element": "{element}" }} }}, "points_per_cell": {points_per_cell} }} }} }}
   ],
-  "interfaces": [ { "name": "cut", "soil": "right", "structure": "left", "region": "cut" } ],
-  "regions": { "cut": { "x": 1.0 }, "left_end": { "x": 0.0 }, "right_end": { "x": 2.0 }, "base": { "y": 0.0 } },
+  "interfaces": [ {{ "name": "cut", "soil": "right", "structure": "left", "region": "cut", "slip": {slip} }} ],
+  "regions": {{ "cut": {{ "x": 1.0 }}, "left_end": {{ "x": 0.0 }}, "right_end": {{ "x": 2.0 }}, "base": {{ "y": 0.0 }}{back_region} }},
   "boundary_conditions": [
-    { "region": "left_end", "displacement": [0.0, null] },
-    { "region": "right_end", "displacement": [0.004, null] },
-    { "region": "base", "displacement": [null, 0.0] }
+    {{ "region": "left_end", "displacement": {fixed_x} }},
+    {{ "region": "right_end", "displacement": [0.004, {free}] }},
+    {{ "region": "base", "displacement": {fixed_lateral} }}{back}
   ],
-  "analysis": { "type": "static", "time_step": 1.0, "end_time": 1.0 },
-  "solver": { "residual_relative_tolerance": 1e-12, "residual_absolute_tolerance": 1e-9 },
-  "output": { "vtk": false }
-}"#;
-    let (sim, _) = run(Case::parse(text).unwrap());
-    let (e, nu, eps) = (1.0e7, 0.3, 0.002);
-    let expected = e / (1.0 - nu * nu) * eps / (1.0 - nu / (1.0 - nu) * eps);
-    let mut worst = 0.0f64;
-    for name in ["left", "right"] {
-        let out = sim.model.output(name).unwrap();
-        let (fields, per) = if name == "left" {
-            (&out.cell_fields, out.cell_fields[0].values.len() / 9)
-        } else {
-            (&out.point_fields, out.points.len())
-        };
-        let stress = &fields.iter().find(|f| f.name == "cauchy_stress").unwrap().values;
-        for p in 0..per {
-            worst = worst.max((stress[9 * p] - expected).abs() / expected).max(stress[9 * p + 4].abs() / expected);
+  "analysis": {{ "type": "static", "time_step": 1.0, "end_time": 1.0 }},
+  "solver": {{ "residual_relative_tolerance": 1e-12, "residual_absolute_tolerance": 1e-9 }},
+  "output": {{ "vtk": false }}
+}}"#,
+                formulation = if dim == 2 { "plane_strain" } else { "3d" },
+            );
+            let (sim, _) = run(Case::parse(&text).unwrap());
+            let expected = if dim == 2 {
+                e / (1.0 - nu * nu) * eps / (1.0 - nu / (1.0 - nu) * eps)
+            } else {
+                e * eps / (1.0 - nu * eps).powi(2)
+            };
+            let mut worst = 0.0f64;
+            let mut count = 0;
+            for name in ["left", "right"] {
+                let out = sim.model.output(name).unwrap();
+                let fields = if name == "left" { &out.cell_fields } else { &out.point_fields };
+                let stress = &fields.iter().find(|f| f.name == "cauchy_stress").unwrap().values;
+                for p in stress.chunks(9) {
+                    let lateral = p[4].abs().max(p[8].abs() * f64::from(u8::from(dim == 3)));
+                    worst = worst.max((p[0] - expected).abs() / expected).max(lateral / expected);
+                    count += 1;
+                }
+            }
+            println!(
+                "{element} ({dim}D), {}: {count} stress points, sigma_xx = {expected:.4} Pa expected, largest relative deviation {worst:.2e} (tolerance 1e-10)",
+                if slip { "slip" } else { "tied" }
+            );
+            assert!(worst < 1e-10);
         }
-        println!("{name}: {per} stress points");
     }
-    println!("uniform stress across the interface: sigma_xx = {expected:.3} Pa expected, largest relative deviation {worst:.2e} (tolerance 1e-10)");
-    assert!(worst < 1e-10);
 }
 
 /// Timoshenko deflection `w(x) = q/(24EI)(x⁴ − 4Lx³ + 6L²x²) + q(Lx − x²/2)/(κGA)` of the
@@ -191,8 +232,14 @@ fn beam_split_fem_clamped_mpm_free() {
         single_interface,
         0.01,
     );
-    report("clamp reaction = weight of the beam [N]", last(&sim, &h, "clamp_reaction_y"), 78480.0, 1e-9);
-    report("interface force = weight of the MPM half [N]", last(&sim, &h, "interface_force_y"), -39240.0, 1e-9);
+    report_split_reactions(&sim, &h, -39240.0);
+}
+
+/// Both splits: the clamp carries the whole weight, the interface the far half's (`far`, N:
+/// the force of the soil side on the structure side).
+fn report_split_reactions(sim: &Simulation, h: &common::History, far: f64) {
+    report("clamp reaction = weight of the beam [N]", last(sim, h, "clamp_reaction_y"), 78480.0, 1e-9);
+    report("interface force = weight of the far half [N]", last(sim, h, "interface_force_y"), far, 1e-9);
 }
 
 /// The material point that the `tip_uy` monitor follows.
@@ -219,8 +266,7 @@ fn beam_split_mpm_clamped_fem_free() {
         single_interface,
         0.01,
     );
-    report("clamp reaction = weight of the beam [N]", last(&sim, &h, "clamp_reaction_y"), 78480.0, 1e-9);
-    report("interface force = weight of the FEM half, upward [N]", last(&sim, &h, "interface_force_y"), 39240.0, 1e-9);
+    report_split_reactions(&sim, &h, 39240.0);
 }
 
 /// Benchmark 12, dynamic (`cases/coupled_beam_split_dynamic.json`, gravity applied
@@ -472,4 +518,41 @@ fn concrete_plate_equals_a_fixed_obstacle() {
         smoothed_peak(&series(&held, &hf, "obstacle_force_x"), 0.01),
     );
     report("peak force on the plate (10 ms mean), concrete vs held [N/m]", fc, ff, 0.10);
+}
+
+/// Issue 14 item 9 (and 16): a background grid with a degenerate cell — a Gmsh quad with two
+/// nodes at one place, or a structured grid whose size overflows — is refused by `loam check`
+/// with one line naming the JSON path and the cell (exit 2), not a panic in the middle of a run.
+#[test]
+fn degenerate_grid_cells_are_refused_at_check() {
+    let dir = std::env::temp_dir().join(format!("loam_degenerate_grid_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("grid.msh"),
+        "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4 1 4\n2 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n1 0 0\n0 1 0\n$EndNodes\n\
+         $Elements\n1 1 1 1\n2 1 3 1\n1 1 2 3 4\n$EndElements\n",
+    )
+    .unwrap();
+    let base: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/cases/cantilever_mpm.json")).unwrap(),
+    )
+    .unwrap();
+    let mut gmsh = base.clone();
+    let d = &mut gmsh["domains"][0];
+    d.as_object_mut().unwrap().remove("grid");
+    d["grid_mesh"] = serde_json::json!({ "gmsh": "grid.msh" });
+    d["material_points"] = serde_json::json!({ "disk": { "centre": [0.3, 0.3], "radius": 0.1, "spacing": 0.05 } });
+    gmsh["monitors"] = serde_json::json!([]);
+    let mut huge = base;
+    huge["domains"][0]["grid"]["size"] = serde_json::json!([1e160, 1e160]);
+    for (name, case, path) in [("gmsh", gmsh, "domains[0].grid_mesh"), ("huge", huge, "domains[0].grid")] {
+        let file = dir.join(format!("{name}.json"));
+        std::fs::write(&file, case.to_string()).unwrap();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_loam")).arg("check").arg(&file).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        println!("{name}: exit {:?}: {stderr}", out.status.code());
+        assert_eq!(out.status.code(), Some(2));
+        assert_eq!(stderr.trim().lines().count(), 1);
+        assert!(stderr.contains(path) && stderr.contains("degenerate"), "{stderr}");
+    }
 }

@@ -1,15 +1,15 @@
 //! FEM validation (issue 2): benchmark 1 (static and dynamic cantilever), patch tests of
-//! every element type and formulation, quadratic Newton convergence, Lamé's thick cylinder
+//! every element type and formulation, Lamé's thick cylinder
 //! (axisymmetric), a 3D hex8 cantilever, and two domains sharing interface nodes.
 //! Each test prints measured vs reference and asserts its tolerance.
 
 mod common;
 
+use approx::assert_abs_diff_eq;
 use std::sync::Arc;
 
-use common::{case, frequency, monitor, report, run as run_to_end};
+use common::{case, euler_bernoulli, frequency, monitor, report, run as run_to_end, timoshenko};
 use loam::case::Case;
-use loam::simulation::Simulation;
 use loam_fem::element::ElementType;
 use loam_fem::formulation::Formulation;
 use loam_fem::mesh::Mesh;
@@ -19,12 +19,22 @@ use loam_fem::solid_domain::FemDomain;
 use loam_laws::neo_hookean::NeoHookean;
 use nalgebra::Matrix3;
 
-/// Benchmark 1, static: Euler–Bernoulli q L⁴/(8 E I) = −0.39256 m, tolerance 3 %.
+/// Benchmark 1, static, quad4 56 × 8: the tip node's deflection (7, 0.5) against Timoshenko
+/// at x = 7, −0.39897 m (Euler–Bernoulli q L⁴/(8 E I) = −0.39256 m, BENCHMARKS.md, plus the
+/// shear deflection q L²/(2 κ G A) = −0.00641 m). Tolerance 2 %: the discretisation error
+/// at 8 cells through the depth is 0.8 % and the geometric nonlinearity 0.24 %
+/// (`tests/convergence.rs`: order 2, Richardson limit −0.3980 m); measured −1.03 %.
+/// BENCHMARKS.md allows 3 % against Euler–Bernoulli (printed).
 #[test]
 fn cantilever_static_tip_deflection() {
     let (sim, h) = run_to_end(case("cantilever_fem.json"));
     let tip = h.last().unwrap().1[monitor(&sim, "tip_uy")];
-    report("benchmark 1 static tip_uy [m]", tip, -0.39256, 0.03);
+    println!(
+        "Euler–Bernoulli at x = 7: {:.5} m ({:+.2} %)",
+        euler_bernoulli(7.0),
+        100.0 * (tip / euler_bernoulli(7.0) - 1.0)
+    );
+    report("benchmark 1 static tip_uy vs Timoshenko [m]", tip, timoshenko(7.0), 0.02);
     // the clamp carries the weight ρ g L h b
     let reaction = h.last().unwrap().1[monitor(&sim, "clamp_reaction_y")];
     report("clamp reaction [N]", reaction, 1000.0 * 9.81 * 7.0, 1e-9);
@@ -132,32 +142,6 @@ fn patch_test_every_element_and_formulation() {
     }
 }
 
-/// Newton converges quadratically on a large-deflection hyperelastic problem: the
-/// cantilever under five times its self-weight in one load step.
-#[test]
-fn newton_converges_quadratically() {
-    let mut c = case("cantilever_fem.json");
-    c.gravity.as_mut().unwrap().acceleration = vec![0.0, -5.0 * 9.81];
-    c.solver.residual_relative_tolerance = 1e-13;
-    c.solver.residual_absolute_tolerance = 1e-6;
-    let mut sim = Simulation::new(c).unwrap();
-    let r = sim.model.solve_step(1.0).expect("converges");
-    println!("residual history: {:?}", r.residuals.iter().map(|v| format!("{v:.3e}")).collect::<Vec<_>>());
-    let rel: Vec<f64> = r.residuals.iter().map(|v| v / r.residuals[0]).collect();
-    // order p = log(r_{k+1}) / log(r_k) over the last iterations in the asymptotic range
-    let orders: Vec<f64> =
-        rel.windows(2).filter(|w| w[0] < 1e-2 && w[1] > 1e-15).map(|w| w[1].ln() / w[0].ln()).collect();
-    println!(
-        "estimated convergence orders: {orders:?} (reference 2 for Newton with a consistent tangent; asserted ≥ 1.8)"
-    );
-    assert!(!orders.is_empty() && orders.iter().any(|&p| p >= 1.8));
-    let tip = sim.monitor_values()[monitor(&sim, "tip_uy")];
-    println!(
-        "tip deflection under 5 g: {tip:.4} m (geometrically nonlinear; Euler–Bernoulli linear would give {:.4})",
-        5.0 * -0.39256
-    );
-}
-
 /// Lamé's thick cylinder under internal pressure (axisymmetric, plane strain along the
 /// axis): `u_r(r) = (1+ν) a² p / (E (b² − a²)) ((1 − 2ν) r + b²/r)`, within 1 %.
 #[test]
@@ -186,8 +170,9 @@ fn thick_cylinder_matches_lame() {
     }
 }
 
-/// The cantilever of benchmark 1 in 3D with hex8 elements (b = 1 m, ν = 0): tip
-/// deflection within 3 % of Euler–Bernoulli −0.39256 m.
+/// The cantilever of benchmark 1 in 3D with hex8 elements (42 × 6 × 2, b = 1 m, ν = 0): the
+/// tip node (7, 0.5, 0.5) within 3 % (BENCHMARKS.md, FEM) of Timoshenko −0.39897 m (6 cells
+/// through the depth lock more than the 2D mesh's 8).
 #[test]
 fn hex8_cantilever_matches_beam_theory() {
     let text = r#"{
@@ -202,11 +187,17 @@ fn hex8_cantilever_matches_beam_theory() {
         "monitors": [{"name": "tip_uy", "type": "displacement", "point": [7, 0.5, 0.5], "component": "y"}]
     }"#;
     let (_, h) = run_to_end(Case::parse(text).unwrap());
-    report("hex8 cantilever tip_uy [m]", h.last().unwrap().1[0], -0.39256, 0.03);
+    let tip = h.last().unwrap().1[0];
+    println!(
+        "Euler–Bernoulli at x = 7: {:.5} m ({:+.2} %)",
+        euler_bernoulli(7.0),
+        100.0 * (tip / euler_bernoulli(7.0) - 1.0)
+    );
+    report("hex8 cantilever tip_uy vs Timoshenko [m]", tip, timoshenko(7.0), 0.03);
 }
 
-/// The coupling seam: the cantilever split into two FEM domains that share the interface
-/// nodes at x = 3.5 gives the single-domain answer to 1e-10.
+/// Consistency check (the coupling seam): the cantilever split into two FEM domains that
+/// share the interface nodes at x = 3.5 gives the single-domain answer to 1e-10.
 #[test]
 fn two_domains_sharing_nodes_equal_one_domain() {
     let single = case("cantilever_fem.json");
@@ -233,5 +224,5 @@ fn two_domains_sharing_nodes_equal_one_domain() {
     assert_eq!(s1.model.coords.len(), s2.model.coords.len(), "interface nodes are shared, not duplicated");
     let (a, b) = (h1.last().unwrap().1[0], h2.last().unwrap().1[0]);
     println!("tip_uy one domain {a:.12}, two domains {b:.12}, difference {:.2e} (tolerance 1e-10)", (a - b).abs());
-    assert!((a - b).abs() < 1e-10);
+    assert_abs_diff_eq!(a, b, epsilon = 1e-10);
 }

@@ -156,13 +156,12 @@ fn three_metre_cut_fails_and_flows() {
 }
 
 /// Bisection on the height between 1 m (stands) and 3 m (fails), 5 levels (2 m / 32 =
-/// 6 cm), on grids h = 0.1 m and h = 0.05 m. Long (about 3 minutes): `LOAM_LONG=1`.
+/// 6 cm), on grids h = 0.1 m and h = 0.05 m: the fine-grid critical height lies in
+/// [1.3, 1.9] m (BENCHMARKS.md, around Rankine's 1.73 m and the wedge's 1.66 m) and does not
+/// rise with refinement. Long (about 1 minute): run by `LOAM_LONG=1 scripts/test.sh`.
 #[test]
+#[ignore = "long (about 1 min): LOAM_LONG=1 scripts/test.sh"]
 fn critical_height_by_bisection() {
-    if std::env::var("LOAM_LONG").map_or(true, |v| v != "1") {
-        println!("critical_height_by_bisection: skipped (about 3 minutes; set LOAM_LONG=1 to run it)");
-        return;
-    }
     let mut results = Vec::new();
     for h in [0.1, 0.05] {
         let (mut stands, mut fails) = (1.0f64, 3.0f64);
@@ -211,7 +210,7 @@ fn output_times_are_hit_exactly() {
     c.output.times = vec![0.123, 0.25];
     let mut sim = Simulation::new(c).expect("case builds");
     let dir = std::env::temp_dir().join(format!("loam_output_times_{}", std::process::id()));
-    let (end, _) = loam::run::run(&mut sim, &dir, false).expect("output written");
+    let (end, _) = loam::run::run(&mut sim, &dir, &loam::run::RunOptions::default()).expect("output written");
     assert!(matches!(end, loam::run::RunEnd::Finished));
     let pvd = std::fs::read_to_string(dir.join("soil.pvd")).expect("series written");
     std::fs::remove_dir_all(&dir).ok();

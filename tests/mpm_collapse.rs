@@ -1,25 +1,50 @@
 //! Benchmark 8: non-cohesive column collapse against the aluminium-bar experiment of Bui et
 //! al. (2008), on quadrilateral and triangular grids. The runs end at rest
-//! (`analysis.stop_at_rest`); the final runout, height at the wall, free surface and failure
-//! line are compared with the digitised experiment in `tests/data/bui2008/`.
+//! (`analysis.stop_at_rest`); the final free surface, runout and failure line are compared
+//! with the digitised experiment in `tests/data/bui2008/` (a copy of
+//! `shared/benchmarks/bui2008/`, digitised from Bui et al. 2008, Int. J. Numer. Anal. Meth.
+//! Geomech. 32:1537–1570, figure of the final deposit; a few millimetres of digitising error).
+//!
+//! **What a wrong run does.** The tolerances are set so that the run the README calls wrong
+//! fails them: pure FLIP point velocities (no PIC share, `pic_relaxation_time` removed) leave
+//! a velocity noise that keeps the column creeping; it never comes to rest and runs out too
+//! far. [`bui2008_pure_flip_fails_the_tolerances`] (long suite) runs it and asserts that it
+//! fails the surface, runout and rest checks of [`check`].
 
 mod common;
 
 use std::path::Path;
 
-use common::{case, last, report, run};
+use common::{case_json, last, parse, run};
 use loam::monitor::point_extents;
 use loam::simulation::Simulation;
 use loam_fem::domain::PointQuantity;
 use loam_mpm::surface::SurfaceProfile;
 
-/// Experiment: runout (surface below 2 mm) and height at the wall (m).
+/// Experiment: runout (surface below 2 mm), height at the wall (m).
 const RUNOUT: f64 = 0.42;
 const HEIGHT_AT_WALL: f64 = 0.099;
-/// RMS of the vertical distance between the final surface and the experiment's (m): 5 % of
-/// the column height, a few times the digitising error of the data.
-const SURFACE_RMS_TOLERANCE: f64 = 0.005;
-/// Failure-line inclination tolerance (degrees).
+/// Runout tolerance (relative): the runout moves by 4 % between h = 5 mm and 2.5 mm (quad
+/// refinement, README "benchmark output"), so 5 % is the discretisation error at h = 5 mm;
+/// pure FLIP runs out 11 % too far.
+const RUNOUT_TOLERANCE: f64 = 0.05;
+/// RMS of the vertical distance between the final surface and the experiment's, over the 23
+/// digitised points from the wall to x = 0.44 m (m). 4 mm: the digitising error (a few mm)
+/// plus the 2 mm that the same case moves between adaptive and small steps (measured: quad
+/// 3.52 mm, tri 2.49 mm); pure FLIP, which spreads the deposit too thin, lies above it
+/// (4.39 mm at 2 s, still creeping).
+const SURFACE_RMS_TOLERANCE: f64 = 0.004;
+/// Failure line inclination (degrees). The experiment's line is 9 digitised points from
+/// (0.021, 0.099) to (0.179, 0.0005); the simulated one is fitted through the edge of the
+/// unmoved region (displacement below 2 mm) in 2.5 mm rows, so a one-cell (5 mm) offset at
+/// either end of its 0.1 m height turns it by about 3°: 5°.
+///
+/// Its position is printed, not asserted: the edge of the unmoved region is diffuse (the
+/// displacement grows over some 4 cm across it), so where it lies depends on the threshold —
+/// on the quad grid, x at mid-height moves from 0.099 to 0.110, 0.120, 0.126 and 0.131 m as
+/// the threshold doubles from 0.5 to 8 mm, while the angle stays within 33.7°–34.9° — and the
+/// experiment's threshold (what moved visibly in the photographs) is not known to that
+/// precision.
 const ANGLE_TOLERANCE: f64 = 5.0;
 
 fn read_xy(name: &str) -> Vec<(f64, f64)> {
@@ -72,40 +97,152 @@ fn failure_line(sim: &Simulation) -> (f64, f64) {
     fit_line(&line)
 }
 
-fn collapse(case_name: &str) {
-    let (sim, history) = run(case(case_name));
-    println!("{case_name}: {} steps, ended at t = {:.3} s", sim.stats.steps, sim.time());
-    assert!(sim.at_rest, "{case_name}: the column must come to rest before the end time");
-    report(&format!("{case_name} runout"), last(&sim, &history, "runout"), RUNOUT, 0.12);
-    report(&format!("{case_name} height at the wall"), last(&sim, &history, "height_at_wall"), HEIGHT_AT_WALL, 0.10);
-
-    let extents = point_extents(&sim.model);
-    let surface = SurfaceProfile::new(&extents, 0.0);
-    let rms = surface.rms_distance(&read_xy("surface.csv"));
-    println!(
-        "{case_name} final surface: RMS distance from the experiment {:.2} mm (tolerance {:.1} mm)",
-        rms * 1e3,
-        SURFACE_RMS_TOLERANCE * 1e3
-    );
-    assert!(rms <= SURFACE_RMS_TOLERANCE, "surface RMS {rms}");
-
-    let (a_exp, b_exp) = fit_line(&read_xy("failure.csv"));
-    let (a, b) = failure_line(&sim);
-    let (angle_exp, angle) = ((-b_exp).atan().to_degrees(), (-b).atan().to_degrees());
-    println!(
-        "{case_name} failure line: {angle:.1}° from the horizontal, meets the base at x = {:.3} m; experiment {angle_exp:.1}°, x = {:.3} m (tolerance {ANGLE_TOLERANCE}°)",
-        -a / b,
-        -a_exp / b_exp
-    );
-    assert!((angle - angle_exp).abs() <= ANGLE_TOLERANCE, "failure line angle {angle} vs {angle_exp}");
+/// What one collapse run measured.
+struct Collapse {
+    label: String,
+    at_rest: bool,
+    end: f64,
+    runout: f64,
+    height_at_wall: f64,
+    surface_rms: f64,
+    /// Failure line: angle from the horizontal (degrees), x at mid-height y = 0.05 m.
+    angle: f64,
+    x_mid: f64,
 }
 
+/// Failure line `(a, b)` as (angle from the horizontal in degrees, x at y = 0.05 m).
+fn line_measures((a, b): (f64, f64)) -> (f64, f64) {
+    ((-b).atan().to_degrees(), (0.05 - a) / b)
+}
+
+/// Runs `case` (to rest or its end time) and measures it against the experiment.
+fn measure(label: &str, case: loam::case::Case) -> Collapse {
+    let (sim, history) = run(case);
+    let extents = point_extents(&sim.model);
+    let surface = SurfaceProfile::new(&extents, 0.0);
+    let (angle, x_mid) = line_measures(failure_line(&sim));
+    let c = Collapse {
+        label: label.to_string(),
+        at_rest: sim.at_rest,
+        end: sim.time(),
+        runout: last(&sim, &history, "runout"),
+        height_at_wall: last(&sim, &history, "height_at_wall"),
+        surface_rms: surface.rms_distance(&read_xy("surface.csv")),
+        angle,
+        x_mid,
+    };
+    println!(
+        "{label}: {} steps, ended at t = {:.3} s{}",
+        sim.stats.steps,
+        c.end,
+        if c.at_rest { " (at rest)" } else { "" }
+    );
+    c
+}
+
+/// The checks of benchmark 8, each printed measured vs the experiment: whether each passes
+/// (at rest, runout, surface RMS, failure-line angle).
+fn check(c: &Collapse) -> [bool; 4] {
+    let (angle_exp, x_mid_exp) = line_measures(fit_line(&read_xy("failure.csv")));
+    let runout_err = (c.runout - RUNOUT) / RUNOUT;
+    let l = &c.label;
+    println!("{l}: at rest before the end time: {}", c.at_rest);
+    println!(
+        "{l}: runout {:.4} m, experiment {RUNOUT} m, error {:+.2} % (tolerance {:.0} %)",
+        c.runout,
+        100.0 * runout_err,
+        100.0 * RUNOUT_TOLERANCE
+    );
+    println!(
+        "{l}: final surface RMS distance from the experiment {:.2} mm (tolerance {:.1} mm); height at the wall {:.4} m \
+         (experiment {HEIGHT_AT_WALL} m, initial 0.1 m: not asserted, inside the RMS)",
+        c.surface_rms * 1e3,
+        SURFACE_RMS_TOLERANCE * 1e3,
+        c.height_at_wall
+    );
+    println!(
+        "{l}: failure line {:.1}° from the horizontal, at x = {:.4} m at mid-height; experiment {angle_exp:.1}°, \
+         x = {x_mid_exp:.4} m (angle tolerance {ANGLE_TOLERANCE}°; position not asserted)",
+        c.angle, c.x_mid
+    );
+    [
+        c.at_rest,
+        runout_err.abs() <= RUNOUT_TOLERANCE,
+        c.surface_rms <= SURFACE_RMS_TOLERANCE,
+        (c.angle - angle_exp).abs() <= ANGLE_TOLERANCE,
+    ]
+}
+
+fn collapse(case_name: &str) {
+    let c = measure(case_name, parse(case_json(case_name)));
+    let passed = check(&c);
+    let names = ["at rest", "runout", "surface RMS", "failure-line angle"];
+    for (ok, name) in passed.iter().zip(names) {
+        assert!(ok, "{case_name}: {name} outside its tolerance");
+    }
+}
+
+/// Quadrilateral grid h = 5 mm, 4 points per cell (`cases/collapse_bui2008_quad.json`).
 #[test]
 fn bui2008_collapse_quadrilateral_grid() {
     collapse("collapse_bui2008_quad.json");
 }
 
+/// Triangular grid: the 5 mm squares halved, 3 points per triangle
+/// (`cases/collapse_bui2008_tri.json`).
 #[test]
 fn bui2008_collapse_triangular_grid() {
     collapse("collapse_bui2008_tri.json");
+}
+
+/// The quadrilateral case with pure FLIP point velocities (`pic_relaxation_time` removed,
+/// θ = 0) fails the checks of [`check`]: it does not come to rest by its 2 s end time, and
+/// its runout and final surface lie outside their tolerances. This is what makes those
+/// tolerances able to fail. About 3 minutes.
+#[test]
+#[ignore = "long (about 3 min): LOAM_LONG=1 scripts/test.sh"]
+fn bui2008_pure_flip_fails_the_tolerances() {
+    let mut json = case_json("collapse_bui2008_quad.json");
+    json["domains"][0].as_object_mut().expect("a domain").remove("pic_relaxation_time");
+    let c = measure("pure FLIP", parse(json));
+    let [at_rest, runout, surface, _] = check(&c);
+    assert!(!at_rest, "pure FLIP should not come to rest");
+    assert!(!runout, "pure FLIP's runout should fail the runout tolerance");
+    assert!(!surface, "pure FLIP's final surface should fail the surface tolerance");
+}
+
+/// Consistency check (issue 5's time-to-answer target; the reference is Loam's own run):
+/// the quadrilateral case with its adaptive steps (about 780 steps) ends on the surface of
+/// the same case run with Kratos' fixed Δt = 5e-5 s until at rest (about 13 000 steps):
+/// RMS vertical distance between the two final surfaces, sampled every millimetre from the
+/// wall to 0.5 m, within 2 mm (issue 5). For scale: two runs whose gravity differs by 1e-12
+/// end 0.8 mm apart (the flow amplifies round-off; README, Performance). About 7 minutes.
+#[test]
+#[ignore = "long (about 7 min): LOAM_LONG=1 scripts/test.sh"]
+fn bui2008_adaptive_steps_end_on_the_small_step_surface() {
+    let adaptive = case_json("collapse_bui2008_quad.json");
+    let mut small = adaptive.clone();
+    small["analysis"].as_object_mut().expect("analysis").remove("adaptive");
+    small["analysis"]["time_step"] = serde_json::json!(5e-5);
+    let mut surfaces = Vec::new();
+    for (label, json) in [("adaptive steps", adaptive), ("fixed Δt = 5e-5 s", small)] {
+        let started = std::time::Instant::now();
+        let (sim, history) = run(parse(json));
+        println!(
+            "{label}: {} steps, at rest {} at t = {:.3} s, {:.0} s wall; runout {:.4} m, height at the wall {:.4} m",
+            sim.stats.steps,
+            sim.at_rest,
+            sim.time(),
+            started.elapsed().as_secs_f64(),
+            last(&sim, &history, "runout"),
+            last(&sim, &history, "height_at_wall")
+        );
+        assert!(sim.at_rest, "{label}: comes to rest");
+        surfaces.push(point_extents(&sim.model));
+    }
+    let samples: Vec<(f64, f64)> =
+        (0..=500).map(|k| 1e-3 * k as f64).map(|x| (x, SurfaceProfile::new(&surfaces[1], 0.0).height_at(x))).collect();
+    let rms = SurfaceProfile::new(&surfaces[0], 0.0).rms_distance(&samples);
+    println!("final surfaces {:.2} mm RMS apart (x = 0 … 0.5 m every 1 mm; tolerance 2 mm, issue 5)", rms * 1e3);
+    assert!(rms <= 0.002);
 }

@@ -31,17 +31,29 @@ const G: f64 = 9.81;
 const RHO_B: f64 = 1500.0;
 /// The seed's GRANUFALL results (Kratos MPM presentation): opening (m), flow (mL/s).
 const SEED: [(f64, f64); 2] = [(0.018, 63.07), (0.008, 7.86)];
-/// Beverloo coefficient band. Experiments: C = 0.55–0.65 (Beverloo et al. 1961; Nedderman,
-/// Tüzün, Savage & Houlsby 1982, Chem. Eng. Sci. 37, 1597, review C = 0.58 ± 0.05); the
-/// seed's own continuum MPM gives C = 0.44 (8 mm) and 0.46 (18 mm). The band takes both and
-/// about 20 % beyond them for a continuum without grain size on a grid that resolves the
-/// opening radius with 5 cells (its `k h` shrinks the effective opening).
-const C_RANGE: (f64, f64) = (0.35, 0.75);
-/// Beverloo's exponent 5/2 and the tolerance of the fitted one.
+/// Tolerance on the flow rate against the seed's at the same opening. The seed's is a
+/// continuum MPM of the same silo (C = 0.44 / 0.46) on a grid it does not state; the grid
+/// narrows the opening by about k h (k ≈ 1.5 cells, measured below), so Q depends on the
+/// resolution as (D − 1.5 h)^{5/2}: 8 instead of 10 cells across the opening lower it by
+/// 11 %. 10 % admits the seed's grid within about that; measured: +2.1 % and +4.6 %.
+const SEED_TOLERANCE: f64 = 0.10;
+/// Beverloo coefficient of the experiments, C = 0.55–0.65 (Beverloo et al. 1961; Nedderman,
+/// Tüzün, Savage & Houlsby 1982, Chem. Eng. Sci. 37, 1597, review C = 0.58 ± 0.05), fitted
+/// with the grains' empty annulus D − k d. Printed, not asserted: the continuum has no grain
+/// size, and the grid's own k h takes its place (C = 0.45–0.48 with it, 0.70 without it).
+const C_EXPERIMENTS: (f64, f64) = (0.55, 0.65);
+/// Beverloo's exponent 5/2 and the tolerance of the fitted one: the three silos are
+/// geometrically similar with h ∝ D, so by dimensional analysis Q ∝ √g D^{5/2} exactly,
+/// except for what breaks the similarity — the elastic compliance ρ g D / E (2.25 times
+/// larger at 18 mm than at 8 mm) and the step sizes. Both are small effects; 0.15 is twice
+/// the departure measured over recent code revisions (2.575–2.597).
 const EXPONENT: f64 = 2.5;
-const EXPONENT_TOLERANCE: f64 = 0.4;
+const EXPONENT_TOLERANCE: f64 = 0.15;
 /// Steady flow: the rates over the two halves of the window agree within this fraction.
-const STEADY_TOLERANCE: f64 = 0.15;
+/// The mass flow pulses with a period of about 2 √(D/g) (arches forming and breaking over
+/// the opening), a third of the window; over half-windows of 3 pulses the means differ by at
+/// most 7.7 % in these runs.
+const STEADY_TOLERANCE: f64 = 0.10;
 
 /// Least-squares slope of `y(t)`.
 fn slope(points: &[(f64, f64)]) -> f64 {
@@ -139,11 +151,27 @@ fn discharge_through_orifice_follows_beverloo() {
     );
     assert!((exponent - EXPONENT).abs() <= EXPONENT_TOLERANCE, "exponent {exponent}");
 
-    // (c) Beverloo's coefficient
+    // (c) the seed's flow rates at 8 and 18 mm; Beverloo's coefficient printed
     for r in &runs {
         let c = beverloo_c(r.q, r.d);
-        println!("D = {:.0} mm: C = {c:.3} (band {:.2}–{:.2})", r.d * 1e3, C_RANGE.0, C_RANGE.1);
-        assert!((C_RANGE.0..=C_RANGE.1).contains(&c), "D = {} m: C = {c}", r.d);
+        println!(
+            "D = {:.0} mm: C = {c:.3} (experiments {:.2}–{:.2}, with the grains' k d; not asserted)",
+            r.d * 1e3,
+            C_EXPERIMENTS.0,
+            C_EXPERIMENTS.1
+        );
+        if let Some(seed) = SEED.iter().find(|s| (s.0 - r.d).abs() < 1e-9) {
+            let err = r.q * 1e6 / seed.1 - 1.0;
+            println!(
+                "D = {:.0} mm: Q = {:.2} mL/s, seed's GRANUFALL {:.2} mL/s, {:+.1} % (tolerance {:.0} %)",
+                r.d * 1e3,
+                r.q * 1e6,
+                seed.1,
+                100.0 * err,
+                100.0 * SEED_TOLERANCE
+            );
+            assert!(err.abs() <= SEED_TOLERANCE, "D = {} m: Q {} vs the seed's {}", r.d, r.q, seed.1);
+        }
     }
 
     // The grid's share of the opening: the 12 mm silo again with h = D/6 (3 cells across the

@@ -5,23 +5,70 @@
 
 mod common;
 
-use common::{case, frequency, last, report, run};
+use approx::{assert_abs_diff_eq, assert_relative_eq};
+use common::{case, case_json, euler_bernoulli, frequency, last, nearest_point, parse, report, run, timoshenko};
 use loam::case::{Case, LoadSpec, RegionSpec};
 use loam_fem::element::ElementType;
 
-/// Benchmark 1 with MPM, static: tip deflection within 5 % of −0.39256 m; printed beside
-/// the FEM result on the same discretisation (material points at the FEM Gauss points
-/// give the FEM stiffness exactly: the strain energies agree to 1e-9).
+/// Benchmark 1 with MPM, static (h = 0.125 m, 4 points per cell). **Measured:** the
+/// deflection of the material point that starts nearest the free end's mid-height (7, 0.5),
+/// at X_p = (6.974, 0.526), against beam theory **at X_p**: Timoshenko (Euler–Bernoulli plus
+/// shear, κ = 5/6; BENCHMARKS.md gives Euler–Bernoulli −0.39256 m at x = 7 and notes that
+/// shear adds 1.6 %). Tolerance 2 %: the discretisation error at this h is 0.8 % and the
+/// geometric nonlinearity 0.24 % (`tests/convergence.rs`: order 2, Richardson limit),
+/// measured −1.01 %; BENCHMARKS.md allows 5 %.
+///
+/// Measured where the reference is: the grid node at the tip (7, 0.5) carries the same
+/// discrete field (in one static step from the reference state the grid's displacement is
+/// the step's), and its error against Timoshenko at x = 7 must equal the point's error at
+/// X_p within 0.1 percentage point (measured −1.03 % and −1.01 %). The point compared with
+/// the beam at x = 7 instead would be 0.5 points off.
+///
+/// Printed beside the FEM result on the same discretisation: material points at the FEM
+/// Gauss points give the FEM stiffness exactly (strain energies agree to 1e-9, a consistency
+/// check).
 #[test]
 fn cantilever_mpm_static_beside_fem() {
-    let (mpm, hm) = run(case("cantilever_mpm.json"));
+    let mut c = case_json("cantilever_mpm.json");
+    c["monitors"].as_array_mut().expect("monitors").push(
+        serde_json::json!({ "name": "grid_tip_uy", "type": "displacement", "point": [7.0, 0.5], "component": "y" }),
+    );
+    let (mpm, hm) = run(parse(c));
     let (fem, hf) = run(case("cantilever_fem.json"));
-    let (tip_mpm, tip_fem) = (last(&mpm, &hm, "tip_uy"), last(&fem, &hf, "tip_uy"));
-    println!("benchmark 1 static tip deflection: FEM code {tip_fem:.5} m | MPM code {tip_mpm:.5} m | Euler–Bernoulli −0.39256 m | Kratos MPM (n = 8) −0.3930 m");
-    report("MPM static tip_uy [m]", tip_mpm, -0.39256, 0.05);
+    assert_eq!(mpm.stats.steps, 1, "one static step");
+    let (x_p, u_p) = nearest_point(&mpm, &[7.0, 0.5]);
+    let (tip_grid, tip_fem) = (last(&mpm, &hm, "grid_tip_uy"), last(&fem, &hf, "tip_uy"));
+    println!(
+        "benchmark 1 static: MPM point at X_p = ({:.4}, {:.4}) {:.5} m (Euler–Bernoulli there {:.5}, Timoshenko {:.5}); \
+         MPM grid node (7, 0.5) {tip_grid:.5} m; FEM node (7, 0.5) {tip_fem:.5} m; at x = 7 Euler–Bernoulli {:.5}, \
+         Timoshenko {:.5}; Kratos MPM (n = 8) −0.3930 m",
+        x_p[0],
+        x_p[1],
+        u_p[1],
+        euler_bernoulli(x_p[0]),
+        timoshenko(x_p[0]),
+        euler_bernoulli(7.0),
+        timoshenko(7.0)
+    );
+    report("MPM point deflection vs Timoshenko at the point's position [m]", u_p[1], timoshenko(x_p[0]), 0.02);
+    let (e_point, e_grid) = (u_p[1] / timoshenko(x_p[0]) - 1.0, tip_grid / timoshenko(7.0) - 1.0);
+    println!(
+        "error of the point at X_p {:+.3} %, of the grid node at the tip {:+.3} %: {:.3} points apart (tolerance 0.1)",
+        100.0 * e_point,
+        100.0 * e_grid,
+        100.0 * (e_point - e_grid).abs()
+    );
+    assert_abs_diff_eq!(e_point, e_grid, epsilon = 1e-3);
+    let e_wrong = u_p[1] / timoshenko(7.0) - 1.0;
+    println!(
+        "the point against the beam at x = 7 instead: {:+.3} %, {:.3} points from the tip node's",
+        100.0 * e_wrong,
+        100.0 * (e_wrong - e_grid).abs()
+    );
+    assert!((e_wrong - e_grid).abs() > 1e-3, "the agreement check must reject the un-fixed measurement point");
     let (wm, wf) = (last(&mpm, &hm, "strain_energy"), last(&fem, &hf, "strain_energy"));
-    println!("strain energy: FEM {wf:.9} J, MPM {wm:.9} J");
-    assert!((wm - wf).abs() < 1e-9 * wf);
+    println!("strain energy: FEM {wf:.9} J, MPM {wm:.9} J (consistency, 1e-9)");
+    assert_relative_eq!(wm, wf, max_relative = 1e-9);
 }
 
 /// Benchmark 1 with MPM, dynamic: first natural frequency within 5 % of 0.9889 Hz.
@@ -33,34 +80,72 @@ fn cantilever_mpm_dynamic_frequency() {
     report("MPM first natural frequency [Hz]", f, 0.9889, 0.05);
 }
 
-/// Benchmark 2 with MPM: axisymmetric plate, centre deflection within 3 % of 0.0760 m
-/// downward, on quadrilateral and triangular grids; the support carries the load q π a².
+/// Benchmark 2 with MPM: axisymmetric plate (h = t/8), on quadrilateral and triangular
+/// grids. **Measured:** the mid-surface's deflection at the centre relative to the
+/// mid-surface at the support radius, `w(0, t/2) − w(a, t/2)`, from the grid nodes there (one
+/// static step: the grid holds the step's displacement). Plate theory's deflection is that
+/// of the mid-surface with the mid-surface fixed at the support; the case supports the bottom
+/// fibre on a single ring of nodes, whose local indentation is logarithmically singular and
+/// keeps growing under refinement (`tests/convergence.rs`), so the centre point's own
+/// deflection (printed) does not converge to plate theory. **Reference:** Mindlin,
+/// Kirchhoff's 0.07604 m (BENCHMARKS.md: 0.0760 m, 3 %) plus the shear deflection
+/// q a²/(4 κ G t) = 0.00076 m. **Tolerance** 1 %: the discretisation error at h = t/8, from
+/// the refinement study (order 2, limits within 0.02 % of Mindlin), is 0.33 % (quad) and
+/// 0.62 % (tri). The support carries the load q π a² (equilibrium, 1e-9).
 #[test]
 fn plate_axisym_mpm_quads_and_triangles() {
+    let (a, t, e, nu, q) = (10.0f64, 1.0f64, 1.0e7, 0.24, 101.84);
+    let d = e * t.powi(3) / (12.0 * (1.0 - nu * nu));
+    let kirchhoff = -(5.0 + nu) * q * a.powi(4) / (64.0 * (1.0 + nu) * d);
+    let mindlin = kirchhoff - q * a * a / (4.0 * 5.0 / 6.0 * e / (2.0 * (1.0 + nu)) * t);
     for (element, ppc) in [("quad4", 4), ("tri3", 3)] {
-        let mut c = case("plate_axisym_mpm.json");
-        let e: loam_fem::element::ElementType = serde_json::from_str(&format!("\"{element}\"")).unwrap();
-        c.domains[0].grid.as_mut().unwrap().element = e;
-        if let Some(loam::case::BodySpec::Cells { mesh, points_per_cell }) = c.domains[0].material_points.as_mut() {
-            *points_per_cell = ppc;
-            if let loam::case::MeshSpec::Rectangle { element, .. } = mesh {
-                *element = e;
-            }
-        }
-        let (sim, h) = run(c);
-        report(&format!("plate centre deflection, {element} grid [m]"), last(&sim, &h, "centre_uy"), -0.0760, 0.03);
-        report("support reaction [N]", last(&sim, &h, "support_reaction"), 101.84 * std::f64::consts::PI * 100.0, 1e-9);
+        let mut c = case_json("plate_axisym_mpm.json");
+        c["domains"][0]["grid"]["element"] = serde_json::json!(element);
+        c["domains"][0]["material_points"]["cells"]["mesh"]["rectangle"]["element"] = serde_json::json!(element);
+        c["domains"][0]["material_points"]["cells"]["points_per_cell"] = serde_json::json!(ppc);
+        let monitors = c["monitors"].as_array_mut().expect("monitors");
+        monitors.push(
+            serde_json::json!({ "name": "grid_centre", "type": "displacement", "point": [0.0, 0.5], "component": "y" }),
+        );
+        monitors.push(
+            serde_json::json!({ "name": "grid_edge", "type": "displacement", "point": [10.0, 0.5], "component": "y" }),
+        );
+        let (sim, h) = run(parse(c));
+        assert_eq!(sim.stats.steps, 1, "one static step");
+        let relative = last(&sim, &h, "grid_centre") - last(&sim, &h, "grid_edge");
+        println!(
+            "plate {element}: w(0) − w(a) at mid-surface {relative:.6} m; Kirchhoff {kirchhoff:.6} m ({:+.2} %), Mindlin \
+             {mindlin:.6} m; centre point's own deflection {:.6} m (support indentation included)",
+            100.0 * (relative / kirchhoff - 1.0),
+            last(&sim, &h, "centre_uy")
+        );
+        report(&format!("plate {element}: w(0) − w(a) vs Mindlin [m]"), relative, mindlin, 0.01);
+        report("support reaction [N]", last(&sim, &h, "support_reaction"), q * std::f64::consts::PI * a * a, 1e-9);
     }
 }
 
-/// Benchmark 3: axial vibration of a bar in its first mode. Period 2π/ω₁ = 10 s and the
-/// velocity amplitude v₀ sin(πx_p/2L) at the free-end material point within 1 % over five
-/// periods; total energy drift below 1 %.
+/// Benchmark 3: axial vibration of a bar in its first mode (h = 1 m, Δt = 0.1 s). Period
+/// 2π/ω₁ = 10 s and the velocity amplitude v₀ sin(πx_p/2L) at the free-end material point
+/// (at its own position x_p) within 1 % over five periods; total energy drift below 1 %.
+///
+/// Valid only while no material point crosses a cell boundary: the outermost points start at
+/// x_p = 24.789 m and swing by ±0.159 m, so they stay 5 mm inside their cell; asserted below.
+/// Refined at this amplitude (h ≤ 0.5 m) they cross into the empty cell beyond the bar and
+/// the energy falls (the cell-crossing error of linear-shape-function MPM; README, "What is
+/// not validated"); `tests/convergence.rs` refines at a tenth of the amplitude.
 #[test]
 fn vibrating_bar_period_amplitude_energy() {
     let (sim, h) = run(case("vibrating_bar_mpm.json"));
     let col = |n: &str| sim.monitor_names().iter().position(|m| *m == n).unwrap();
     let (kv, ke, ks) = (col("end_vx"), col("kinetic_energy"), col("strain_energy"));
+    let (x_end, _) = nearest_point(&sim, &[25.0, 0.5]);
+    let swing = h.iter().map(|r| r.1[col("end_ux")].abs()).fold(0.0, f64::max);
+    println!(
+        "outermost point: X = {:.4} m, largest |u_x| {swing:.4} m: stays {:.1} mm inside its cell [24, 25]",
+        x_end[0],
+        1e3 * (25.0 - x_end[0] - swing)
+    );
+    assert!(x_end[0] + swing < 25.0, "the bar's outer points must not cross a cell boundary");
     let mut crossings = Vec::new();
     for w in h.windows(2) {
         let (a, b) = (w[0].1[kv], w[1].1[kv]);
@@ -73,8 +158,7 @@ fn vibrating_bar_period_amplitude_energy() {
     let (l, e, rho, v0) = (25.0f64, 100.0f64, 1.0f64, 0.1);
     let omega = std::f64::consts::PI / (2.0 * l) * (e / rho).sqrt();
     report("bar period [s]", period, 2.0 * std::f64::consts::PI / omega, 0.01);
-    // the monitored point is the outer Gauss column of the last body cell
-    let x_p = 24.5 + 0.5 / 3f64.sqrt();
+    let x_p = x_end[0];
     let amplitude_exact = v0 * (std::f64::consts::PI * x_p / (2.0 * l)).sin();
     let last_period: Vec<f64> = h.iter().filter(|r| r.0 > h.last().unwrap().0 - 10.0).map(|r| r.1[kv].abs()).collect();
     report(
@@ -118,8 +202,9 @@ fn disk_collision_energy_and_rebound() {
     assert!(vx_end < -0.05);
 }
 
-/// 3D: the cantilever of benchmark 1 on a hex8 background grid with 8 material points per
-/// cell, against Euler–Bernoulli (−0.39256 m) within 5 %.
+/// 3D: the cantilever of benchmark 1 on a hex8 background grid (h = 1/6 m) with 8 material
+/// points per cell: the point nearest (7, 0.5, 0.5), at its own position X_p, against
+/// Timoshenko at X_p within 5 % (BENCHMARKS.md, MPM; only 6 cells through the depth).
 #[test]
 fn hex_grid_mpm_cantilever_matches_beam_theory() {
     let text = r#"{
@@ -135,8 +220,16 @@ fn hex_grid_mpm_cantilever_matches_beam_theory() {
         "analysis": {"type": "static", "time_step": 1, "end_time": 1},
         "monitors": [{"name": "tip_uy", "type": "material_point_displacement", "point": [7, 0.5, 0.5], "component": "y"}]
     }"#;
-    let (sim, h) = run(Case::parse(text).unwrap());
-    report("hex-grid MPM cantilever tip_uy [m]", last(&sim, &h, "tip_uy"), -0.39256, 0.05);
+    let (sim, _) = run(Case::parse(text).unwrap());
+    let (x_p, u_p) = nearest_point(&sim, &[7.0, 0.5, 0.5]);
+    println!(
+        "point at X_p = ({:.4}, {:.4}, {:.4}); Euler–Bernoulli there {:.5} m",
+        x_p[0],
+        x_p[1],
+        x_p[2],
+        euler_bernoulli(x_p[0])
+    );
+    report("hex-grid MPM cantilever: point deflection vs Timoshenko at X_p [m]", u_p[1], timoshenko(x_p[0]), 0.05);
 }
 
 /// Benchmark 7: a block on a frictionless slip boundary inclined at 30° (a rotated grid,
@@ -155,8 +248,9 @@ fn block_slides_on_inclined_slip_boundary() {
     assert!(normal.abs() < 1e-3);
 }
 
-/// The bin-searched background grid (any mesh, `grid_mesh`) on the same cells as the
-/// structured grid gives the same MPM cantilever to round-off, on quads and triangles.
+/// Consistency check: the bin-searched background grid (any mesh, `grid_mesh`) on the same
+/// cells as the structured grid gives the same MPM cantilever to round-off (1e-10 m), on
+/// quads and triangles.
 #[test]
 fn unstructured_grid_with_bin_search_equals_structured_grid() {
     for element in [ElementType::Quad4, ElementType::Tri3] {
@@ -178,8 +272,7 @@ fn unstructured_grid_with_bin_search_equals_structured_grid() {
         let (s2, h2) = run(binned);
         let (a, b) = (last(&s1, &h1, "tip_uy"), last(&s2, &h2, "tip_uy"));
         println!("{element:?}: tip_uy structured grid {a:.12} m, bin-searched grid {b:.12} m, difference {:.1e} (tolerance 1e-10)", (a - b).abs());
-        assert!((a - b).abs() < 1e-10);
-        report(&format!("bin-searched {element:?} grid tip_uy [m]"), b, -0.39256, 0.05);
+        assert_abs_diff_eq!(a, b, epsilon = 1e-10);
     }
 }
 

@@ -213,13 +213,15 @@ mod tests {
         let grid = Grid::new([0.0; 3], [4.0, 1.0, 0.0], [4, 1, 1], ElementType::Quad4);
         let coords = grid.reference_coords().to_vec();
         let anchored: Vec<bool> = coords.iter().map(|x| x[0] == 0.0).collect();
-        let prescribed = vec![[false; 3]; coords.len()];
-        let mut motion = HarmonicExtension::new(
-            &grid,
-            &MotionConstraints { anchored: &anchored, prescribed: &prescribed, band: 3.5 },
-        );
-        let mut w: Vec<[f64; 3]> = anchored.iter().map(|&a| if a { [1.0, 0.0, 0.0] } else { [0.0; 3] }).collect();
-        motion.extend(&mut w);
+        // the interface moved by 1 along x, extended with the nodes held by `prescribed`
+        let extended = |prescribed: &[[bool; 3]]| {
+            let mut motion =
+                HarmonicExtension::new(&grid, &MotionConstraints { anchored: &anchored, prescribed, band: 3.5 });
+            let mut w: Vec<[f64; 3]> = anchored.iter().map(|&a| if a { [1.0, 0.0, 0.0] } else { [0.0; 3] }).collect();
+            motion.extend(&mut w);
+            w
+        };
+        let w = extended(&vec![[false; 3]; coords.len()]);
         for (x, w) in coords.iter().zip(&w) {
             // x = 4 is beyond the band: fixed; in between w_x = 1 − x/4
             let expected = 1.0 - x[0] / 4.0;
@@ -228,12 +230,7 @@ mod tests {
         }
         // the bottom held in x by a boundary condition: those nodes stay
         let prescribed: Vec<[bool; 3]> = coords.iter().map(|x| [x[1] == 0.0, false, false]).collect();
-        let mut motion = HarmonicExtension::new(
-            &grid,
-            &MotionConstraints { anchored: &anchored, prescribed: &prescribed, band: 3.5 },
-        );
-        let mut w: Vec<[f64; 3]> = anchored.iter().map(|&a| if a { [1.0, 0.0, 0.0] } else { [0.0; 3] }).collect();
-        motion.extend(&mut w);
+        let w = extended(&prescribed);
         for (x, w) in coords.iter().zip(&w) {
             if x[1] == 0.0 && x[0] > 0.0 {
                 assert_eq!(w[0], 0.0, "held at {x:?}");

@@ -119,6 +119,16 @@ impl Assembler {
         self.pattern.nnz()
     }
 
+    /// What the linear solver has learnt about this pattern's matrices.
+    pub fn solver_memory(&self) -> crate::linear_solver::SolverMemory {
+        self.solver.memory()
+    }
+
+    /// Starts the linear solver from what a solver of the same pattern had learnt.
+    pub fn remember(&mut self, memory: crate::linear_solver::SolverMemory) {
+        self.solver.remember(memory);
+    }
+
     /// Accumulated linear-solver timings of this pattern.
     pub fn solver_timings(&self) -> SolverTimings {
         self.solver.timings

@@ -32,7 +32,7 @@ pub enum ConvergenceCriterion {
 }
 
 /// Norms per block of the monolithic system (soil, interface, structure).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BlockNorms {
     /// Equations of grid nodes.
     pub soil: f64,

@@ -9,7 +9,7 @@ use crate::element::ElementType;
 use crate::formulation::Formulation;
 
 /// Nodal unknowns of the whole model, full DOF vectors (node-major, `dim` per node).
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NodalState {
     /// Displacement from the reference configuration.
     pub u: Vec<f64>,
@@ -286,6 +286,14 @@ pub trait Domain: Send + Sync {
     /// [`crate::model::Model::initialise_acceleration`]; particle domains interpolate it to
     /// their points. Mesh domains need nothing (the model holds nodal accelerations).
     fn accept_initial_acceleration(&mut self, _a: &[f64]) {}
+
+    /// The domain's committed state beyond the model's nodal unknowns (law histories,
+    /// material points, walls), encoded for a checkpoint: with the nodal state it
+    /// determines every later step bit for bit.
+    fn save_state(&self) -> Vec<u8>;
+
+    /// Restores a state of [`Domain::save_state`] into a domain built from the same case.
+    fn restore_state(&mut self, state: &[u8]) -> Result<(), String>;
 
     /// Geometry and fields for output at the committed state: the mesh of an FEM domain;
     /// the material points of each body, the points of each penalty wall and, with

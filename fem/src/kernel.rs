@@ -300,7 +300,7 @@ pub fn cauchy_stress(first_piola: &Matrix3<f64>, f: &Matrix3<f64>) -> Matrix3<f6
 }
 
 /// What the kernel reports per integration point for output and energy bookkeeping.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 pub struct PointOutput {
     /// Total deformation gradient `F`.
     pub deformation_gradient: Matrix3<f64>,

@@ -127,6 +127,16 @@ fn buffer(req: StackReq) -> Result<MemBuffer, LinearSolverError> {
     MemBuffer::try_new(req).map_err(|_| LinearSolverError::Factorisation("out of memory".into()))
 }
 
+/// What a solver has learnt about the matrices of its pattern, which decides how it solves
+/// the next ones (kept in checkpoints: a resumed run solves as the uninterrupted one would).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct SolverMemory {
+    /// Cholesky failed (an indefinite tangent): LU from then on.
+    pub cholesky_failed: bool,
+    /// GMRES on the symmetric part's factors failed: LU from then on.
+    pub symmetric_part_failed: bool,
+}
+
 /// A direct solver bound to one sparsity pattern.
 #[derive(Debug)]
 pub struct LinearSolver {
@@ -157,6 +167,17 @@ impl LinearSolver {
             gmres: Gmres::default(),
             timings: SolverTimings::default(),
         }
+    }
+
+    /// What this solver has learnt about its pattern's matrices.
+    pub fn memory(&self) -> SolverMemory {
+        SolverMemory { cholesky_failed: self.llt_failed, symmetric_part_failed: self.symmetric_part_failed }
+    }
+
+    /// Starts from what a solver of the same pattern had learnt ([`LinearSolver::memory`]).
+    pub fn remember(&mut self, memory: SolverMemory) {
+        self.llt_failed = memory.cholesky_failed;
+        self.symmetric_part_failed = memory.symmetric_part_failed;
     }
 
     /// Forgets the symbolic factorisations (call when the pattern changes).

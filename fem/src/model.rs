@@ -24,7 +24,7 @@ use crate::convergence::BlockNorms;
 pub use crate::convergence::ConvergenceCriterion;
 use crate::dofs::{DofTie, NodeRole};
 use crate::domain::{AssemblyInput, Domain, DomainError, NamedOutput, NodalState};
-use crate::linear_solver::{LinearSolverError, SolverTimings};
+use crate::linear_solver::{LinearSolverError, SolverMemory, SolverTimings};
 pub use crate::newton::NewtonSettings;
 use crate::newton::{assembly_input, NewtonStrategy, StepProblem};
 use crate::scheme::TimeScheme;
@@ -90,7 +90,7 @@ pub enum StepError {
 }
 
 /// Wall-clock seconds per phase.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PhaseTimings {
     /// Domains' per-step preparation (initialisation phase of particle domains: point
     /// search, sort, shape functions, projection to the grid, grid reset).
@@ -205,6 +205,9 @@ pub struct Model {
     pub soil_forces: Vec<f64>,
     /// Amplitude factor of each constraint at the committed state (0 before the first step).
     applied_factors: Vec<f64>,
+    /// What the linear solver of the current pattern had learnt, from a checkpoint, for the
+    /// assembler built at the next step if that step keeps the pattern.
+    restored_solver_memory: Option<SolverMemory>,
     assembler: Option<Assembler>,
 }
 
@@ -231,6 +234,7 @@ impl Model {
             reactions: vec![0.0; n],
             soil_forces: vec![0.0; n],
             applied_factors: Vec::new(),
+            restored_solver_memory: None,
             assembler: None,
         }
     }
@@ -275,7 +279,11 @@ impl Model {
             ties: &self.ties,
             solver: self.settings.linear_solver,
         };
-        self.assembler = Some(Assembler::new(&system, &self.domains));
+        let mut assembler = Assembler::new(&system, &self.domains);
+        if let Some(memory) = self.restored_solver_memory.take() {
+            assembler.remember(memory);
+        }
+        self.assembler = Some(assembler);
     }
 
     /// Accumulated times of the linear solver (symbolic analyses, numeric factorisations,
@@ -312,7 +320,48 @@ impl Model {
         }
         if changed {
             self.invalidate_pattern();
+            self.restored_solver_memory = None;
         }
+        Ok(())
+    }
+
+    /// The committed state of the model and of every domain, for a checkpoint: with the
+    /// case, it determines every later step bit for bit.
+    pub fn save_state(&self) -> ModelState {
+        ModelState {
+            time: self.time,
+            committed: self.committed.clone(),
+            reactions: self.reactions.clone(),
+            soil_forces: self.soil_forces.clone(),
+            applied_factors: self.applied_factors.clone(),
+            solver_memory: self.assembler.as_ref().map(Assembler::solver_memory).or(self.restored_solver_memory),
+            domains: self.domains.iter().map(|d| d.save_state()).collect(),
+        }
+    }
+
+    /// Restores a state of [`Model::save_state`] into a model built from the same case.
+    pub fn restore_state(&mut self, state: ModelState) -> Result<(), String> {
+        let n = self.num_dofs();
+        let c = &state.committed;
+        if c.u.len() != n || c.v.len() != n || c.a.len() != n || state.domains.len() != self.domains.len() {
+            return Err(format!(
+                "the saved model has {} DOFs and {} domains, this case {n} and {}",
+                c.u.len(),
+                state.domains.len(),
+                self.domains.len()
+            ));
+        }
+        for (d, bytes) in self.domains.iter_mut().zip(&state.domains) {
+            d.restore_state(bytes)?;
+        }
+        self.time = state.time;
+        self.state.clone_from(&state.committed);
+        self.committed = state.committed;
+        self.reactions = state.reactions;
+        self.soil_forces = state.soil_forces;
+        self.applied_factors = state.applied_factors;
+        self.restored_solver_memory = state.solver_memory;
+        self.assembler = None;
         Ok(())
     }
 
@@ -502,6 +551,25 @@ impl Model {
     pub fn output(&self, name: &str) -> Option<crate::domain::DomainOutput> {
         self.outputs(false).into_iter().find(|o| o.name == name).map(|o| o.output)
     }
+}
+
+/// The committed state of a [`Model`] ([`Model::save_state`]).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct ModelState {
+    /// Time of the committed state.
+    pub time: f64,
+    /// Nodal unknowns.
+    pub committed: NodalState,
+    /// Reactions.
+    pub reactions: Vec<f64>,
+    /// Soil forces on shared nodes.
+    pub soil_forces: Vec<f64>,
+    /// Amplitude factors of the constraints at the committed state.
+    pub applied_factors: Vec<f64>,
+    /// What the linear solver of the current pattern had learnt.
+    pub solver_memory: Option<SolverMemory>,
+    /// Each domain's [`Domain::save_state`].
+    pub domains: Vec<Vec<u8>>,
 }
 
 /// The nonlinear system `R(u) = 0` of one step, evaluated at corrections of the predictor

@@ -18,6 +18,15 @@ use crate::formulation::Formulation;
 use crate::kernel::{point_geometry, solid_element, KernelContext, PointGeometry, PointOutput};
 use crate::mesh::Mesh;
 
+/// What an FEM domain carries from step to step beside the nodal unknowns.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct FemState {
+    law_history: Vec<f64>,
+    points: Vec<PointOutput>,
+    previous_deformation_gradient: Vec<Matrix3<f64>>,
+    work: Vec<f64>,
+}
+
 /// A solid FEM domain of one element type and one material.
 pub struct FemDomain {
     name: String,
@@ -258,11 +267,12 @@ impl Domain for FemDomain {
         self.committed_state.copy_from_slice(&self.trial_state);
     }
 
+    /// `½ vᵀ M v` over the elements, summed in element order (a parallel sum would depend on
+    /// how the work was split: not reproducible in the last digit from run to run).
     fn kinetic_energy(&self, v: &[f64]) -> f64 {
         let nn = self.element.num_nodes();
         let dim = self.dim();
         (0..self.mesh.num_cells())
-            .into_par_iter()
             .map(|e| {
                 let cell = self.mesh.cell(e);
                 let me = &self.mass[e * nn * nn..(e + 1) * nn * nn];
@@ -286,6 +296,34 @@ impl Domain for FemDomain {
 
     fn boundary_facets(&self) -> Vec<Vec<usize>> {
         self.mesh.boundary_facets().into_iter().map(|f| f.into_iter().map(|a| self.node_ids[a]).collect()).collect()
+    }
+
+    fn save_state(&self) -> Vec<u8> {
+        let state = FemState {
+            law_history: self.committed_state.clone(),
+            points: self.committed_out.clone(),
+            previous_deformation_gradient: self.f_prev.clone(),
+            work: self.work.clone(),
+        };
+        bincode::serialize(&state).expect("an FEM domain's state encodes")
+    }
+
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        let state: FemState = bincode::deserialize(bytes).map_err(|e| format!("domain '{}': {e}", self.name))?;
+        if state.law_history.len() != self.committed_state.len()
+            || state.points.len() != self.committed_out.len()
+            || state.previous_deformation_gradient.len() != self.f_prev.len()
+            || state.work.len() != self.work.len()
+        {
+            return Err(format!("domain '{}': the saved state is of another mesh or law", self.name));
+        }
+        self.trial_state.clone_from(&state.law_history);
+        self.committed_state = state.law_history;
+        self.trial_out.clone_from(&state.points);
+        self.committed_out = state.points;
+        self.f_prev = state.previous_deformation_gradient;
+        self.work = state.work;
+        Ok(())
     }
 
     fn outputs(&self, committed: &NodalState, _with_grid: bool) -> Vec<NamedOutput> {

@@ -116,6 +116,16 @@ impl Trial {
     }
 }
 
+/// What a body carries from step to step: its points (in their current order) and how many
+/// left the grid.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct BodyState {
+    /// The points with their committed fields and law histories.
+    pub points: MaterialPoints,
+    /// Points erased so far.
+    pub erased: usize,
+}
+
 /// The material points of one material (see the module doc).
 pub struct Body {
     /// Name from the case file (its output file `<name>.pvd`).
@@ -466,6 +476,44 @@ impl Body {
                 *vol = v0 * f.determinant();
             });
         self.points.state.copy_from_slice(&self.trial.state);
+    }
+
+    /// The committed state of the body (its points and how many left the grid).
+    pub fn state(&self) -> BodyState {
+        BodyState { points: self.points.clone(), erased: self.erased }
+    }
+
+    /// Restores a state of [`Body::state`] of the same body.
+    pub fn restore(&mut self, state: BodyState) -> Result<(), String> {
+        let sl = self.law.state_len();
+        let p = &state.points;
+        let n = p.id.len();
+        let consistent = [
+            p.position.len(),
+            p.displacement.len(),
+            p.velocity.len(),
+            p.acceleration.len(),
+            p.mass.len(),
+            p.volume.len(),
+            p.initial_volume.len(),
+            p.deformation_gradient.len(),
+            p.cauchy.len(),
+            p.work.len(),
+        ]
+        .iter()
+        .all(|&l| l == n)
+            && p.state.len() == n * sl
+            && p.id.iter().all(|&id| id < self.initial_count);
+        if !consistent || n + state.erased != self.initial_count {
+            return Err(format!("body '{}': the saved points are of another body or law", self.name));
+        }
+        self.points = state.points;
+        self.erased = state.erased;
+        self.index_of_id.iter_mut().for_each(|i| *i = usize::MAX);
+        for (k, &id) in self.points.id.iter().enumerate() {
+            self.index_of_id[id] = k;
+        }
+        Ok(())
     }
 
     /// Interpolates the nodal accelerations `a` (full DOF vector) to the points.

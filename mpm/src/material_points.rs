@@ -8,7 +8,7 @@ use nalgebra::Matrix3;
 
 /// Material points (struct of arrays). Index order changes every step (points are sorted
 /// by cell); `id` is stable.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct MaterialPoints {
     /// Stable identifier (index at creation).
     pub id: Vec<usize>,

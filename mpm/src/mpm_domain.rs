@@ -67,6 +67,14 @@ struct CellBlocks {
     rings: usize,
 }
 
+/// What an MPM domain carries from step to step beside the nodal unknowns.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct MpmState {
+    bodies: Vec<crate::body::BodyState>,
+    walls: Vec<crate::penalty_boundary::WallState>,
+    pattern: Vec<usize>,
+}
+
 /// Material points on a background grid (see the module doc).
 pub struct MpmDomain {
     name: String,
@@ -397,44 +405,26 @@ impl MpmDomain {
                         message: err.to_string(),
                     };
                     let body = body_ref;
+                    let mut contribute = |f: &mut [f64], k: Option<&mut [f64]>| {
+                        body.cell_contribution(&ctx, cell, &disp[..nn], &inertia[..nn], input, trial, out, f, k)
+                            .map_err(fail)
+                    };
                     if blocks.first_body[b] as usize == k {
-                        body.cell_contribution(
-                            &ctx,
-                            cell,
-                            &disp[..nn],
-                            &inertia[..nn],
-                            input,
-                            trial,
-                            out,
-                            fv,
-                            input.with_tangent.then_some(&mut *km),
-                        )
-                        .map_err(fail)
-                    } else {
-                        let mut f_scratch = [0.0; MAX_BLOCK];
-                        let mut k_scratch = [0.0; MAX_BLOCK * MAX_BLOCK];
-                        body.cell_contribution(
-                            &ctx,
-                            cell,
-                            &disp[..nn],
-                            &inertia[..nn],
-                            input,
-                            trial,
-                            out,
-                            &mut f_scratch[..nd],
-                            input.with_tangent.then_some(&mut k_scratch[..nd * nd]),
-                        )
-                        .map_err(fail)?;
-                        for (f, s) in fv.iter_mut().zip(&f_scratch) {
-                            *f += s;
-                        }
-                        if input.with_tangent {
-                            for (m, s) in km.iter_mut().zip(&k_scratch) {
-                                *m += s;
-                            }
-                        }
-                        Ok(())
+                        return contribute(fv, input.with_tangent.then_some(&mut *km));
                     }
+                    // a later body of the block: into scratch, then added
+                    let mut f_scratch = [0.0; MAX_BLOCK];
+                    let mut k_scratch = [0.0; MAX_BLOCK * MAX_BLOCK];
+                    contribute(&mut f_scratch[..nd], input.with_tangent.then_some(&mut k_scratch[..nd * nd]))?;
+                    for (f, s) in fv.iter_mut().zip(&f_scratch) {
+                        *f += s;
+                    }
+                    if input.with_tangent {
+                        for (m, s) in km.iter_mut().zip(&k_scratch) {
+                            *m += s;
+                        }
+                    }
+                    Ok(())
                 });
             body.restore_trial(trial);
             result?;
@@ -717,6 +707,40 @@ impl Domain for MpmDomain {
 
     fn wall_force(&self, wall: &str) -> Option<[f64; 3]> {
         self.walls.iter().find(|w| w.name() == wall).map(PenaltyBoundary::total_force)
+    }
+
+    /// The bodies' points, the walls' forces and the cells of the sparsity pattern (kept
+    /// while the active cells stay inside it: a resumed run assembles the same pattern).
+    fn save_state(&self) -> Vec<u8> {
+        let state = MpmState {
+            bodies: self.bodies.iter().map(Body::state).collect(),
+            walls: self.walls.iter().map(PenaltyBoundary::state).collect(),
+            pattern: self.blocks.pattern.clone(),
+        };
+        bincode::serialize(&state).expect("an MPM domain's state encodes")
+    }
+
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        let state: MpmState = bincode::deserialize(bytes).map_err(|e| format!("domain '{}': {e}", self.name))?;
+        let cells = self.grid.mesh.num_cells();
+        if state.bodies.len() != self.bodies.len()
+            || state.walls.len() != self.walls.len()
+            || state.pattern.iter().any(|&c| c >= cells)
+        {
+            return Err(format!("domain '{}': the saved state is of another grid, bodies or walls", self.name));
+        }
+        for (body, s) in self.bodies.iter_mut().zip(state.bodies) {
+            body.restore(s)?;
+        }
+        for (wall, s) in self.walls.iter_mut().zip(state.walls) {
+            wall.restore(s);
+        }
+        self.blocks.in_pattern = vec![false; cells];
+        for &c in &state.pattern {
+            self.blocks.in_pattern[c] = true;
+        }
+        self.blocks.pattern = state.pattern;
+        Ok(())
     }
 
     fn outputs(&self, committed: &NodalState, with_grid: bool) -> Vec<NamedOutput> {

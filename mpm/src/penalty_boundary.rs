@@ -220,6 +220,17 @@ struct PenaltyPoint {
     position: [f64; 3],
 }
 
+/// What a wall carries from step to step (its penalty points are placed anew each step).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct WallState {
+    /// Time of the committed state.
+    pub time: f64,
+    /// Force of the wall on the body at each point of the last step.
+    pub force: Vec<[f64; 3]>,
+    /// Whether each point acted.
+    pub acting: Vec<bool>,
+}
+
 /// A rigid wall enforced on a background grid by penalty (see the module doc).
 pub struct PenaltyBoundary {
     name: String,
@@ -292,6 +303,18 @@ impl PenaltyBoundary {
     /// Number of penalty points that acted in the last converged step.
     pub fn acting_points(&self) -> usize {
         self.acting.iter().filter(|a| **a).count()
+    }
+
+    /// The committed state: the wall's clock and the forces of its points in the last step.
+    pub fn state(&self) -> WallState {
+        WallState { time: self.time, force: self.force.clone(), acting: self.acting.clone() }
+    }
+
+    /// Restores a state of [`PenaltyBoundary::state`].
+    pub fn restore(&mut self, state: WallState) {
+        self.time = state.time;
+        self.force = state.force;
+        self.acting = state.acting;
     }
 
     /// The wall's name (its output file and its `wall_force` monitor).

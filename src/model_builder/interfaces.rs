@@ -52,34 +52,30 @@ pub(super) fn attach(case: &Case, model: &mut Model, parts: &mut [Part]) -> Resu
             let soil = node_ids[a];
             kind[a] = GridNodeKind::Slip { source: *structure, normal: node.normal };
             anchor[a] = Some(*structure);
-            let structure_held = (0..dim).any(|i| held(*structure, i));
-            let soil_held = (0..dim).any(|i| held(soil, i));
-            if structure_held {
-                // the soil node follows the structure's prescribed components
-                let copies: Vec<Constraint> = model
-                    .constraints
-                    .iter()
-                    .filter(|c| c.dofs.iter().any(|&d| d / dim == *structure))
-                    .map(|c| {
-                        let mut copy = Constraint::without_dofs(c.amplitude.clone());
-                        for (&d, &v) in c.dofs.iter().zip(&c.values) {
-                            if d / dim == *structure && !held(soil, d % dim) {
-                                copy.dofs.push(soil * dim + d % dim);
-                                copy.values.push(v);
-                            }
-                        }
-                        copy
-                    })
-                    .collect();
-                model.constraints.extend(copies.into_iter().filter(|c| !c.dofs.is_empty()));
-                continue;
+            // the normal along a coordinate axis: its global components are tied directly
+            // (no local frames; boundary conditions on the other components stay); inclined:
+            // both nodes in the local frame of the normal, unless a boundary condition holds
+            // one of them (then the soil node takes the structure node's conditions)
+            let axis = (0..dim).find(|&k| node.normal[k].abs() > 1.0 - 1e-12);
+            match axis {
+                Some(k) if !held(*structure, k) && !held(soil, k) => {
+                    model.ties.push(DofTie { leader: structure * dim + k, follower: soil * dim + k });
+                }
+                Some(k) if held(*structure, k) => {
+                    model
+                        .constraints
+                        .extend(copy_constraints(model, *structure, soil, dim, |i| i == k && !held(soil, i)));
+                }
+                Some(_) => {} // the soil node's own condition holds its normal component
+                None if (0..dim).any(|i| held(*structure, i) || held(soil, i)) => {
+                    model.constraints.extend(copy_constraints(model, *structure, soil, dim, |i| !held(soil, i)));
+                }
+                None => {
+                    model.frames.push(Slip { node: soil, normal: node.normal });
+                    model.frames.push(Slip { node: *structure, normal: node.normal });
+                    model.ties.push(DofTie { leader: structure * dim, follower: soil * dim });
+                }
             }
-            if soil_held {
-                continue;
-            }
-            model.frames.push(Slip { node: soil, normal: node.normal });
-            model.frames.push(Slip { node: *structure, normal: node.normal });
-            model.ties.push(DofTie { leader: structure * dim, follower: soil * dim });
         }
         let names: Vec<String> =
             coupling.interfaces.iter().map(|&k| format!("'{}'", case.interfaces[k].name)).collect();
@@ -91,6 +87,32 @@ pub(super) fn attach(case: &Case, model: &mut Model, parts: &mut [Part]) -> Resu
         });
     }
     Ok(())
+}
+
+/// The constraints of `structure`'s components `i` with `which(i)`, copied onto `soil` (the
+/// soil node of a slip pair follows what holds its structure node).
+fn copy_constraints(
+    model: &Model,
+    structure: usize,
+    soil: usize,
+    dim: usize,
+    which: impl Fn(usize) -> bool,
+) -> Vec<Constraint> {
+    model
+        .constraints
+        .iter()
+        .map(|c| {
+            let mut copy = Constraint::without_dofs(c.amplitude.clone());
+            for (&d, &v) in c.dofs.iter().zip(&c.values) {
+                if d / dim == structure && which(d % dim) {
+                    copy.dofs.push(soil * dim + d % dim);
+                    copy.values.push(v);
+                }
+            }
+            copy
+        })
+        .filter(|c| !c.dofs.is_empty())
+        .collect()
 }
 
 /// Mean cell size of a grid: the square (cube) root of its mean cell measure.

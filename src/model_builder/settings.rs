@@ -66,6 +66,20 @@ pub(super) fn check(case: &Case) -> Result<TimeScheme, CaseError> {
             return Err(CaseError::new("analysis.adaptive.growth", format!("must be ≥ 1, got {}", a.growth)));
         }
     }
+    if let Some(c) = &case.analysis.checkpoint {
+        if c.every_steps.is_none() && c.every_seconds.is_none() {
+            return Err(CaseError::new("analysis.checkpoint", "give every_steps and/or every_seconds"));
+        }
+        if c.every_steps == Some(0) {
+            return Err(CaseError::new("analysis.checkpoint.every_steps", "must be at least 1"));
+        }
+        if let Some(s) = c.every_seconds {
+            check_positive("analysis.checkpoint.every_seconds", s)?;
+        }
+        if c.keep == 0 {
+            return Err(CaseError::new("analysis.checkpoint.keep", "must be at least 1"));
+        }
+    }
     if let Some(r) = &case.analysis.stop_at_rest {
         check_positive("analysis.stop_at_rest.kinetic_energy_ratio", r.kinetic_energy_ratio)?;
         if !(r.duration >= 0.0 && r.min_time >= 0.0) {

@@ -16,13 +16,16 @@ use std::path::{Path, PathBuf};
 
 use super::vtk::OutputError;
 
+/// One data set of a series: time, file name relative to the `.pvd`, part.
+pub type DataSet = (f64, String, usize);
+
 /// A `.pvd` series being written: (time, file name relative to the `.pvd`, part) per data
 /// set; a series of several parts lists every part of each step (ParaView shows them
 /// together, e.g. the soil's points and the structure's mesh of a coupled case).
 #[derive(Debug, Clone)]
 pub struct PvdSeries {
     path: PathBuf,
-    steps: Vec<(f64, String, usize)>,
+    steps: Vec<DataSet>,
 }
 
 impl PvdSeries {
@@ -55,13 +58,21 @@ impl PvdSeries {
         Ok(())
     }
 
+    /// A series to be written to `path` that already holds `steps` (a resumed run); the
+    /// `.pvd` is rewritten with them.
+    pub fn resume(path: impl Into<PathBuf>, steps: Vec<DataSet>) -> Result<Self, OutputError> {
+        let series = Self { path: path.into(), steps };
+        series.write()?;
+        Ok(series)
+    }
+
     /// Path of the `.pvd` file.
     pub fn path(&self) -> &Path {
         &self.path
     }
 
     /// The data sets recorded so far: (time, relative file name, part).
-    pub fn steps(&self) -> &[(f64, String, usize)] {
+    pub fn steps(&self) -> &[DataSet] {
         &self.steps
     }
 

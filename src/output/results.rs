@@ -7,6 +7,22 @@ use std::path::{Path, PathBuf};
 
 use crate::simulation::Simulation;
 
+/// What the writer has written, for checkpoints: a resumed run continues `monitors.csv` and
+/// the `.pvd` series from there, without duplicate or missing rows.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct WriterState {
+    /// Length of `monitors.csv` (bytes).
+    pub monitors_length: u64,
+    /// Step of its last row.
+    pub rows_step: usize,
+    /// Step of the last VTK output.
+    pub last_vtk_step: Option<usize>,
+    /// Last `time_interval` multiple written.
+    pub last_vtk_slot: i64,
+    /// The `.pvd` series.
+    pub vtk: Option<super::vtk_output::VtkState>,
+}
+
 /// Writer of a run's results.
 pub struct ResultWriter {
     dir: PathBuf,
@@ -17,6 +33,10 @@ pub struct ResultWriter {
     last_vtk_step: Option<usize>,
     /// Index of the last `time_interval` multiple written.
     last_vtk_slot: i64,
+    /// Step of the last row of `monitors.csv`.
+    rows_step: usize,
+    /// Length of `monitors.csv` after the last complete [`ResultWriter::write_step`].
+    complete_length: u64,
 }
 
 impl ResultWriter {
@@ -38,7 +58,77 @@ impl ResultWriter {
             time_interval: sim.case.output.time_interval,
             last_vtk_step: None,
             last_vtk_slot: 0,
+            rows_step: 0,
+            complete_length: 0,
         })
+    }
+
+    /// The state after the last complete [`ResultWriter::write_step`] (what survives a
+    /// failure in the middle of one), without touching the files.
+    pub fn last_complete_state(&self) -> Option<WriterState> {
+        Some(WriterState {
+            monitors_length: self.complete_length,
+            rows_step: self.rows_step,
+            last_vtk_step: self.last_vtk_step,
+            last_vtk_slot: self.last_vtk_slot,
+            vtk: self.vtk.as_ref().map(|v| v.state()),
+        })
+    }
+
+    /// What has been written so far (after a flush).
+    pub fn state(&mut self) -> std::io::Result<WriterState> {
+        self.monitors.flush()?;
+        Ok(WriterState {
+            monitors_length: self.monitors.get_ref().metadata()?.len(),
+            rows_step: self.rows_step,
+            last_vtk_step: self.last_vtk_step,
+            last_vtk_slot: self.last_vtk_slot,
+            vtk: self.vtk.as_ref().map(|v| v.state()),
+        })
+    }
+
+    /// Continues the results of a checkpoint in `dir`: `monitors.csv` cut back to its length
+    /// then (rows of steps after the checkpoint, written before an interruption, are
+    /// dropped; the resumed run writes them again), the `.pvd` series rewritten with the data
+    /// sets up to it. The state's own row is written if the checkpoint was taken before it
+    /// (an output failure).
+    pub fn resume(dir: &Path, sim: &Simulation, state: WriterState) -> std::io::Result<Self> {
+        let path = dir.join("monitors.csv");
+        let file = std::fs::OpenOptions::new().append(true).open(&path).map_err(|e| {
+            std::io::Error::new(
+                e.kind(),
+                format!("{}: {e} (the results of the checkpoint's run are not here)", path.display()),
+            )
+        })?;
+        let length = file.metadata()?.len();
+        if length < state.monitors_length {
+            return Err(std::io::Error::other(format!(
+                "{} is shorter ({length} bytes) than when the checkpoint was written ({} bytes)",
+                path.display(),
+                state.monitors_length
+            )));
+        }
+        file.set_len(state.monitors_length)?;
+        let vtk = match state.vtk {
+            Some(v) if sim.case.output.vtk => Some(super::vtk_output::VtkSeries::resume(dir, sim, v)?),
+            _ if sim.case.output.vtk => Some(super::vtk_output::VtkSeries::new(dir)),
+            _ => None,
+        };
+        let mut writer = Self {
+            dir: dir.to_path_buf(),
+            monitors: BufWriter::new(file),
+            vtk,
+            interval: sim.case.output.interval,
+            time_interval: sim.case.output.time_interval,
+            last_vtk_step: state.last_vtk_step,
+            last_vtk_slot: state.last_vtk_slot,
+            rows_step: state.rows_step,
+            complete_length: state.monitors_length,
+        };
+        if state.rows_step < sim.step {
+            writer.write_step(sim, false)?;
+        }
+        Ok(writer)
     }
 
     /// Output directory.
@@ -72,6 +162,8 @@ impl ResultWriter {
             }
             self.last_vtk_step = Some(sim.step);
         }
+        self.rows_step = sim.step;
+        self.complete_length = self.monitors.get_ref().metadata()?.len();
         Ok(())
     }
 

@@ -57,6 +57,8 @@ pub enum RunStatus {
     Failed,
     /// Writing the results failed.
     OutputError,
+    /// Interrupted (SIGINT/SIGTERM) after a converged step; a checkpoint was written.
+    Interrupted,
 }
 
 /// Why the run ended, and when.

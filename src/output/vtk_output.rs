@@ -9,9 +9,17 @@ use std::path::{Path, PathBuf};
 
 use loam_fem::domain::Field;
 
-use super::pvd::PvdSeries;
+use super::pvd::{DataSet, PvdSeries};
 use super::vtk::{write_vtu, VtuCells, VtuField};
 use crate::simulation::Simulation;
+
+/// The series written so far (for checkpoints): per output name its data sets, and those of
+/// the `<case>.pvd` of all parts.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct VtkState {
+    series: Vec<(String, Vec<DataSet>)>,
+    all: Option<Vec<DataSet>>,
+}
 
 /// One `.pvd` series per output name, in the order the model first gave them.
 pub struct VtkSeries {
@@ -29,6 +37,30 @@ impl VtkSeries {
     /// A series in `dir`.
     pub fn new(dir: &Path) -> Self {
         Self { dir: dir.to_path_buf(), series: Vec::new(), all: None }
+    }
+
+    /// The series written so far.
+    pub fn state(&self) -> VtkState {
+        VtkState {
+            series: self.series.iter().map(|(n, s)| (n.clone(), s.steps().to_vec())).collect(),
+            all: self.all.as_ref().map(|s| s.steps().to_vec()),
+        }
+    }
+
+    /// Series in `dir` that continue those of `state` (their `.pvd` files rewritten).
+    pub fn resume(dir: &Path, sim: &Simulation, state: VtkState) -> std::io::Result<Self> {
+        let pvd = |name: &str, steps| {
+            PvdSeries::resume(dir.join(format!("{name}.pvd")), steps).map_err(std::io::Error::other)
+        };
+        let mut series = Vec::with_capacity(state.series.len());
+        for (name, steps) in state.series {
+            series.push((name.clone(), pvd(&name, steps)?));
+        }
+        let all = match state.all {
+            Some(steps) => Some(pvd(&sim.case.name, steps)?),
+            None => None,
+        };
+        Ok(Self { dir: dir.to_path_buf(), series, all })
     }
 
     /// Writes the committed state of every output of every domain.

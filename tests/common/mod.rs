@@ -7,6 +7,7 @@ use std::path::Path;
 
 use loam::case::Case;
 use loam::simulation::Simulation;
+use loam_fem::domain::PointQuantity;
 
 /// Monitor history: (time, values in column order) per step, the initial state first.
 pub type History = Vec<(f64, Vec<f64>)>;
@@ -14,6 +15,18 @@ pub type History = Vec<(f64, Vec<f64>)>;
 /// A bundled case from `cases/`.
 pub fn case(name: &str) -> Case {
     Case::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("cases").join(name)).expect("bundled case loads")
+}
+
+/// A bundled case from `cases/` as JSON, to be edited through the case-file schema (the
+/// public interface) and built with [`parse`].
+pub fn case_json(name: &str) -> serde_json::Value {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases").join(name);
+    serde_json::from_str(&std::fs::read_to_string(&path).expect("bundled case present")).expect("bundled case is JSON")
+}
+
+/// A case from its JSON.
+pub fn parse(json: serde_json::Value) -> Case {
+    Case::parse(&json.to_string()).expect("case parses")
 }
 
 /// Runs `case` to its end time.
@@ -40,10 +53,11 @@ pub fn last(sim: &Simulation, h: &History, name: &str) -> f64 {
 /// Prints measured vs reference and asserts the relative error is within `tolerance`.
 pub fn report(what: &str, measured: f64, reference: f64, tolerance: f64) {
     let err = (measured - reference).abs() / reference.abs();
+    let tolerance_text =
+        if tolerance >= 1e-3 { format!("{:.1} %", tolerance * 100.0) } else { format!("{tolerance:.0e} relative") };
     println!(
-        "{what}: measured {measured:.6}, reference {reference:.6}, error {:.3} % (tolerance {:.1} %)",
-        err * 100.0,
-        tolerance * 100.0
+        "{what}: measured {measured:.6}, reference {reference:.6}, error {:.3} % (tolerance {tolerance_text})",
+        err * 100.0
     );
     assert!(err <= tolerance, "{what}: error {err} above {tolerance}");
 }
@@ -77,6 +91,11 @@ pub fn principal_angle(points: &[[f64; 2]]) -> f64 {
     }
     (0.5 * (2.0 * sxy).atan2(sxx - syy)).to_degrees().abs()
 }
+
+/// Resolution of a fitted shear-band angle (degrees): the band is fitted through cells or
+/// points h = 0.05 m apart along a band about 1.4 m long, so an offset of one cell at its
+/// ends turns it by atan(0.05 / 1.4) = 2°.
+pub const BAND_FIT: f64 = 2.0;
 
 /// Localisation measures of a field `kappa` (accumulated plastic deviatoric strain) at
 /// positions `x`: (κ max, κ mean, share of positions with κ > κ_max / 2, angle of that band
@@ -133,4 +152,68 @@ pub fn check_mc_softening(label: &str, force: (f64, f64, bool), measures: (f64, 
     assert!(end < 0.7 * peak && end > residual_strength, "softening towards, not below, the residual");
     assert!(max >= 5.0 * mean && share < 0.15, "the strain localises");
     assert!((40.0..=52.5).contains(&angle), "band angle {angle}° outside Roscoe ± 5°");
+}
+
+/// Observed order of convergence from three levels refined by `ratio` (h, h/r, h/r²):
+/// `p = ln(|u₁ − u₂| / |u₂ − u₃|) / ln r` (self-convergence: no reference needed).
+pub fn observed_order(values: [f64; 3], ratio: f64) -> f64 {
+    ((values[0] - values[1]).abs() / (values[1] - values[2]).abs()).ln() / ratio.ln()
+}
+
+/// Richardson extrapolation of the finest two of three levels with the observed order:
+/// `u* = u₃ + (u₃ − u₂) / (r^p − 1)`.
+pub fn richardson(values: [f64; 3], ratio: f64) -> f64 {
+    let p = observed_order(values, ratio);
+    values[2] + (values[2] - values[1]) / (ratio.powf(p) - 1.0)
+}
+
+/// Newton convergence orders of one step from its residual norms `r_0, r_1, …` (the last
+/// one at the round-off floor: the step ran until its correction was round-off):
+///
+/// $$ p_k = \frac{\ln(r_{k+1} / r_k)}{\ln(r_k / r_{k-1})} $$
+///
+/// over the asymptotic iterations: those where the previous iteration already contracted
+/// the residual tenfold (`r_k ≤ 0.1 r_{k−1}`: past the global phase) and `r_{k+1}` lies at
+/// least ten times above the floor (the last residual), so that round-off does not enter
+/// the estimate. Returns `(k, p_k)`. Quadratic convergence gives p → 2; a linearly
+/// converging solver gives p = 1 whatever its rate.
+pub fn newton_orders(residuals: &[f64]) -> Vec<(usize, f64)> {
+    let floor = *residuals.last().expect("residuals");
+    (1..residuals.len().saturating_sub(1))
+        .filter(|&k| residuals[k] <= 0.1 * residuals[k - 1] && residuals[k + 1] >= 10.0 * floor)
+        .map(|k| (k, (residuals[k + 1] / residuals[k]).ln() / (residuals[k] / residuals[k - 1]).ln()))
+        .collect()
+}
+
+/// The material point of domain 0 that starts nearest to `target`: its reference position
+/// `X = x − u` and its displacement `u` (as many components as the model's dimension).
+pub fn nearest_point(sim: &Simulation, target: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let d = &sim.model.domains[0];
+    let dim = target.len();
+    let mut best = (f64::MAX, vec![], vec![]);
+    for id in d.points_in_box(&[f64::MIN; 3][..dim], &[f64::MAX; 3][..dim]) {
+        let x = d.point_quantity(id, PointQuantity::Position).expect("position");
+        let u = d.point_quantity(id, PointQuantity::Displacement).expect("displacement");
+        let x0: Vec<f64> = (0..dim).map(|i| x[i] - u[i]).collect();
+        let dist = x0.iter().zip(target).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
+        if dist < best.0 {
+            best = (dist, x0, (0..dim).map(|i| u[i]).collect());
+        }
+    }
+    (best.1, best.2)
+}
+
+/// Timoshenko deflection (m, downward negative) of benchmark 1's cantilever (L = 7 m,
+/// h = b = 1 m, E = 9e7 Pa, ν = 0, ρ g = 9810 N/m³) under its weight at distance `x` from
+/// the clamp: Euler–Bernoulli `q x² (6L² − 4Lx + x²)/(24 EI)` plus shear
+/// `q (L x − x²/2)/(κ G A)`, κ = 5/6; at x = L: −0.39256 − 0.00641 = −0.39897 m.
+pub fn timoshenko(x: f64) -> f64 {
+    let (q, ei, kga, l) = (1000.0 * 9.81, 9.0e7 / 12.0, 5.0 / 6.0 * 4.5e7, 7.0);
+    -(q * x * x * (6.0 * l * l - 4.0 * l * x + x * x) / (24.0 * ei) + q * (l * x - x * x / 2.0) / kga)
+}
+
+/// Euler–Bernoulli part of [`timoshenko`]; −0.39256 m at x = L (BENCHMARKS.md benchmark 1).
+pub fn euler_bernoulli(x: f64) -> f64 {
+    let (q, ei, l) = (1000.0 * 9.81, 9.0e7 / 12.0, 7.0);
+    -(q * x * x * (6.0 * l * l - 4.0 * l * x + x * x) / (24.0 * ei))
 }
