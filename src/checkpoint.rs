@@ -28,6 +28,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use bincode::Options;
 use loam_fem::model::ModelState;
 use serde::{Deserialize, Serialize};
 
@@ -119,6 +120,11 @@ pub fn write(path: &Path, checkpoint: &Checkpoint) -> Result<(), CheckpointError
 /// `case_fingerprint`.
 pub fn read(path: &Path, case_fingerprint: u32) -> Result<Checkpoint, CheckpointError> {
     let refused = |reason: String| CheckpointError::Refused { file: path.to_path_buf(), reason };
+    let meta =
+        std::fs::metadata(path).map_err(|e| CheckpointError::Io { file: path.to_path_buf(), reason: e.to_string() })?;
+    if !meta.is_file() {
+        return Err(refused("not a regular file".into()));
+    }
     let bytes =
         std::fs::read(path).map_err(|e| CheckpointError::Io { file: path.to_path_buf(), reason: e.to_string() })?;
     if bytes.len() < HEADER || &bytes[..8] != MAGIC {
@@ -141,8 +147,12 @@ pub fn read(path: &Path, case_fingerprint: u32) -> Result<Checkpoint, Checkpoint
     if crc32fast::hash(payload) != crc {
         return Err(refused("corrupt (its checksum does not match)".into()));
     }
+    // the encoding of `write` (bincode's fixed-width integers), allocating no more than the
+    // payload can hold: a crafted length cannot ask for more memory than the file has
+    let options =
+        bincode::DefaultOptions::new().with_fixint_encoding().allow_trailing_bytes().with_limit(payload.len() as u64);
     let checkpoint: Checkpoint =
-        bincode::deserialize(payload).map_err(|e| refused(format!("corrupt (cannot decode: {e})")))?;
+        options.deserialize(payload).map_err(|e| refused(format!("corrupt (cannot decode: {e})")))?;
     if checkpoint.case_fingerprint != case_fingerprint {
         return Err(refused(format!(
             "written for another case ('{}', or this case with other settings than end_time and checkpoint)",

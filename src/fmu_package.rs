@@ -7,7 +7,7 @@
 //! binaries/<platform>/<id>.so             the loam-fmu shared library (the same for every case)
 //! resources/loam_fmu.json                 manifest: the case file name, the instantiation token
 //! resources/<case>.json                   the case (Gmsh paths rewritten into resources/)
-//! resources/mesh_<k>_<file>.msh           the Gmsh files it reads
+//! resources/<kind>_<k>_<file>.msh         the Gmsh files it reads (kind: mesh, grid, body)
 //! ```
 //!
 //! The key decision: the variable set is *per case*, so the model description is written
@@ -341,12 +341,27 @@ pub fn package(case_path: &Path, out: &Path, library: &Path) -> Result<PackageSu
         .map_err(|e| CaseError::new(case_path.display().to_string(), format!("cannot re-read case: {e}")))?;
     let mut files: Vec<(String, Vec<u8>)> = Vec::new();
     for (k, d) in sim.case.domains.iter().enumerate() {
-        if let Some(MeshSpec::Gmsh(file)) = &d.mesh {
+        // an FEM mesh, a background grid and a body mesh may each be a Gmsh file
+        let body_mesh = match &d.material_points {
+            Some(crate::case::BodySpec::Cells { mesh, .. }) => Some(mesh),
+            _ => None,
+        };
+        let meshes = [
+            (d.mesh.as_ref(), vec!["mesh"], "mesh"),
+            (d.grid_mesh.as_ref(), vec!["grid_mesh"], "grid"),
+            (body_mesh, vec!["material_points", "cells", "mesh"], "body"),
+        ];
+        for (spec, json_path, kind) in meshes {
+            let Some(MeshSpec::Gmsh(file)) = spec else { continue };
             let src = sim.case.directory.join(file);
             let stem = file.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "mesh.msh".into());
-            let packaged = format!("mesh_{k}_{stem}");
+            let packaged = format!("{kind}_{k}_{stem}");
             files.push((format!("resources/{packaged}"), std::fs::read(&src).map_err(io(&src))?));
-            json["domains"][k]["mesh"]["gmsh"] = serde_json::Value::String(packaged);
+            let mut node = &mut json["domains"][k];
+            for key in json_path {
+                node = &mut node[key];
+            }
+            node["gmsh"] = serde_json::Value::String(packaged);
         }
     }
     let case_file = format!("{}.json", sim.case.name);

@@ -15,9 +15,10 @@ use crate::case::{Case, CaseError};
 use crate::model_builder::{build_model, InputSlot, ModelInput, ModelOutput};
 use crate::monitor::Monitor;
 
-/// Why a run stopped early.
+/// Why a run stopped early. A failure before the first step (the consistent initial
+/// acceleration, `time_step` 0) says so rather than quoting a step of length 0.
 #[derive(Debug, Clone, thiserror::Error, PartialEq)]
-#[error("step {step} (t = {time:.6e} s, Δt = {time_step:.3e} s after {cuts} cuts): {source}")]
+#[error("{}: {source}", self.when())]
 pub struct RunError {
     /// Index of the step that failed (1-based).
     pub step: usize,
@@ -29,6 +30,23 @@ pub struct RunError {
     pub cuts: u32,
     /// The last failure.
     pub source: StepError,
+}
+
+impl RunError {
+    /// Where the run stopped, for the message.
+    fn when(&self) -> String {
+        if self.time_step == 0.0 {
+            format!(
+                "step {} (t = {:.6e} s, computing the initial acceleration before the first step)",
+                self.step, self.time
+            )
+        } else {
+            format!(
+                "step {} (t = {:.6e} s, Δt = {:.3e} s after {} cuts)",
+                self.step, self.time, self.time_step, self.cuts
+            )
+        }
+    }
 }
 
 /// A rejected [`Simulation::set_input`].
