@@ -7,6 +7,20 @@
 //! otherwise. On this project's FEM/MPM matrices Cholesky with AMD ordering was up to 10×
 //! faster than LU (whose column ordering fills in more), see `../shared/STACK.md`.
 //!
+//! **Saddle-point systems** (mixed u–p domains: `[K_uu K_up; K_pu −M_p]`, symmetric and
+//! indefinite for the hyperelastic laws and the pressure-independent plasticity) break
+//! Cholesky. There `auto` takes the sparse `L D Lᵀ` factorisation without pivoting on the
+//! same symbolic (AMD) analysis as Cholesky, with the pivot signs expected of a
+//! quasi-definite matrix (`+` on displacement equations, `−` on pressure equations; a pivot
+//! of the wrong sign or below `1e-13·max|a_ii|` is replaced by a regularised one) and one
+//! step of iterative refinement when the solve's residual is not at round-off (Vanderbei
+//! 1995, "Symmetric quasidefinite matrices", SIAM J. Optim. 5:100–113,
+//! doi:10.1137/0805005: such matrices factorise stably in any symmetric order). An
+//! unsymmetric saddle point (Mohr–Coulomb or Drucker–Prager with φ > 0, whose deviatoric
+//! stress depends on the pressure), or an `L D Lᵀ` that fails, goes to LU. `ldlt` asks for it
+//! on any symmetric matrix. Measured on the u–p footing and Cook's membrane:
+//! `docs/performance.md` (section "Mixed u–p").
+//!
 //! `symmetric_part_gmres` solves an unsymmetric tangent by GMRES ([`crate::krylov`])
 //! preconditioned with the Cholesky factors of its symmetric part, to [`KRYLOV_TOLERANCE`]
 //! within [`KRYLOV_MAX_ITERATIONS`], and falls back to LU for the rest of the pattern when that
@@ -16,7 +30,10 @@
 use std::time::Instant;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky};
+use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky,
+};
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, NumericLu, SymbolicLu};
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::{Conj, MatMut, Side};
@@ -42,6 +59,9 @@ pub enum LinearSolverKind {
     Lu,
     /// Sparse Cholesky (symmetric positive definite matrices only).
     Cholesky,
+    /// Sparse `L D Lᵀ` without pivoting, with the pivot signs of a saddle point (symmetric
+    /// matrices; LU if the matrix is unsymmetric or the factorisation fails).
+    Ldlt,
     /// As `auto` for symmetric matrices; an unsymmetric one (non-associated plasticity) by
     /// GMRES preconditioned with the Cholesky factors of its symmetric part, LU if that part
     /// is not positive definite or GMRES does not converge. Pays in mass-dominated steps
@@ -85,6 +105,20 @@ struct CholeskyState {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
     scratch: MemBuffer,
+}
+
+/// Symbolic `L D Lᵀ` factorisation (the Cholesky analysis) with the factor, the expected
+/// pivot signs and the workspace kept.
+struct LdltState {
+    symbolic: SymbolicCholesky<usize>,
+    values: Vec<f64>,
+    scratch: MemBuffer,
+}
+
+impl std::fmt::Debug for LdltState {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LdltState").field("len_val", &self.values.len()).finish_non_exhaustive()
+    }
 }
 
 /// Symbolic LU factorisation with the numeric factor and the workspace kept.
@@ -133,8 +167,14 @@ pub struct LinearSolver {
     kind: LinearSolverKind,
     lu: Option<LuState>,
     llt: Option<CholeskyState>,
+    ldlt: Option<LdltState>,
+    /// Expected pivot sign of each equation of a saddle-point system (`+1` displacement,
+    /// `−1` pressure); empty otherwise.
+    signs: Vec<i8>,
     /// Set once Cholesky failed on this pattern (indefinite tangent): use LU from then on.
     llt_failed: bool,
+    /// Set once `L D Lᵀ` failed on this pattern: LU from then on.
+    ldlt_failed: bool,
     /// Set once GMRES on the symmetric part's factors failed on this pattern: LU from then on.
     symmetric_part_failed: bool,
     /// `(A + Aᵀ)/2` for its factorisation.
@@ -151,7 +191,10 @@ impl LinearSolver {
             kind,
             lu: None,
             llt: None,
+            ldlt: None,
+            signs: Vec::new(),
             llt_failed: false,
+            ldlt_failed: false,
             symmetric_part_failed: false,
             symmetric_values: Vec::new(),
             gmres: Gmres::default(),
@@ -163,8 +206,16 @@ impl LinearSolver {
     pub fn reset_pattern(&mut self) {
         self.lu = None;
         self.llt = None;
+        self.ldlt = None;
         self.llt_failed = false;
+        self.ldlt_failed = false;
         self.symmetric_part_failed = false;
+    }
+
+    /// Declares a saddle-point system: the expected pivot sign of every equation (`+1` on
+    /// displacement equations, `−1` on pressure equations), for `L D Lᵀ`.
+    pub fn set_saddle_point(&mut self, signs: Vec<i8>) {
+        self.signs = signs;
     }
 
     /// GMRES on `A x = b` preconditioned by the Cholesky factors held in the Cholesky state
@@ -201,10 +252,23 @@ impl LinearSolver {
         if n == 0 {
             return Ok(());
         }
-        let par = faer::get_global_parallelism();
+        let ldlt = match self.kind {
+            LinearSolverKind::Ldlt => true,
+            LinearSolverKind::Auto => !self.signs.is_empty(),
+            _ => false,
+        };
+        if ldlt {
+            if !self.ldlt_failed && pattern.is_symmetric(values, 1e-10) {
+                if self.solve_ldlt(pattern, values, rhs)? {
+                    return check_finite(rhs);
+                }
+                self.ldlt_failed = true;
+            }
+            return self.solve_lu(pattern, values, rhs);
+        }
         let symmetric = match self.kind {
             LinearSolverKind::Cholesky => true,
-            LinearSolverKind::Lu => false,
+            LinearSolverKind::Lu | LinearSolverKind::Ldlt => false,
             LinearSolverKind::Auto | LinearSolverKind::SymmetricPartGmres => {
                 !self.llt_failed && pattern.is_symmetric(values, 1e-10)
             }
@@ -235,6 +299,13 @@ impl LinearSolver {
             }
             self.symmetric_part_failed = true;
         }
+        self.solve_lu(pattern, values, rhs)
+    }
+
+    /// Sparse LU with partial pivoting (symbolic analysis once per pattern).
+    fn solve_lu(&mut self, pattern: &AssemblyPattern, values: &[f64], rhs: &mut [f64]) -> Result<(), LinearSolverError> {
+        let n = pattern.num_equations();
+        let par = faer::get_global_parallelism();
         if self.lu.is_none() {
             let t = Instant::now();
             let a = pattern.matrix(values);
@@ -269,6 +340,92 @@ impl LinearSolver {
         );
         self.timings.solve += t.elapsed().as_secs_f64();
         check_finite(rhs)
+    }
+
+    /// `L D Lᵀ` of the symmetric saddle-point matrix (module doc) and the solve, with one step
+    /// of iterative refinement if the residual is not at round-off; `false` if the
+    /// factorisation failed or the solution is not accurate (then `rhs` is unchanged).
+    fn solve_ldlt(
+        &mut self,
+        pattern: &AssemblyPattern,
+        values: &[f64],
+        rhs: &mut [f64],
+    ) -> Result<bool, LinearSolverError> {
+        let a = pattern.matrix(values);
+        let par = faer::get_global_parallelism();
+        if self.ldlt.is_none() {
+            let t = Instant::now();
+            let params =
+                CholeskySymbolicParams { supernodal_flop_ratio_threshold: cholesky_threshold(), ..Default::default() };
+            let symbolic = factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), params)
+                .map_err(factorisation_error)?;
+            let scratch = buffer(StackReq::any_of(&[
+                symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
+                symbolic.solve_in_place_scratch::<f64>(1, par),
+            ]))?;
+            let values = vec![0.0; symbolic.len_val()];
+            self.ldlt = Some(LdltState { symbolic, values, scratch });
+            self.timings.symbolic += t.elapsed().as_secs_f64();
+        }
+        let n = rhs.len();
+        let signs: Vec<i8> = if self.signs.len() == n { self.signs.clone() } else { vec![1; n] };
+        let diag_max = (0..n).fold(0.0f64, |m, c| {
+            let (col_ptr, row_idx) = (a.symbolic().col_ptr(), a.symbolic().row_idx());
+            (col_ptr[c]..col_ptr[c + 1]).filter(|&k| row_idx[k] == c).fold(m, |m, k| m.max(values[k].abs()))
+        });
+        let t = Instant::now();
+        let st = self.ldlt.as_mut().expect("symbolic LDLT present");
+        let regularization = LdltRegularization {
+            dynamic_regularization_signs: Some(&signs),
+            dynamic_regularization_delta: 1e-8 * diag_max,
+            dynamic_regularization_epsilon: 1e-13 * diag_max,
+        };
+        let factor = st.symbolic.factorize_numeric_ldlt::<f64>(
+            &mut st.values,
+            a,
+            Side::Lower,
+            regularization,
+            par,
+            MemStack::new(&mut st.scratch),
+            Default::default(),
+        );
+        self.timings.factorisation += t.elapsed().as_secs_f64();
+        self.timings.factorisations += 1;
+        if factor.is_err() {
+            return Ok(false);
+        }
+        let t = Instant::now();
+        let b = rhs.to_vec();
+        let solve = |st: &mut LdltState, x: &mut [f64]| {
+            LdltRef::new(&st.symbolic, &st.values).solve_in_place_with_conj(
+                Conj::No,
+                MatMut::from_column_major_slice_mut(x, n, 1),
+                par,
+                MemStack::new(&mut st.scratch),
+            );
+        };
+        let mut x = b.clone();
+        solve(st, &mut x);
+        let mut r = vec![0.0; n];
+        pattern.multiply(values, &x, &mut r);
+        for (ri, bi) in r.iter_mut().zip(&b) {
+            *ri = bi - *ri;
+        }
+        let (bn, mut rn) = (norm2(&b), norm2(&r));
+        if rn > 1e-12 * bn {
+            solve(st, &mut r);
+            for (xi, di) in x.iter_mut().zip(&r) {
+                *xi += di;
+            }
+            pattern.multiply(values, &x, &mut r);
+            rn = norm2(&r.iter().zip(&b).map(|(ax, bi)| bi - ax).collect::<Vec<_>>());
+        }
+        self.timings.solve += t.elapsed().as_secs_f64();
+        if !(rn <= 1e-8 * bn) {
+            return Ok(false);
+        }
+        rhs.copy_from_slice(&x);
+        Ok(true)
     }
 
     /// Cholesky factorisation of the symmetric matrix with nonzeros `values` (its lower
@@ -349,6 +506,10 @@ fn cholesky_threshold() -> SupernodalThreshold {
         Ok("auto") => SupernodalThreshold::AUTO,
         _ => SupernodalThreshold::FORCE_SUPERNODAL,
     }
+}
+
+fn norm2(x: &[f64]) -> f64 {
+    x.iter().map(|v| v * v).sum::<f64>().sqrt()
 }
 
 fn check_finite(x: &[f64]) -> Result<(), LinearSolverError> {

@@ -99,6 +99,8 @@ pub struct StepProblem<'a> {
     pub gravity: [f64; 3],
     /// External nodal forces at `t_{n+1}` (local frames at slip nodes).
     pub f_ext: &'a [f64],
+    /// Number of displacement DOFs (the DOFs with velocity and acceleration).
+    pub kinematic_dofs: usize,
 }
 
 impl StepProblem<'_> {
@@ -109,7 +111,7 @@ impl StepProblem<'_> {
             *u += s * d;
             *du += s * d;
         }
-        self.scheme.update_kinematics(self.dt, self.state, self.committed);
+        self.scheme.update_kinematics(self.dt, self.state, self.committed, self.kinematic_dofs);
     }
 }
 
