@@ -138,6 +138,24 @@ pub struct DomainSpec {
     /// `consistent` (default) or `lumped` mass matrix.
     #[serde(default)]
     pub mass_matrix: MassMatrix,
+    /// Unknowns of the domain's elements: `displacement` (default, the irreducible element)
+    /// or `mixed_up` (nodal displacements and pressures with a stabilised equal-order
+    /// element, for nearly and exactly incompressible materials: undrained soil, rubber).
+    /// All bodies on one background grid share it.
+    #[serde(default)]
+    pub element_formulation: ElementFormulation,
+}
+
+/// The unknowns of a domain's elements (`domains[k].element_formulation`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ElementFormulation {
+    /// Nodal displacements only (the irreducible element).
+    #[default]
+    Displacement,
+    /// Nodal displacements and pressures (mean Kirchhoff stress), equal order, stabilised by
+    /// the polynomial pressure projection (Dohrmann & Bochev 2004).
+    MixedUp,
 }
 
 fn fem() -> DomainKind {
