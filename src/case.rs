@@ -703,6 +703,10 @@ pub enum MonitorSpec {
         point: Vec<f64>,
         /// Component.
         component: Component,
+        /// Factor applied to the value (default 1), e.g. `-1/(B s_u)` for a normalised
+        /// bearing pressure, or `-1` for a settlement.
+        #[serde(default = "one")]
+        scale: f64,
     },
     /// Velocity component of the node nearest to `point`.
     Velocity {
@@ -730,6 +734,10 @@ pub enum MonitorSpec {
         region: String,
         /// Component.
         component: Component,
+        /// Factor applied to the value (default 1), e.g. `-1/(B s_u)` for a normalised
+        /// bearing pressure, or `-1` for a settlement.
+        #[serde(default = "one")]
+        scale: f64,
     },
     /// Displacement component of the material point nearest to `point` at the start.
     MaterialPointDisplacement {
@@ -739,6 +747,10 @@ pub enum MonitorSpec {
         point: Vec<f64>,
         /// Component.
         component: Component,
+        /// Factor applied to the value (default 1), e.g. `-1/(B s_u)` for a normalised
+        /// bearing pressure, or `-1` for a settlement.
+        #[serde(default = "one")]
+        scale: f64,
     },
     /// Velocity component of the material point nearest to `point` at the start.
     MaterialPointVelocity {
@@ -799,6 +811,10 @@ pub enum MonitorSpec {
         wall: String,
         /// Component.
         component: Component,
+        /// Factor applied to the value (default 1), e.g. `-1/(B s_u)` for a normalised
+        /// bearing pressure, or `-1` for a settlement.
+        #[serde(default = "one")]
+        scale: f64,
     },
     /// Total current volume (m³) of the material points inside `box` (every point if
     /// absent), `Σ_p V_p` with `V_p = J_p V_p⁰` the bulk volume the law carries: per unit
@@ -831,6 +847,10 @@ pub enum MonitorSpec {
         interface: String,
         /// Component.
         component: Component,
+        /// Factor applied to the value (default 1), e.g. `-1/(B s_u)` for a normalised
+        /// bearing pressure, or `-1` for a settlement.
+        #[serde(default = "one")]
+        scale: f64,
     },
     /// Total kinetic energy (J), of every domain or of the domain (FEM domain or MPM body)
     /// named `domain`.
@@ -853,6 +873,18 @@ pub enum MonitorSpec {
 }
 
 impl MonitorSpec {
+    /// The factor applied to the monitor's value (`scale`, 1 where the monitor has none).
+    pub fn scale(&self) -> f64 {
+        match self {
+            MonitorSpec::Displacement { scale, .. }
+            | MonitorSpec::Reaction { scale, .. }
+            | MonitorSpec::MaterialPointDisplacement { scale, .. }
+            | MonitorSpec::WallForce { scale, .. }
+            | MonitorSpec::InterfaceForce { scale, .. } => *scale,
+            _ => 1.0,
+        }
+    }
+
     /// The monitor's column name.
     pub fn name(&self) -> &str {
         match self {

@@ -76,6 +76,8 @@ pub struct Assembler {
     delta: Vec<f64>,
     /// Equilibration `D` per equation (empty without pressure equations).
     scale: Vec<f64>,
+    /// `1/s` per pressure DOF (the weights of [`Assembler::dof_norm`]).
+    pressure_weights: Vec<f64>,
     /// Whether `rhs` holds the correction of the last solve (else the residual).
     solved: bool,
     rotations: SlipRotations,
@@ -138,6 +140,7 @@ impl Assembler {
             rhs: vec![0.0; n_eq],
             delta: vec![0.0; num_dofs],
             scale,
+            pressure_weights: system.pressure_scales.iter().map(|s| 1.0 / s).collect(),
             solved: false,
             buffer_dofs: layout.dofs,
             rotations,
@@ -219,6 +222,16 @@ impl Assembler {
             return norm(&self.rhs);
         }
         self.rhs.iter().enumerate().map(|(e, v)| (v * self.weight(e)).powi(2)).sum::<f64>().sqrt()
+    }
+
+    /// Norm of a correction given per DOF (full vector, e.g. the step's increment `Δu`), with
+    /// the pressure DOFs weighted as the corrections of [`Assembler::solve`] (`δp/s`).
+    pub fn dof_norm(&self, full: &[f64]) -> f64 {
+        let first = self.dofs.displacement_dofs();
+        let (u, p) = full.split_at(first.min(full.len()));
+        let sq: f64 = u.iter().map(|v| v * v).sum::<f64>()
+            + p.iter().zip(&self.pressure_weights).map(|(v, w)| (v * w).powi(2)).sum::<f64>();
+        sq.sqrt()
     }
 
     /// Norms of the right-hand side per block (before a solve: the residual; after it: the

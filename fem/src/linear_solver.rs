@@ -12,8 +12,11 @@
 //! Cholesky. There `auto` takes the sparse `L D Lᵀ` factorisation without pivoting on the
 //! same symbolic (AMD) analysis as Cholesky, with the pivot signs expected of a
 //! quasi-definite matrix (`+` on displacement equations, `−` on pressure equations; a pivot
-//! of the wrong sign or below `1e-13·max|a_ii|` is replaced by a regularised one) and one
-//! step of iterative refinement when the solve's residual is not at round-off (Vanderbei
+//! of the wrong sign or below `1e-13·max|a_ii|` is replaced by a regularised one) and up to
+//! [`LDLT_REFINEMENTS`] steps of iterative refinement while the solve's residual is not at
+//! round-off; a solve left above `1e-8` relative goes to LU, which then takes the next few
+//! solves ([`LDLT_BACKOFF`]: `L D Lᵀ` fails where perfect plasticity leaves `K_uu` singular in
+//! a collapse mechanism) (Vanderbei
 //! 1995, "Symmetric quasidefinite matrices", SIAM J. Optim. 5:100–113,
 //! doi:10.1137/0805005: such matrices factorise stably in any symmetric order). An
 //! unsymmetric saddle point (Mohr–Coulomb or Drucker–Prager with φ > 0, whose deviatoric
@@ -45,6 +48,13 @@ use crate::krylov::Gmres;
 /// Relative residual `‖b − A x‖/‖b‖` a GMRES solve must reach: far below the
 /// Newton tolerances, so that Newton takes the same path as with exact solves.
 pub const KRYLOV_TOLERANCE: f64 = 1e-9;
+/// Steps of iterative refinement at most after an `L D Lᵀ` solve whose residual is not at
+/// round-off (regularised pivots).
+pub const LDLT_REFINEMENTS: usize = 3;
+/// Longest run of LU solves after `L D Lᵀ` failures (a factorisation, or a solve not
+/// accurate to 1e-8): after each failure LU takes the next `2k + 1` solves (`k` the previous
+/// run), up to this many, before `L D Lᵀ` is tried again.
+pub const LDLT_BACKOFF: u32 = 7;
 /// Arnoldi steps before GMRES is given up for LU.
 pub const KRYLOV_MAX_ITERATIONS: usize = 12;
 
@@ -96,6 +106,10 @@ pub struct SolverTimings {
     pub krylov_solves: usize,
     /// GMRES iterations of those solves (failed attempts included).
     pub krylov_iterations: usize,
+    /// Saddle-point systems whose `L D Lᵀ` failed (then solved by LU).
+    pub ldlt_failures: usize,
+    /// Saddle-point systems solved by LU (after a failure of `L D Lᵀ`, or unsymmetric).
+    pub saddle_point_lu: usize,
 }
 
 /// Symbolic Cholesky factorisation with the numeric factor and the workspace kept between
@@ -173,8 +187,10 @@ pub struct LinearSolver {
     signs: Vec<i8>,
     /// Set once Cholesky failed on this pattern (indefinite tangent): use LU from then on.
     llt_failed: bool,
-    /// Set once `L D Lᵀ` failed on this pattern: LU from then on.
-    ldlt_failed: bool,
+    /// Length of the last run of LU solves after an `L D Lᵀ` failure ([`LDLT_BACKOFF`]).
+    ldlt_backoff: u32,
+    /// Solves left to LU before `L D Lᵀ` is tried again.
+    ldlt_skip: u32,
     /// Set once GMRES on the symmetric part's factors failed on this pattern: LU from then on.
     symmetric_part_failed: bool,
     /// `(A + Aᵀ)/2` for its factorisation.
@@ -194,7 +210,8 @@ impl LinearSolver {
             ldlt: None,
             signs: Vec::new(),
             llt_failed: false,
-            ldlt_failed: false,
+            ldlt_backoff: 0,
+            ldlt_skip: 0,
             symmetric_part_failed: false,
             symmetric_values: Vec::new(),
             gmres: Gmres::default(),
@@ -208,7 +225,8 @@ impl LinearSolver {
         self.llt = None;
         self.ldlt = None;
         self.llt_failed = false;
-        self.ldlt_failed = false;
+        self.ldlt_backoff = 0;
+        self.ldlt_skip = 0;
         self.symmetric_part_failed = false;
     }
 
@@ -258,12 +276,18 @@ impl LinearSolver {
             _ => false,
         };
         if ldlt {
-            if !self.ldlt_failed && pattern.is_symmetric(values, 1e-10) {
+            if self.ldlt_skip > 0 {
+                self.ldlt_skip -= 1;
+            } else if pattern.is_symmetric(values, 1e-10) {
                 if self.solve_ldlt(pattern, values, rhs)? {
+                    self.ldlt_backoff = 0;
                     return check_finite(rhs);
                 }
-                self.ldlt_failed = true;
+                self.ldlt_backoff = (2 * self.ldlt_backoff + 1).min(LDLT_BACKOFF);
+                self.ldlt_skip = self.ldlt_backoff;
+                self.timings.ldlt_failures += 1;
             }
+            self.timings.saddle_point_lu += 1;
             return self.solve_lu(pattern, values, rhs);
         }
         let symmetric = match self.kind {
@@ -412,13 +436,19 @@ impl LinearSolver {
             *ri = bi - *ri;
         }
         let (bn, mut rn) = (norm2(&b), norm2(&r));
-        if rn > 1e-12 * bn {
+        for _ in 0..LDLT_REFINEMENTS {
+            if rn <= 1e-12 * bn {
+                break;
+            }
             solve(st, &mut r);
             for (xi, di) in x.iter_mut().zip(&r) {
                 *xi += di;
             }
             pattern.multiply(values, &x, &mut r);
-            rn = norm2(&r.iter().zip(&b).map(|(ax, bi)| bi - ax).collect::<Vec<_>>());
+            for (ri, bi) in r.iter_mut().zip(&b) {
+                *ri = bi - *ri;
+            }
+            rn = norm2(&r);
         }
         self.timings.solve += t.elapsed().as_secs_f64();
         if !(rn <= 1e-8 * bn) {
