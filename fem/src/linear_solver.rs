@@ -34,8 +34,9 @@ use std::time::Instant;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, IntranodeLbltRef, LdltRef, LltRef, SymbolicCholesky,
 };
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, NumericLu, SymbolicLu};
 use faer::sparse::linalg::SupernodalThreshold;
@@ -72,6 +73,9 @@ pub enum LinearSolverKind {
     /// Sparse `L D Lᵀ` without pivoting, with the pivot signs of a saddle point (symmetric
     /// matrices; LU if the matrix is unsymmetric or the factorisation fails).
     Ldlt,
+    /// Sparse `L B Lᵀ` with Bunch–Kaufman pivoting inside the supernodes (symmetric
+    /// matrices; LU if the matrix is unsymmetric or the solve is not accurate).
+    Lblt,
     /// As `auto` for symmetric matrices; an unsymmetric one (non-associated plasticity) by
     /// GMRES preconditioned with the Cholesky factors of its symmetric part, LU if that part
     /// is not positive definite or GMRES does not converge. Pays in mass-dominated steps
@@ -127,6 +131,10 @@ struct LdltState {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
     scratch: MemBuffer,
+    /// Bunch–Kaufman (`L B Lᵀ`): the subdiagonal of `B` and the pivoting permutation.
+    subdiag: Vec<f64>,
+    perm_forward: Vec<usize>,
+    perm_inverse: Vec<usize>,
 }
 
 impl std::fmt::Debug for LdltState {
@@ -271,12 +279,12 @@ impl LinearSolver {
             return Ok(());
         }
         let ldlt = match self.kind {
-            LinearSolverKind::Ldlt => true,
+            LinearSolverKind::Ldlt | LinearSolverKind::Lblt => true,
             LinearSolverKind::Auto => !self.signs.is_empty(),
             _ => false,
         };
         if ldlt {
-            if self.ldlt_skip > 0 {
+                if self.ldlt_skip > 0 {
                 self.ldlt_skip -= 1;
             } else if pattern.is_symmetric(values, 1e-10) {
                 if self.solve_ldlt(pattern, values, rhs)? {
@@ -292,7 +300,7 @@ impl LinearSolver {
         }
         let symmetric = match self.kind {
             LinearSolverKind::Cholesky => true,
-            LinearSolverKind::Lu | LinearSolverKind::Ldlt => false,
+            LinearSolverKind::Lu | LinearSolverKind::Ldlt | LinearSolverKind::Lblt => false,
             LinearSolverKind::Auto | LinearSolverKind::SymmetricPartGmres => {
                 !self.llt_failed && pattern.is_symmetric(values, 1e-10)
             }
@@ -385,10 +393,19 @@ impl LinearSolver {
                 .map_err(factorisation_error)?;
             let scratch = buffer(StackReq::any_of(&[
                 symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
+                symbolic.factorize_numeric_intranode_lblt_scratch::<f64>(par, Default::default()),
                 symbolic.solve_in_place_scratch::<f64>(1, par),
             ]))?;
             let values = vec![0.0; symbolic.len_val()];
-            self.ldlt = Some(LdltState { symbolic, values, scratch });
+            let n = symbolic.nrows();
+            self.ldlt = Some(LdltState {
+                symbolic,
+                values,
+                scratch,
+                subdiag: vec![0.0; n],
+                perm_forward: vec![0; n],
+                perm_inverse: vec![0; n],
+            });
             self.timings.symbolic += t.elapsed().as_secs_f64();
         }
         let n = rhs.len();
@@ -399,34 +416,54 @@ impl LinearSolver {
         });
         let t = Instant::now();
         let st = self.ldlt.as_mut().expect("symbolic LDLT present");
-        let regularization = LdltRegularization {
-            dynamic_regularization_signs: Some(&signs),
-            dynamic_regularization_delta: 1e-8 * diag_max,
-            dynamic_regularization_epsilon: 1e-13 * diag_max,
-        };
-        let factor = st.symbolic.factorize_numeric_ldlt::<f64>(
-            &mut st.values,
-            a,
-            Side::Lower,
-            regularization,
-            par,
-            MemStack::new(&mut st.scratch),
-            Default::default(),
-        );
+        // `auto` on a saddle point, and `lblt`: Bunch–Kaufman; `ldlt`: signed regularisation
+        let pivoting = self.kind != LinearSolverKind::Ldlt;
+        if pivoting {
+            st.symbolic.factorize_numeric_intranode_lblt::<f64>(
+                &mut st.values,
+                &mut st.subdiag,
+                &mut st.perm_forward,
+                &mut st.perm_inverse,
+                a,
+                Side::Lower,
+                par,
+                MemStack::new(&mut st.scratch),
+                Default::default(),
+            );
+        } else {
+            let regularization = LdltRegularization {
+                dynamic_regularization_signs: Some(&signs),
+                dynamic_regularization_delta: 1e-8 * diag_max,
+                dynamic_regularization_epsilon: 1e-13 * diag_max,
+            };
+            let factor = st.symbolic.factorize_numeric_ldlt::<f64>(
+                &mut st.values,
+                a,
+                Side::Lower,
+                regularization,
+                par,
+                MemStack::new(&mut st.scratch),
+                Default::default(),
+            );
+            if factor.is_err() {
+                self.timings.factorisation += t.elapsed().as_secs_f64();
+                return Ok(false);
+            }
+        }
         self.timings.factorisation += t.elapsed().as_secs_f64();
         self.timings.factorisations += 1;
-        if factor.is_err() {
-            return Ok(false);
-        }
         let t = Instant::now();
         let b = rhs.to_vec();
         let solve = |st: &mut LdltState, x: &mut [f64]| {
-            LdltRef::new(&st.symbolic, &st.values).solve_in_place_with_conj(
-                Conj::No,
-                MatMut::from_column_major_slice_mut(x, n, 1),
-                par,
-                MemStack::new(&mut st.scratch),
-            );
+            let x = MatMut::from_column_major_slice_mut(x, n, 1);
+            let stack = MemStack::new(&mut st.scratch);
+            if pivoting {
+                let perm = PermRef::new_checked(&st.perm_forward, &st.perm_inverse, n);
+                IntranodeLbltRef::new(&st.symbolic, &st.values, &st.subdiag, perm)
+                    .solve_in_place_with_conj(Conj::No, x, par, stack);
+            } else {
+                LdltRef::new(&st.symbolic, &st.values).solve_in_place_with_conj(Conj::No, x, par, stack);
+            }
         };
         let mut x = b.clone();
         solve(st, &mut x);
