@@ -586,6 +586,18 @@ impl Linearisation<'_> {
         self.model.assembler.as_ref().expect("prepared").dofs().block(e)
     }
 
+    /// Whether each equation is a pressure equation (mixed u–p domains).
+    pub fn pressure_equations(&self) -> Vec<bool> {
+        let dofs = self.model.assembler.as_ref().expect("prepared").dofs();
+        let mut out = vec![false; dofs.num_equations()];
+        for (g, &e) in dofs.equations().iter().enumerate() {
+            if e != crate::dofs::CONSTRAINED && dofs.is_pressure(g) {
+                out[e] = true;
+            }
+        }
+        out
+    }
+
     /// Residual per equation and the tangent (dense, row-major) at `u = u_pred + δu`, where
     /// `δu` is the correction `delta` per equation taken to the DOFs as a Newton correction
     /// is (tied DOFs together, slip frames to the global frame).
