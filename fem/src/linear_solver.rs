@@ -284,7 +284,7 @@ impl LinearSolver {
             _ => false,
         };
         if ldlt {
-                if self.ldlt_skip > 0 {
+            if self.ldlt_skip > 0 {
                 self.ldlt_skip -= 1;
             } else if pattern.is_symmetric(values, 1e-10) {
                 if self.solve_ldlt(pattern, values, rhs)? {
@@ -335,7 +335,12 @@ impl LinearSolver {
     }
 
     /// Sparse LU with partial pivoting (symbolic analysis once per pattern).
-    fn solve_lu(&mut self, pattern: &AssemblyPattern, values: &[f64], rhs: &mut [f64]) -> Result<(), LinearSolverError> {
+    fn solve_lu(
+        &mut self,
+        pattern: &AssemblyPattern,
+        values: &[f64],
+        rhs: &mut [f64],
+    ) -> Result<(), LinearSolverError> {
         let n = pattern.num_equations();
         let par = faer::get_global_parallelism();
         if self.lu.is_none() {
@@ -459,8 +464,12 @@ impl LinearSolver {
             let stack = MemStack::new(&mut st.scratch);
             if pivoting {
                 let perm = PermRef::new_checked(&st.perm_forward, &st.perm_inverse, n);
-                IntranodeLbltRef::new(&st.symbolic, &st.values, &st.subdiag, perm)
-                    .solve_in_place_with_conj(Conj::No, x, par, stack);
+                IntranodeLbltRef::new(&st.symbolic, &st.values, &st.subdiag, perm).solve_in_place_with_conj(
+                    Conj::No,
+                    x,
+                    par,
+                    stack,
+                );
             } else {
                 LdltRef::new(&st.symbolic, &st.values).solve_in_place_with_conj(Conj::No, x, par, stack);
             }
@@ -488,7 +497,8 @@ impl LinearSolver {
             rn = norm2(&r);
         }
         self.timings.solve += t.elapsed().as_secs_f64();
-        if !(rn <= 1e-8 * bn) {
+        let accurate = rn <= 1e-8 * bn;
+        if !accurate {
             return Ok(false);
         }
         rhs.copy_from_slice(&x);

@@ -36,7 +36,9 @@
 //!
 //! `r_u,ai = Σ_p w P̃_iJ ∂N_a/∂X̃_J` (as the displacement element),
 //!
-//! `r_p,a = Σ_p w0 N_a (ln J − p/K) − (1/μ) Σ_p w0 N_a (p − Π₀p)`,
+//! `r_p,a = Σ_p w0 N_a (ln J + θ₀ − p/K) − (1/μ) Σ_p w0 N_a (p − Π₀p)`
+//! (`θ₀` an elastic volume change the law's history carries from the start, e.g. a
+//! geostatic prestrain, [`loam_laws::mixed::MixedLaw::volumetric_offset`]),
 //!
 //! and the consistent tangent (symmetric for the hyperelastic laws and the
 //! pressure-independent plasticity, where `B̃ = J0⁻¹ ΔF⁻ᵀ`):
@@ -46,9 +48,14 @@
 //! `K_pp = −Σ_p w0 N_a N_b / K − (1/μ) (M − m mᵀ / V)`, `M_ab = Σ_p w0 N_a N_b`.
 //!
 //! With `K = ∞` (incompressible) `ln J = 0` holds weakly and `K_pp` is the stabilisation
-//! alone. The pressure mass terms are integrated by the element's points: FEM passes a rule
-//! exact for `N_a N_b` (3 points on tri3, 4 on tet4, 2×2(×2) on quads and hexes); an MPM cell
-//! needs several material points for the projection to act (3 or more per cell).
+//! alone. FEM integrates everything on a rule exact for `N_a N_b` (3 points on tri3, 4 on
+//! tet4, 2×2(×2) on quads and hexes). An MPM cell integrates the momentum, the volumetric law
+//! and `K_up`, `K_pu` on its material points, but its projection term (`M`, `m`, `V`) on the
+//! cell's own Gauss rule scaled by the cell's fill fraction `φ = Σ_p w0_p / V_cell`: with its
+//! points alone a cell holding one or two points would have `M − m mᵀ/V ≈ 0` and leave its
+//! pressures unstabilised (observed: Newton stalling on the footing, whose surface cells
+//! empty as the soil flows), while the fill-weighted cell rule keeps the projection's
+//! kernel the element-wise constants whatever the points.
 //! Components of `F` follow [`crate::kernel::active_components`] through the general gradient
 //! operator (axisymmetry adds the hoop row `N_a/R`); plane stress has no incompressibility
 //! constraint and no u–p form.
@@ -60,8 +67,8 @@ use nalgebra::Matrix3;
 use crate::element::MAX_NODES;
 use crate::formulation::Formulation;
 use crate::kernel::{
-    active_components, cauchy_stress, delta_deformation_gradient, gradient_operator, pull_back_response,
-    KernelContext, KernelError, PointGeometry, PointOutput, MAX_DOFS,
+    active_components, cauchy_stress, delta_deformation_gradient, gradient_operator, pull_back_response, KernelContext,
+    KernelError, PointGeometry, PointOutput, MAX_DOFS,
 };
 
 /// Largest u–p element block (hex8: 8 × (3 + 1) DOFs).
@@ -85,6 +92,9 @@ fn mixed_law<'a>(ctx: &KernelContext<'a>) -> Result<&'a dyn MixedLaw, KernelErro
 /// displacements `disp` and nodal pressures `pressure`.
 ///
 /// Arguments as [`crate::kernel::solid_element`]; outputs are overwritten.
+/// `projection_rule`: the cell's own Gauss points (weights: their share of the cell's
+/// volume) on which an MPM cell integrates the pressure projection, scaled by its fill
+/// fraction; `None` integrates it on the integration points (FEM).
 pub fn mixed_element(
     ctx: &KernelContext<'_>,
     disp: &[[f64; 3]],
@@ -97,6 +107,7 @@ pub fn mixed_element(
     point_out: &mut [PointOutput],
     residual: &mut [f64],
     mut stiffness: Option<&mut [f64]>,
+    projection_rule: Option<&[PointGeometry]>,
 ) -> Result<(), KernelError> {
     let law = mixed_law(ctx)?;
     let nn = ctx.element.num_nodes();
@@ -111,8 +122,7 @@ pub fn mixed_element(
         k[..nd * nd].fill(0.0);
     }
     let active = active_components(ctx.formulation);
-    let request =
-        if stiffness.is_some() { TangentRequest::Components(active) } else { TangentRequest::None };
+    let request = if stiffness.is_some() { TangentRequest::Components(active) } else { TangentRequest::None };
     let mut b = [[0.0; 9]; MAX_DOFS];
     let mut bt_a = [[0.0; 9]; MAX_DOFS];
     let mut response = StressResponse::default();
@@ -143,25 +153,21 @@ pub fn mixed_element(
         pull_back_response(&f0[q], &mut stress, &mut response.tangent, request.components());
         let j0 = f0[q].determinant();
         let dp_tilde = dp_df * f0[q].transpose() / j0;
-        point_out[q] = PointOutput {
-            deformation_gradient: f,
-            stress,
-            cauchy: cauchy_stress(&response.first_piola, &f),
-        };
+        point_out[q] =
+            PointOutput { deformation_gradient: f, stress, cauchy: cauchy_stress(&response.first_piola, &f) };
         let (w, w0) = (g.weight, g.weight / j0);
         let det_f = f.determinant();
         if det_f <= 0.0 || !det_f.is_finite() {
             return Err(KernelError::Law { point: q, source: loam_laws::LawError::InvertedDeformation { det_f } });
         }
-        let volumetric = det_f.ln() - p * inv_k;
+        let volumetric = det_f.ln() + law.volumetric_offset(&committed[q * stride..(q + 1) * stride]) - p * inv_k;
         let nc = gradient_operator(ctx.formulation, ctx.element, g, &mut b);
         for r in 0..nu {
             let v: f64 = (0..nc).map(|c| stress[(active[c] / 3, active[c] % 3)] * b[r][c]).sum();
             residual[r] += w * v;
         }
         for a in 0..nn {
-            residual[nu + a] += w0 * g.shape[a] * (volumetric - inv_mu * p);
-            moments[a] += w0 * g.shape[a];
+            residual[nu + a] += w0 * g.shape[a] * volumetric;
         }
         volume += w0;
         let Some(k) = stiffness.as_deref_mut() else { continue };
@@ -192,21 +198,40 @@ pub fn mixed_element(
         }
         for a in 0..nn {
             for c in 0..nn {
-                k[(nu + a) * nd + nu + c] -= w0 * g.shape[a] * g.shape[c] * (inv_k + inv_mu);
+                k[(nu + a) * nd + nu + c] -= w0 * g.shape[a] * g.shape[c] * inv_k;
             }
         }
     }
-    // the projection's part of the stabilisation: + (1/μ) m_a Π₀p, + (1/μ) m_a m_b / V
-    if volume > 0.0 {
-        let mean: f64 = (0..nn).map(|b| moments[b] * pressure[b]).sum::<f64>() / volume;
-        for a in 0..nn {
-            residual[nu + a] += inv_mu * moments[a] * mean;
+    if volume <= 0.0 {
+        return Ok(());
+    }
+    // the projection term −(1/μ) (M p − m Π₀p), Π₀p = mᵀp / V, on the points (FEM) or on the
+    // cell's rule scaled by the fill fraction (MPM)
+    let rule: Vec<(f64, &[f64; MAX_NODES])> = match projection_rule {
+        None => geometry.iter().zip(f0).map(|(g, f)| (g.weight / f.determinant(), &g.shape)).collect(),
+        Some(cell) => {
+            let fill = volume / cell.iter().map(|g| g.weight).sum::<f64>();
+            cell.iter().map(|g| (g.weight * fill, &g.shape)).collect()
         }
-        if let Some(k) = stiffness.as_deref_mut() {
-            for a in 0..nn {
-                for c in 0..nn {
-                    k[(nu + a) * nd + nu + c] += inv_mu * moments[a] * moments[c] / volume;
-                }
+    };
+    let mut mass = [[0.0; MAX_NODES]; MAX_NODES];
+    for (w, n) in &rule {
+        for a in 0..nn {
+            moments[a] += w * n[a];
+            for c in 0..nn {
+                mass[a][c] += w * n[a] * n[c];
+            }
+        }
+    }
+    let mean: f64 = (0..nn).map(|b| moments[b] * pressure[b]).sum::<f64>() / volume;
+    for a in 0..nn {
+        let mp: f64 = (0..nn).map(|c| mass[a][c] * pressure[c]).sum();
+        residual[nu + a] -= inv_mu * (mp - moments[a] * mean);
+    }
+    if let Some(k) = stiffness {
+        for a in 0..nn {
+            for c in 0..nn {
+                k[(nu + a) * nd + nu + c] -= inv_mu * (mass[a][c] - moments[a] * moments[c] / volume);
             }
         }
     }
@@ -262,19 +287,28 @@ mod tests {
         ];
         for (law, plastic) in laws {
             for (element, formulation) in cases {
-                let err = check(law, element, formulation, plastic);
-                println!(
-                    "{} (K = {:.3e}) {element:?} {formulation:?}: u–p element tangent vs central FD, relative error \
-                     {err:.2e} (tolerance 1e-6)",
-                    law.name(),
-                    law.mixed().unwrap().bulk_modulus()
-                );
-                assert!(err < 1e-6, "{element:?} {formulation:?}: {err}");
+                for cell_rule in [false, true] {
+                    let err = check(law, element, formulation, plastic, cell_rule);
+                    println!(
+                        "{} (K = {:.3e}) {element:?} {formulation:?}{}: u–p element tangent vs central FD, relative \
+                         error {err:.2e} (tolerance 1e-6)",
+                        law.name(),
+                        law.mixed().unwrap().bulk_modulus(),
+                        if cell_rule { ", projection on the cell rule" } else { "" }
+                    );
+                    assert!(err < 1e-6, "{element:?} {formulation:?}: {err}");
+                }
             }
         }
     }
 
-    fn check(law: &dyn ConstitutiveLaw, element: ElementType, formulation: Formulation, plastic: bool) -> f64 {
+    fn check(
+        law: &dyn ConstitutiveLaw,
+        element: ElementType,
+        formulation: Formulation,
+        plastic: bool,
+        cell_rule: bool,
+    ) -> f64 {
         let coords = element_coords(element);
         let (nn, dim) = (element.num_nodes(), element.dim());
         let nd = nn * (dim + 1);
@@ -288,6 +322,14 @@ mod tests {
             .map(|g| point_geometry(element, formulation, 1.0, &coords, &g.xi, g.weight, None).unwrap())
             .collect();
         let np = geometry.len();
+        // as an MPM cell would: the projection on the cell's standard rule
+        let projection: Option<Vec<PointGeometry>> = cell_rule.then(|| {
+            element
+                .gauss_points_mixed()
+                .iter()
+                .map(|g| point_geometry(element, formulation, 1.0, &coords, &g.xi, g.weight, None).unwrap())
+                .collect()
+        });
         let mut f0 = Matrix3::new(1.05, 0.03, 0.0, -0.02, 0.97, 0.0, 0.0, 0.0, 1.0);
         if dim == 3 {
             f0[(0, 2)] = 0.02;
@@ -308,7 +350,8 @@ mod tests {
         let scale = if plastic { 0.05 } else { 0.03 };
         let mut x = vec![0.0; nd];
         for (s, v) in x.iter_mut().enumerate() {
-            *v = if s < nn * dim { scale * ((s * 3 + 1) as f64).sin() } else { -3.0e3 * (1.0 + 0.3 * (s as f64).cos()) };
+            *v =
+                if s < nn * dim { scale * ((s * 3 + 1) as f64).sin() } else { -3.0e3 * (1.0 + 0.3 * (s as f64).cos()) };
         }
         let residual = |x: &[f64], k: Option<&mut [f64]>| {
             let disp: Vec<[f64; 3]> = (0..nn)
@@ -321,8 +364,21 @@ mod tests {
             let mut r = vec![0.0; nd];
             let mut out = vec![PointOutput::default(); np];
             let mut trial = committed.clone();
-            mixed_element(&ctx, &disp, &x[nn * dim..], &geometry, &f0s, &f0s, &committed, &mut trial, &mut out, &mut r, k)
-                .unwrap();
+            mixed_element(
+                &ctx,
+                &disp,
+                &x[nn * dim..],
+                &geometry,
+                &f0s,
+                &f0s,
+                &committed,
+                &mut trial,
+                &mut out,
+                &mut r,
+                k,
+                projection.as_deref(),
+            )
+            .unwrap();
             (r, trial)
         };
         let mut k = vec![0.0; nd * nd];

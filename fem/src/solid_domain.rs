@@ -20,8 +20,8 @@ use crate::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, Nam
 use crate::element::{ElementType, MAX_NODES};
 use crate::formulation::Formulation;
 use crate::kernel::{point_geometry, solid_element, KernelContext, PointGeometry, PointOutput};
-use crate::mixed_kernel::mixed_element;
 use crate::mesh::Mesh;
+use crate::mixed_kernel::mixed_element;
 
 /// A solid FEM domain of one element type and one material.
 pub struct FemDomain {
@@ -268,7 +268,16 @@ impl Domain for FemDomain {
                     (&geometry[points.clone()], &f_prev[points], &committed[e * stride..(e + 1) * stride]);
                 match pressure_dofs {
                     None => solid_element(
-                        &ctx, &disp[..nn], geometry, identity, f_prev, committed, trial, out, fv, stiffness,
+                        &ctx,
+                        &disp[..nn],
+                        geometry,
+                        identity,
+                        f_prev,
+                        committed,
+                        trial,
+                        out,
+                        fv,
+                        stiffness,
                     ),
                     Some(p_dofs) => {
                         let mut pressure = [0.0; MAX_NODES];
@@ -287,6 +296,7 @@ impl Domain for FemDomain {
                             out,
                             fv,
                             stiffness,
+                            None,
                         )
                     }
                 }

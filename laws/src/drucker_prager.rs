@@ -30,11 +30,13 @@ use nalgebra::Matrix3;
 use serde::Deserialize;
 
 use crate::dual::{Dual, Real};
+use crate::mixed::{
+    isochoric_elastic_strain, update_principal_mixed, MixedLaw, MixedPrincipalModel, MixedPrincipalResponse,
+};
 use crate::multiplicative::{
     self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel, PrincipalResponse,
     PLASTIC_OUTPUT,
 };
-use crate::mixed::{isochoric_elastic_strain, update_principal_mixed, MixedLaw, MixedPrincipalModel, MixedPrincipalResponse};
 use crate::LawError;
 
 /// How the Drucker–Prager cone is matched to the Mohr–Coulomb pyramid.
@@ -235,6 +237,10 @@ impl MixedLaw for DruckerPrager {
         self.mu
     }
 
+    fn volumetric_offset(&self, committed: &[f64]) -> f64 {
+        crate::mixed::principal_volumetric_offset(committed)
+    }
+
     fn update_mixed(
         &self,
         kinematics: &crate::Kinematics,
@@ -249,11 +255,11 @@ impl MixedLaw for DruckerPrager {
 }
 
 multiplicative::impl_principal_law!(impl[] DruckerPrager, name: "drucker_prager", outputs: &PLASTIC_OUTPUT, lame: |law| (law.lambda, law.mu),
-    mixed: |law| if law.eta_bar == 0.0 {
-        Ok(law)
-    } else {
-        Err("mixed_up needs an isochoric plastic flow: dilatancy_angle must be 0".to_string())
-    });
+mixed: |law| if law.eta_bar == 0.0 {
+    Ok(law)
+} else {
+    Err("mixed_up needs an isochoric plastic flow: dilatancy_angle must be 0".to_string())
+});
 
 #[cfg(test)]
 mod tests {

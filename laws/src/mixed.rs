@@ -12,8 +12,10 @@
 //! - the stress `τ = τ_dev(F, p) + p 1`, `P = τ F⁻ᵀ`, with the tangents `A = ∂P/∂F` at fixed
 //!   `p` and `∂P/∂p` at fixed `F` (`τ_dev` depends on `p` only through a pressure-dependent
 //!   yield surface: Mohr–Coulomb or Drucker–Prager with φ > 0);
-//! - the volumetric law `p = K ln J` through its bulk modulus `K` (`∞` for an exactly
-//!   incompressible material): the mixed element imposes `ln J − p/K = 0` weakly.
+//! - the volumetric law `p = K ln J_e` through its bulk modulus `K` (`∞` for an exactly
+//!   incompressible material): the mixed element imposes `ln J + θ₀ − p/K = 0` weakly, where
+//!   `θ₀ = ln J_e − ln J` is an elastic volume change the history carries from the start (a
+//!   geostatic prestrain; 0 otherwise, [`MixedLaw::volumetric_offset`]).
 //!
 //! `K ln J` is the mean Kirchhoff stress of Hencky elasticity, and of every Hencky-based
 //! plasticity law of this crate whose plastic flow is isochoric (`det Cp = 1`, so that
@@ -44,6 +46,14 @@ pub trait MixedLaw: Send + Sync {
 
     /// Elastic shear modulus μ (Pa): the scale of the pressure stabilisation.
     fn shear_modulus(&self) -> f64;
+
+    /// The elastic volumetric strain carried by the committed history at `F = I`,
+    /// `θ₀ = ln J_e − ln J` (0 unless the history holds an elastic prestrain, e.g. a
+    /// geostatic initial stress stored in `Cp⁻¹`): the volumetric law is `p = K (ln J + θ₀)`.
+    /// The isochoric flow of the u–p plasticity laws keeps it constant.
+    fn volumetric_offset(&self, _committed: &[f64]) -> f64 {
+        0.0
+    }
 
     /// Stress and tangents at `kinematics` and the pressure `pressure` (mean Kirchhoff stress,
     /// Pa): writes `P` and the requested entries of `A = ∂P/∂F` into `response` (as
@@ -126,24 +136,22 @@ pub fn mixed_tangent_relative_error(
     };
     let f = kinematics.deformation_gradient;
     let mut failure = None;
-    let fd = |h: f64, stress: &mut dyn FnMut(&Matrix3<f64>, f64) -> Result<Matrix3<f64>, LawError>| {
-        crate::tensor::finite_difference_tangent(&f, h, |g| stress(g, pressure).unwrap_or_else(|_| Matrix3::zeros()))
-    };
-    let (h, coarse) = (2e-6, fd(2e-6, &mut stress));
-    let fine = fd(0.5 * h, &mut stress);
-    let a_fd = (4.0 * fine - coarse) / 3.0;
-    let scale = r.first_piola.amax().max(pressure.abs()).max(law.shear_modulus() * 1e-3);
-    let hp = 1e-6 * scale;
-    let (plus, minus) = match (stress(&f, pressure + hp), stress(&f, pressure - hp)) {
-        (Ok(a), Ok(b)) => (a, b),
-        (Err(e), _) | (_, Err(e)) => {
+    let mut at_f = |g: &Matrix3<f64>| {
+        stress(g, pressure).unwrap_or_else(|e| {
             failure = Some(e);
-            (Matrix3::zeros(), Matrix3::zeros())
-        }
+            Matrix3::zeros()
+        })
     };
+    let h = 2e-6;
+    let coarse = crate::tensor::finite_difference_tangent(&f, h, &mut at_f);
+    let fine = crate::tensor::finite_difference_tangent(&f, 0.5 * h, &mut at_f);
+    let a_fd = (4.0 * fine - coarse) / 3.0;
     if let Some(e) = failure {
         return Err(e);
     }
+    let scale = r.first_piola.amax().max(pressure.abs()).max(law.shear_modulus() * 1e-3);
+    let hp = 1e-6 * scale;
+    let (plus, minus) = (stress(&f, pressure + hp)?, stress(&f, pressure - hp)?);
     let dp_fd = (plus - minus) / (2.0 * hp);
     Ok(((r.tangent - a_fd).amax() / r.tangent.amax(), (dp - dp_fd).amax() / dp.amax().max(1e-300)))
 }
@@ -160,6 +168,11 @@ pub trait MixedPrincipalModel: Send + Sync {
         committed: &[f64],
         trial: &mut [f64],
     ) -> Result<MixedPrincipalResponse, LawError>;
+}
+
+/// `θ₀ = ½ ln det Cp⁻¹` of a history `[Cp⁻¹ | internal]` ([`MixedLaw::volumetric_offset`]).
+pub fn principal_volumetric_offset(committed: &[f64]) -> f64 {
+    0.5 * crate::multiplicative::read_sym(&committed[..crate::multiplicative::CP_INV_LEN]).determinant().ln()
 }
 
 /// [`MixedLaw::update_mixed`] of a [`MixedPrincipalModel`]: [`mixed_kirchhoff_update`] with

@@ -41,11 +41,13 @@
 use nalgebra::Matrix3;
 
 use crate::dual::{Dual, Real};
+use crate::mixed::{
+    isochoric_elastic_strain, update_principal_mixed, MixedLaw, MixedPrincipalModel, MixedPrincipalResponse,
+};
 use crate::multiplicative::{
     self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel, PrincipalResponse,
     PLASTIC_OUTPUT,
 };
-use crate::mixed::{isochoric_elastic_strain, update_principal_mixed, MixedLaw, MixedPrincipalModel, MixedPrincipalResponse};
 use crate::LawError;
 
 /// Mohr–Coulomb strength at a given accumulated plastic deviatoric strain.
@@ -317,10 +319,7 @@ impl<S: StrengthEvolution> MohrCoulombLaw<S> {
         }
         let psi = self.strength.at(0.0_f64).dilatancy_angle;
         (psi != 0.0).then(|| {
-            format!(
-                "mixed_up needs an isochoric plastic flow: dilatancy_angle must be 0, got {}",
-                psi.to_degrees()
-            )
+            format!("mixed_up needs an isochoric plastic flow: dilatancy_angle must be 0, got {}", psi.to_degrees())
         })
     }
 
@@ -376,6 +375,10 @@ impl<S: StrengthEvolution> MixedLaw for MohrCoulombLaw<S> {
 
     fn shear_modulus(&self) -> f64 {
         self.mu
+    }
+
+    fn volumetric_offset(&self, committed: &[f64]) -> f64 {
+        crate::mixed::principal_volumetric_offset(committed)
     }
 
     fn update_mixed(

@@ -328,14 +328,15 @@ impl Body {
     /// the lumped mass terms `r_I += M_I (ã_I − g)`, `K_II += c_M M_I` added. With the
     /// nodal `pressure` of the cell the kernel is the mixed u–p one
     /// ([`loam_fem::mixed_kernel`]): `f_int` then holds the displacement rows and the `nn`
-    /// pressure rows (which carry no mass; in a mass-only assembly they are `1 · a_p = 0`).
+    /// pressure rows (which carry no mass; in a mass-only assembly they are `1 · a_p = 0`),
+    /// and `cell_rule` is the cell's Gauss rule on which it integrates its pressure projection.
     #[allow(clippy::too_many_arguments)]
     pub fn cell_contribution(
         &self,
         ctx: &KernelContext<'_>,
         cell: usize,
         disp: &[[f64; 3]],
-        pressure: Option<&[f64]>,
+        pressure: Option<(&[f64], &[PointGeometry])>,
         inertia: &[[f64; 3]],
         input: &AssemblyInput<'_>,
         trial: &mut [f64],
@@ -356,7 +357,9 @@ impl Body {
         let k = if with_stiffness { stiffness.as_deref_mut() } else { None };
         match pressure {
             None => solid_element(ctx, disp, geometry, f, f, committed, trial, out, f_int, k)?,
-            Some(p) => mixed_element(ctx, disp, p, geometry, f, f, committed, trial, out, f_int, k)?,
+            Some((p, cell_rule)) => {
+                mixed_element(ctx, disp, p, geometry, f, f, committed, trial, out, f_int, k, Some(cell_rule))?
+            }
         }
         if let (Some(km), false) = (stiffness.as_deref_mut(), with_stiffness) {
             km.fill(0.0);

@@ -34,7 +34,7 @@ use loam_fem::domain::{
 };
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
-use loam_fem::kernel::KernelContext;
+use loam_fem::kernel::{point_geometry, KernelContext, PointGeometry};
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 
@@ -374,6 +374,7 @@ impl MpmDomain {
         let dim = self.dim();
         let nd = self.block_len();
         let pressure_dofs = self.pressure_dofs.as_deref();
+        let (formulation, thickness) = (self.formulation, self.thickness);
         let (grid, node_ids, name, blocks) = (&self.grid, &self.node_ids, &self.name, &self.blocks);
         let attachment = self.attachment.as_ref();
         // blocks without points: zero, but for the orphan nodes' equations `r = Δu` (`K = I`:
@@ -457,7 +458,33 @@ impl MpmDomain {
                             pressure[a] = input.state.u[p[local]];
                         }
                     }
-                    let pressure = pressure_dofs.map(|_| &pressure[..nn]);
+                    // the cell's Gauss rule in the step's configuration, for the projection
+                    let cell_rule: Vec<PointGeometry> = if pressure_dofs.is_some() {
+                        let coords = grid.cell_coords(cell);
+                        element
+                            .gauss_points_mixed()
+                            .iter()
+                            .map(|gp| {
+                                point_geometry(
+                                    element,
+                                    formulation,
+                                    thickness,
+                                    &coords[..nn],
+                                    &gp.xi,
+                                    gp.weight,
+                                    grid.cell_map(cell),
+                                )
+                            })
+                            .collect::<Result<_, _>>()
+                            .map_err(|err| DomainError {
+                                domain: name.clone(),
+                                element: cell,
+                                message: err.to_string(),
+                            })?
+                    } else {
+                        Vec::new()
+                    };
+                    let pressure = pressure_dofs.map(|_| (&pressure[..nn], cell_rule.as_slice()));
                     let fail = |err: loam_fem::kernel::KernelError| DomainError {
                         domain: name.clone(),
                         element: cell,
@@ -618,7 +645,8 @@ impl MpmDomain {
         }
         if self.pressure_dofs.is_some() {
             // the mean Kirchhoff stress interpolated from the nodal pressures at convergence
-            let values = pts.cauchy.iter().zip(&pts.deformation_gradient).map(|(s, f)| f.determinant() * s.trace() / 3.0);
+            let values =
+                pts.cauchy.iter().zip(&pts.deformation_gradient).map(|(s, f)| f.determinant() * s.trace() / 3.0);
             point_fields.push(Field { name: "pressure".into(), components: 1, values: values.collect() });
         }
         DomainOutput { points: pts.position.clone(), cells: None, point_fields, cell_fields: Vec::new() }

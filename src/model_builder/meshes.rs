@@ -816,7 +816,7 @@ pub(super) fn assign_pressure_dofs(case: &Case, model: &mut Model, parts: &mut [
             Part::Fem(k, domain) if case.domains[*k].element_formulation == ElementFormulation::MixedUp => {
                 let mu = domain.law().mixed().expect("checked").shear_modulus();
                 let scale = mu / mean_cell_size(domain.mesh());
-                let dofs = model.add_pressure_dofs(&domain.node_ids().to_vec(), scale);
+                let dofs = model.add_pressure_dofs(domain.node_ids(), scale);
                 domain.set_pressure_dofs(dofs);
             }
             Part::Grid(grid) if case.domains[grid.bodies[0]].element_formulation == ElementFormulation::MixedUp => {
@@ -827,7 +827,7 @@ pub(super) fn assign_pressure_dofs(case: &Case, model: &mut Model, parts: &mut [
                     .map(|b| b.law().mixed().expect("checked").shear_modulus())
                     .fold(0.0, f64::max);
                 let scale = mu / mean_cell_size(&grid.domain.grid().mesh);
-                let dofs = model.add_pressure_dofs(&grid.domain.node_ids().to_vec(), scale);
+                let dofs = model.add_pressure_dofs(grid.domain.node_ids(), scale);
                 grid.domain.set_pressure_dofs(dofs);
             }
             _ => {}
