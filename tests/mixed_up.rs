@@ -513,3 +513,29 @@ fn footing_on_undrained_soil_fem() {
     report("footing FEM u–p: q/s_u plateau vs Prandtl 2 + π", up, PRANDTL, 0.05);
     assert!(u > 1.15 * up, "the displacement element locks above the mixed one");
 }
+
+/// Benchmark 8 (Bui et al. 2008) with the u–p element: the isochoric flow of a frictional
+/// soil with ψ = 0 must not stiffen (or soften) the collapse: runout within 5 % of the
+/// displacement run on the same grid, which comes to rest (about 0.7 s).
+#[test]
+#[ignore = "about 8 min in release; currently fails: the u–p run spreads to 0.657 m against 0.416 m and is not at rest at 2 s (issue 15, see the README's mixed u–p section)"]
+fn bui_collapse_with_mixed_up() {
+    let (sim_u, h_u) = run(case("collapse_bui2008_quad.json"));
+    let (sim_up, h_up) = run(case("collapse_bui2008_quad_up.json"));
+    let runout = |sim: &Simulation, h: &History| h.last().unwrap().1[monitor(sim, "runout")];
+    let height = |sim: &Simulation, h: &History| h.last().unwrap().1[monitor(sim, "height_at_wall")];
+    println!(
+        "Bui collapse: displacement element runout {:.4} m, height at the wall {:.4} m, {} steps, at rest {}; u–p \
+         runout {:.4} m, height {:.4} m, {} steps, at rest {}",
+        runout(&sim_u, &h_u),
+        height(&sim_u, &h_u),
+        sim_u.stats.steps,
+        sim_u.at_rest,
+        runout(&sim_up, &h_up),
+        height(&sim_up, &h_up),
+        sim_up.stats.steps,
+        sim_up.at_rest
+    );
+    report("Bui collapse u–p runout vs the displacement run", runout(&sim_up, &h_up), runout(&sim_u, &h_u), 0.05);
+    assert!(sim_up.at_rest, "the u–p column comes to rest");
+}

@@ -7,22 +7,25 @@
 //! otherwise. On this project's FEM/MPM matrices Cholesky with AMD ordering was up to 10×
 //! faster than LU (whose column ordering fills in more), see `../shared/STACK.md`.
 //!
-//! **Saddle-point systems** (mixed u–p domains: `[K_uu K_up; K_pu −M_p]`, symmetric and
+//! **Saddle-point systems** (mixed u–p domains: `[K_uu K_up; K_pu K_pp]`, symmetric and
 //! indefinite for the hyperelastic laws and the pressure-independent plasticity) break
-//! Cholesky. There `auto` takes the sparse `L D Lᵀ` factorisation without pivoting on the
-//! same symbolic (AMD) analysis as Cholesky, with the pivot signs expected of a
-//! quasi-definite matrix (`+` on displacement equations, `−` on pressure equations; a pivot
-//! of the wrong sign or below `1e-13·max|a_ii|` is replaced by a regularised one) and up to
-//! [`LDLT_REFINEMENTS`] steps of iterative refinement while the solve's residual is not at
-//! round-off; a solve left above `1e-8` relative goes to LU, which then takes the next few
-//! solves ([`LDLT_BACKOFF`]: `L D Lᵀ` fails where perfect plasticity leaves `K_uu` singular in
-//! a collapse mechanism) (Vanderbei
-//! 1995, "Symmetric quasidefinite matrices", SIAM J. Optim. 5:100–113,
-//! doi:10.1137/0805005: such matrices factorise stably in any symmetric order). An
-//! unsymmetric saddle point (Mohr–Coulomb or Drucker–Prager with φ > 0, whose deviatoric
-//! stress depends on the pressure), or an `L D Lᵀ` that fails, goes to LU. `ldlt` asks for it
-//! on any symmetric matrix. Measured on the u–p footing and Cook's membrane:
-//! `docs/performance.md` (section "Mixed u–p").
+//! Cholesky. The assembler equilibrates them (pressure rows and columns scaled by `μ/h`) and
+//! declares the expected pivot signs (`+` displacement, `−` pressure); then `auto` takes the
+//! sparse `L B Lᵀ` factorisation with Bunch–Kaufman pivoting inside the supernodes (faer's
+//! intranode factorisation, on the same symbolic AMD analysis as Cholesky; Bunch & Kaufman
+//! 1977, "Some stable methods for calculating inertia and solving symmetric linear systems",
+//! Math. Comp. 31:163–179, doi:10.1090/S0025-5718-1977-0428694-0) when the matrix is
+//! symmetric, LU when it is not (Mohr–Coulomb or Drucker–Prager with φ > 0, whose deviatoric
+//! stress depends on the pressure). Each symmetric solve is followed by up to
+//! [`LDLT_REFINEMENTS`] steps of iterative refinement while its residual is above round-off;
+//! one left above `1e-8` relative goes to LU, which then takes the next few solves
+//! ([`LDLT_BACKOFF`]). `ldlt` asks for `L D Lᵀ` without pivoting and with signed regularisation
+//! of the pivots (a pivot of the wrong sign or below `1e-13·max|a_ii|` replaced; stable for
+//! quasi-definite matrices, Vanderbei 1995, "Symmetric quasidefinite matrices", SIAM J.
+//! Optim. 5:100–113, doi:10.1137/0805005): 25 % cheaper than `L B Lᵀ`, but perfect plasticity
+//! makes `K_uu` indefinite in a collapse mechanism and it then fails. Measured on the u–p
+//! footing and Cook's membrane (LU 4× slower than `L B Lᵀ`): `docs/performance.md`, section
+//! "Mixed u–p".
 //!
 //! `symmetric_part_gmres` solves an unsymmetric tangent by GMRES ([`crate::krylov`])
 //! preconditioned with the Cholesky factors of its symmetric part, to [`KRYLOV_TOLERANCE`]
@@ -49,12 +52,12 @@ use crate::krylov::Gmres;
 /// Relative residual `‖b − A x‖/‖b‖` a GMRES solve must reach: far below the
 /// Newton tolerances, so that Newton takes the same path as with exact solves.
 pub const KRYLOV_TOLERANCE: f64 = 1e-9;
-/// Steps of iterative refinement at most after an `L D Lᵀ` solve whose residual is not at
-/// round-off (regularised pivots).
+/// Steps of iterative refinement at most after a symmetric indefinite (`L B Lᵀ`, `L D Lᵀ`)
+/// solve whose residual is not at round-off.
 pub const LDLT_REFINEMENTS: usize = 3;
-/// Longest run of LU solves after `L D Lᵀ` failures (a factorisation, or a solve not
-/// accurate to 1e-8): after each failure LU takes the next `2k + 1` solves (`k` the previous
-/// run), up to this many, before `L D Lᵀ` is tried again.
+/// Longest run of LU solves after failures of the symmetric indefinite factorisation (a
+/// factorisation, or a solve not accurate to 1e-8): after each failure LU takes the next
+/// `2k + 1` solves (`k` the previous run), up to this many, before it is tried again.
 pub const LDLT_BACKOFF: u32 = 7;
 /// Arnoldi steps before GMRES is given up for LU.
 pub const KRYLOV_MAX_ITERATIONS: usize = 12;
@@ -63,7 +66,8 @@ pub const KRYLOV_MAX_ITERATIONS: usize = 12;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LinearSolverKind {
-    /// Cholesky when the matrix is symmetric positive definite, LU otherwise.
+    /// Cholesky when the matrix is symmetric positive definite, LU otherwise; on a saddle
+    /// point (mixed u–p) `L B Lᵀ` when symmetric, LU otherwise.
     #[default]
     Auto,
     /// Sparse LU with partial pivoting (any matrix).
@@ -110,9 +114,11 @@ pub struct SolverTimings {
     pub krylov_solves: usize,
     /// GMRES iterations of those solves (failed attempts included).
     pub krylov_iterations: usize,
-    /// Saddle-point systems whose `L D Lᵀ` failed (then solved by LU).
+    /// Saddle-point systems whose symmetric indefinite factorisation (`L B Lᵀ`, `L D Lᵀ`)
+    /// failed (then solved by LU).
     pub ldlt_failures: usize,
-    /// Saddle-point systems solved by LU (after a failure of `L D Lᵀ`, or unsymmetric).
+    /// Saddle-point systems solved by LU (after a failure of `L B Lᵀ` / `L D Lᵀ`, or
+    /// unsymmetric).
     pub saddle_point_lu: usize,
 }
 
@@ -287,7 +293,7 @@ impl LinearSolver {
             if self.ldlt_skip > 0 {
                 self.ldlt_skip -= 1;
             } else if pattern.is_symmetric(values, 1e-10) {
-                if self.solve_ldlt(pattern, values, rhs)? {
+                if self.solve_symmetric_indefinite(pattern, values, rhs)? {
                     self.ldlt_backoff = 0;
                     return check_finite(rhs);
                 }
@@ -379,10 +385,12 @@ impl LinearSolver {
         check_finite(rhs)
     }
 
-    /// `L D Lᵀ` of the symmetric saddle-point matrix (module doc) and the solve, with one step
-    /// of iterative refinement if the residual is not at round-off; `false` if the
-    /// factorisation failed or the solution is not accurate (then `rhs` is unchanged).
-    fn solve_ldlt(
+    /// `L B Lᵀ` (Bunch–Kaufman; `L D Lᵀ` with signed regularisation for the `ldlt` kind) of
+    /// the symmetric saddle-point matrix (module doc) and the solve, with up to
+    /// [`LDLT_REFINEMENTS`] steps of iterative refinement while the residual is not at
+    /// round-off; `false` if the factorisation failed or the solution is not accurate to 1e-8
+    /// (then `rhs` is unchanged).
+    fn solve_symmetric_indefinite(
         &mut self,
         pattern: &AssemblyPattern,
         values: &[f64],

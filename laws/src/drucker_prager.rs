@@ -24,15 +24,14 @@
 //! is von Mises): at the given pressure `p` (mean Kirchhoff stress) the trial deviator
 //! `s_tr = 2μ dev ε_tr` returns radially, `f_tr = √J₂,tr + η p − ξ c`, `G Δγ = f_tr`,
 //! `s = (1 − f_tr/√J₂,tr) s_tr`, `τ = s + p 1`, while `ξ c − η p ≥ 0`; beyond the apex
-//! `τ = p 1`. Tangents by dual numbers seeded on `(ε_tr, p)`.
+//! `τ = p 1` and the volumetric law is capped at `θ ≤ p_apex/K`, `p_apex = ξ c/η`, as for
+//! Mohr–Coulomb. Tangents by dual numbers seeded on `(ε_tr, p)`.
 
 use nalgebra::Matrix3;
 use serde::Deserialize;
 
 use crate::dual::{Dual, Real};
-use crate::mixed::{
-    isochoric_elastic_strain, update_principal_mixed, MixedLaw, MixedPrincipalModel, MixedPrincipalResponse,
-};
+use crate::mixed::{elastic_strain_up, update_principal_mixed, MixedLaw, MixedPrincipalModel, MixedPrincipalResponse};
 use crate::multiplicative::{
     self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel, PrincipalResponse,
     PLASTIC_OUTPUT,
@@ -191,6 +190,16 @@ impl PrincipalModel for DruckerPrager {
 }
 
 impl DruckerPrager {
+    /// The elastic volumetric strain at the apex, `θ_apex = p_apex/K`, `p_apex = ξ c/η`
+    /// (`+∞` without an apex: η = 0, von Mises).
+    fn apex_strain(&self) -> f64 {
+        if self.eta > 0.0 {
+            self.xi * self.cohesion / self.eta / (self.lambda + 2.0 * self.mu / 3.0)
+        } else {
+            f64::INFINITY
+        }
+    }
+
     /// The u–p return (module doc) at trial principal log strains `eps` and pressure `p`.
     fn mixed_return<T: Real>(&self, eps: [T; 3], p: T) -> ([T; 3], DruckerPragerRegion) {
         let s = crate::mixed::deviator(eps).map(|e| e * (2.0 * self.mu));
@@ -221,7 +230,7 @@ impl MixedPrincipalModel for DruckerPrager {
         let eps: [Dual<4>; 3] = [Dual::seed(eps_tr[0], 0), Dual::seed(eps_tr[1], 1), Dual::seed(eps_tr[2], 2)];
         let (t, region) = self.mixed_return(eps, Dual::seed(pressure, 3));
         let tau = t.map(|x| x.v);
-        let eps_e = isochoric_elastic_strain(eps_tr, tau, self.mu);
+        let eps_e = elastic_strain_up(eps_tr, tau, self.mu, self.apex_strain());
         accumulate_plastic_strain(committed, trial, eps_tr, eps_e, region != DruckerPragerRegion::Elastic);
         let dtau_deps = Matrix3::from_fn(|a, b| t[a].d[b]);
         Ok((PrincipalResponse { tau, eps_e, dtau_deps }, t.map(|x| x.d[3])))
@@ -237,8 +246,8 @@ impl MixedLaw for DruckerPrager {
         self.mu
     }
 
-    fn volumetric_offset(&self, committed: &[f64]) -> f64 {
-        crate::mixed::principal_volumetric_offset(committed)
+    fn volumetric_strain(&self, ln_j: f64, committed: &[f64]) -> (f64, f64) {
+        crate::mixed::principal_volumetric_strain(ln_j, committed, self.apex_strain())
     }
 
     fn update_mixed(

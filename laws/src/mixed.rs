@@ -12,10 +12,10 @@
 //! - the stress `τ = τ_dev(F, p) + p 1`, `P = τ F⁻ᵀ`, with the tangents `A = ∂P/∂F` at fixed
 //!   `p` and `∂P/∂p` at fixed `F` (`τ_dev` depends on `p` only through a pressure-dependent
 //!   yield surface: Mohr–Coulomb or Drucker–Prager with φ > 0);
-//! - the volumetric law `p = K ln J_e` through its bulk modulus `K` (`∞` for an exactly
-//!   incompressible material): the mixed element imposes `ln J + θ₀ − p/K = 0` weakly, where
-//!   `θ₀ = ln J_e − ln J` is an elastic volume change the history carries from the start (a
-//!   geostatic prestrain; 0 otherwise, [`MixedLaw::volumetric_offset`]).
+//! - the volumetric law `p = K θ`, `θ = ln J_e`, through its bulk modulus `K` (`∞` for an
+//!   exactly incompressible material): the mixed element imposes `θ − p/K = 0` weakly, where
+//!   `θ` is `ln J` unless the history carries an elastic volume change from the start (a
+//!   geostatic prestrain) or the law has an apex in tension ([`MixedLaw::volumetric_strain`]).
 //!
 //! `K ln J` is the mean Kirchhoff stress of Hencky elasticity, and of every Hencky-based
 //! plasticity law of this crate whose plastic flow is isochoric (`det Cp = 1`, so that
@@ -47,12 +47,15 @@ pub trait MixedLaw: Send + Sync {
     /// Elastic shear modulus μ (Pa): the scale of the pressure stabilisation.
     fn shear_modulus(&self) -> f64;
 
-    /// The elastic volumetric strain carried by the committed history at `F = I`,
-    /// `θ₀ = ln J_e − ln J` (0 unless the history holds an elastic prestrain, e.g. a
-    /// geostatic initial stress stored in `Cp⁻¹`): the volumetric law is `p = K (ln J + θ₀)`.
-    /// The isochoric flow of the u–p plasticity laws keeps it constant.
-    fn volumetric_offset(&self, _committed: &[f64]) -> f64 {
-        0.0
+    /// The elastic volumetric strain `θ = ln J_e` of the volumetric law `p = K θ` at the total
+    /// volume change `ln J`, from the committed history, with `dθ/d ln J`. By default
+    /// `θ = ln J`. A history may carry an elastic volume change from the start, `θ₀`
+    /// (a geostatic prestrain stored in `Cp⁻¹`: `θ = ln J + θ₀`, `θ₀ = ½ ln det Cp⁻¹`), and a
+    /// frictional law caps `θ` at its apex, `θ ≤ p_apex/K` (beyond it the grains separate:
+    /// the plastic flow is a volume increase and the mean stress stays at the apex, as the
+    /// displacement form's apex return; `dθ/d ln J = 0` there).
+    fn volumetric_strain(&self, ln_j: f64, _committed: &[f64]) -> (f64, f64) {
+        (ln_j, 1.0)
     }
 
     /// Stress and tangents at `kinematics` and the pressure `pressure` (mean Kirchhoff stress,
@@ -104,11 +107,11 @@ pub fn deviator<T: crate::dual::Real>(eps: [T; 3]) -> [T; 3] {
     eps.map(|e| e - mean)
 }
 
-/// Updated principal elastic log strains of a u–p return with isochoric flow: the volumetric
-/// part of the trial (`J_e = J`) and the deviator carrying `dev τ`:
-/// `ε_e,a = tr ε_tr / 3 + (τ_a − tr τ / 3) / (2μ)`.
-pub fn isochoric_elastic_strain(eps_tr: [f64; 3], tau: [f64; 3], mu: f64) -> [f64; 3] {
-    let vol = (eps_tr[0] + eps_tr[1] + eps_tr[2]) / 3.0;
+/// Updated principal elastic log strains of a u–p return: the volumetric part of the trial
+/// up to the apex cap `θ_apex` (isochoric flow below it, `J_e = J`; dilation beyond it) and
+/// the deviator carrying `dev τ`: `ε_e,a = min(tr ε_tr, θ_apex)/3 + (τ_a − tr τ/3)/(2μ)`.
+pub fn elastic_strain_up(eps_tr: [f64; 3], tau: [f64; 3], mu: f64, theta_apex: f64) -> [f64; 3] {
+    let vol = (eps_tr[0] + eps_tr[1] + eps_tr[2]).min(theta_apex) / 3.0;
     let s = deviator(tau);
     s.map(|si| vol + si / (2.0 * mu))
 }
@@ -170,9 +173,17 @@ pub trait MixedPrincipalModel: Send + Sync {
     ) -> Result<MixedPrincipalResponse, LawError>;
 }
 
-/// `θ₀ = ½ ln det Cp⁻¹` of a history `[Cp⁻¹ | internal]` ([`MixedLaw::volumetric_offset`]).
-pub fn principal_volumetric_offset(committed: &[f64]) -> f64 {
-    0.5 * crate::multiplicative::read_sym(&committed[..crate::multiplicative::CP_INV_LEN]).determinant().ln()
+/// [`MixedLaw::volumetric_strain`] of a history `[Cp⁻¹ | internal]` with the apex cap
+/// `θ_apex`: `θ = min(ln J + ½ ln det Cp⁻¹, θ_apex)`.
+pub fn principal_volumetric_strain(ln_j: f64, committed: &[f64], theta_apex: f64) -> (f64, f64) {
+    let offset =
+        0.5 * crate::multiplicative::read_sym(&committed[..crate::multiplicative::CP_INV_LEN]).determinant().ln();
+    let theta = ln_j + offset;
+    if theta > theta_apex {
+        (theta_apex, 0.0)
+    } else {
+        (theta, 1.0)
+    }
 }
 
 /// [`MixedLaw::update_mixed`] of a [`MixedPrincipalModel`]: [`mixed_kirchhoff_update`] with

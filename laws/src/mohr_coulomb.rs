@@ -34,16 +34,16 @@
 //! mean, `τ_B,a = 2μ (ε_tr,a − tr ε_tr/3) + p`. The plane and edge returns above move along
 //! the flow directions `D b`, which are deviatoric for ψ = 0 (and free of λ), so they are the
 //! same algorithm at the fixed mean stress `p`. Beyond the apex (`p ≥ σ_c/(k − 1) = c cot φ`)
-//! no deviatoric stress is admissible: `τ = p 1`. The elastic strains are
-//! `ε_e = tr ε_tr/3 + dev τ/(2μ)` (`J_e = J`), and `∂τ_a/∂ε_tr,b`, `∂τ_a/∂p` come from the
-//! same dual numbers, seeded on `(ε_tr, p)`.
+//! no deviatoric stress is admissible: `τ = p 1`, and the volumetric law is capped there,
+//! `θ = min(ln J_e, p_apex/K)` (the grains separate: the flow beyond the apex is a volume
+//! increase, as in the displacement form's apex return). The elastic strains are
+//! `ε_e = min(tr ε_tr, p_apex/K)/3 + dev τ/(2μ)` (`J_e = J` below the apex), and
+//! `∂τ_a/∂ε_tr,b`, `∂τ_a/∂p` come from the same dual numbers, seeded on `(ε_tr, p)`.
 
 use nalgebra::Matrix3;
 
 use crate::dual::{Dual, Real};
-use crate::mixed::{
-    isochoric_elastic_strain, update_principal_mixed, MixedLaw, MixedPrincipalModel, MixedPrincipalResponse,
-};
+use crate::mixed::{elastic_strain_up, update_principal_mixed, MixedLaw, MixedPrincipalModel, MixedPrincipalResponse};
 use crate::multiplicative::{
     self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel, PrincipalResponse,
     PLASTIC_OUTPUT,
@@ -323,6 +323,17 @@ impl<S: StrengthEvolution> MohrCoulombLaw<S> {
         })
     }
 
+    /// The elastic volumetric strain at the apex, `θ_apex = p_apex/K`, `p_apex = σ_c/(k − 1)`
+    /// (`+∞` without an apex: φ = 0).
+    fn apex_strain(&self) -> f64 {
+        let (k, sc, _) = mohr_coulomb_coefficients(&self.strength.at(0.0_f64));
+        if k - 1.0 > 1e-12 {
+            sc / (k - 1.0) / (self.lambda + 2.0 * self.mu / 3.0)
+        } else {
+            f64::INFINITY
+        }
+    }
+
     /// The u–p return (module doc) at trial principal log strains `eps` and pressure `p`.
     fn mixed_return<T: Real>(&self, eps: [T; 3], p: T) -> Result<([T; 3], Region), LawError> {
         let (k, sc, m) = mohr_coulomb_coefficients(&self.strength.at(T::cst(0.0)));
@@ -361,7 +372,7 @@ impl<S: StrengthEvolution> MixedPrincipalModel for MohrCoulombLaw<S> {
         let eps: [Dual<4>; 3] = [Dual::seed(eps_tr[0], 0), Dual::seed(eps_tr[1], 1), Dual::seed(eps_tr[2], 2)];
         let (t, region) = self.mixed_return(eps, Dual::seed(pressure, 3))?;
         let tau = t.map(|x| x.v);
-        let eps_e = isochoric_elastic_strain(eps_tr, tau, self.mu);
+        let eps_e = elastic_strain_up(eps_tr, tau, self.mu, self.apex_strain());
         accumulate_plastic_strain(committed, trial, eps_tr, eps_e, region != Region::Elastic);
         let dtau_deps = Matrix3::from_fn(|a, b| t[a].d[b]);
         Ok((PrincipalResponse { tau, eps_e, dtau_deps }, t.map(|x| x.d[3])))
@@ -377,8 +388,8 @@ impl<S: StrengthEvolution> MixedLaw for MohrCoulombLaw<S> {
         self.mu
     }
 
-    fn volumetric_offset(&self, committed: &[f64]) -> f64 {
-        crate::mixed::principal_volumetric_offset(committed)
+    fn volumetric_strain(&self, ln_j: f64, committed: &[f64]) -> (f64, f64) {
+        crate::mixed::principal_volumetric_strain(ln_j, committed, self.apex_strain())
     }
 
     fn update_mixed(

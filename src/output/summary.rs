@@ -105,11 +105,11 @@ pub struct LinearSolverReport {
     pub krylov_solves: usize,
     /// GMRES iterations.
     pub krylov_iterations: usize,
-    /// Saddle-point systems (mixed u–p) solved by LU, after an `L D Lᵀ` that failed or on an
-    /// unsymmetric matrix (the others by `L D Lᵀ`).
+    /// Saddle-point systems (mixed u–p) solved by LU, after a symmetric indefinite
+    /// factorisation that failed or on an unsymmetric matrix (the others by `L B Lᵀ`).
     #[serde(default)]
     pub saddle_point_lu: usize,
-    /// Saddle-point systems whose `L D Lᵀ` failed.
+    /// Saddle-point systems whose symmetric indefinite factorisation failed.
     #[serde(default)]
     pub ldlt_failures: usize,
 }
