@@ -183,6 +183,24 @@ pub struct DomainSpec {
     /// `consistent` (default) or `lumped` mass matrix.
     #[serde(default)]
     pub mass_matrix: MassMatrix,
+    /// Unknowns of the domain's elements: `displacement` (default, the irreducible element)
+    /// or `mixed_up` (nodal displacements and pressures with a stabilised equal-order
+    /// element, for nearly and exactly incompressible materials: undrained soil, rubber).
+    /// All bodies on one background grid share it.
+    #[serde(default)]
+    pub element_formulation: ElementFormulation,
+}
+
+/// The unknowns of a domain's elements (`domains[k].element_formulation`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ElementFormulation {
+    /// Nodal displacements only (the irreducible element).
+    #[default]
+    Displacement,
+    /// Nodal displacements and pressures (mean Kirchhoff stress), equal order, stabilised by
+    /// the polynomial pressure projection (Dohrmann & Bochev 2004).
+    MixedUp,
 }
 
 fn fem() -> DomainKind {
@@ -755,6 +773,10 @@ pub enum MonitorSpec {
         point: Vec<f64>,
         /// Component.
         component: Component,
+        /// Factor applied to the value (default 1), e.g. `-1/(B s_u)` for a normalised
+        /// bearing pressure, or `-1` for a settlement.
+        #[serde(default = "one")]
+        scale: f64,
     },
     /// Velocity component of the node nearest to `point`.
     Velocity {
@@ -782,6 +804,10 @@ pub enum MonitorSpec {
         region: String,
         /// Component.
         component: Component,
+        /// Factor applied to the value (default 1), e.g. `-1/(B s_u)` for a normalised
+        /// bearing pressure, or `-1` for a settlement.
+        #[serde(default = "one")]
+        scale: f64,
     },
     /// Displacement component of the material point nearest to `point` at the start.
     MaterialPointDisplacement {
@@ -791,6 +817,10 @@ pub enum MonitorSpec {
         point: Vec<f64>,
         /// Component.
         component: Component,
+        /// Factor applied to the value (default 1), e.g. `-1/(B s_u)` for a normalised
+        /// bearing pressure, or `-1` for a settlement.
+        #[serde(default = "one")]
+        scale: f64,
     },
     /// Velocity component of the material point nearest to `point` at the start.
     MaterialPointVelocity {
@@ -851,6 +881,10 @@ pub enum MonitorSpec {
         wall: String,
         /// Component.
         component: Component,
+        /// Factor applied to the value (default 1), e.g. `-1/(B s_u)` for a normalised
+        /// bearing pressure, or `-1` for a settlement.
+        #[serde(default = "one")]
+        scale: f64,
     },
     /// Total current volume (m³) of the material points inside `box` (every point if
     /// absent), `Σ_p V_p` with `V_p = J_p V_p⁰` the bulk volume the law carries: per unit
@@ -883,6 +917,10 @@ pub enum MonitorSpec {
         interface: String,
         /// Component.
         component: Component,
+        /// Factor applied to the value (default 1), e.g. `-1/(B s_u)` for a normalised
+        /// bearing pressure, or `-1` for a settlement.
+        #[serde(default = "one")]
+        scale: f64,
     },
     /// Total kinetic energy (J), of every domain or of the domain (FEM domain or MPM body)
     /// named `domain`.
@@ -905,6 +943,18 @@ pub enum MonitorSpec {
 }
 
 impl MonitorSpec {
+    /// The factor applied to the monitor's value (`scale`, 1 where the monitor has none).
+    pub fn scale(&self) -> f64 {
+        match self {
+            MonitorSpec::Displacement { scale, .. }
+            | MonitorSpec::Reaction { scale, .. }
+            | MonitorSpec::MaterialPointDisplacement { scale, .. }
+            | MonitorSpec::WallForce { scale, .. }
+            | MonitorSpec::InterfaceForce { scale, .. } => *scale,
+            _ => 1.0,
+        }
+    }
+
     /// The monitor's column name.
     pub fn name(&self) -> &str {
         match self {

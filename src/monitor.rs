@@ -122,6 +122,8 @@ pub struct Monitor {
     pub name: String,
     /// What it measures.
     pub kind: MonitorKind,
+    /// Factor applied to the measured value.
+    pub scale: f64,
 }
 
 fn pick(v: &[f64], dim: usize, node: usize, component: Option<usize>) -> f64 {
@@ -132,8 +134,13 @@ fn pick(v: &[f64], dim: usize, node: usize, component: Option<usize>) -> f64 {
 }
 
 impl Monitor {
-    /// Value at the model's committed state.
+    /// Value at the model's committed state, times the monitor's scale.
     pub fn evaluate(&self, model: &Model) -> f64 {
+        self.scale * self.measure(model)
+    }
+
+    /// Value at the model's committed state.
+    fn measure(&self, model: &Model) -> f64 {
         let dim = model.dim;
         let s = &model.committed;
         match &self.kind {

@@ -117,8 +117,14 @@ fn bad_input_exits_2_naming_the_json_path() {
     );
     expect_bad(
         "nu out of range",
-        check_edited("nu", |j| j["materials"]["beam"]["poisson_ratio"] = json!(0.5)),
+        check_edited("nu", |j| j["materials"]["beam"]["poisson_ratio"] = json!(0.6)),
         &["materials.beam.poisson_ratio"],
+    );
+    // ν = 0.5 (incompressible) is a valid Neo-Hookean material, for mixed u–p domains only
+    expect_bad(
+        "incompressible in a displacement domain",
+        check_edited("nu05", |j| j["materials"]["beam"]["poisson_ratio"] = json!(0.5)),
+        &["domains[0].material", "mixed_up"],
     );
     expect_bad(
         "missing material",

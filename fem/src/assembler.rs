@@ -17,6 +17,15 @@
 //!
 //! Residual and correction norms are also reported per block (soil, interface, structure)
 //! of the monolithic system, from the node roles of the DOF map.
+//!
+//! **Pressure equations** (mixed u–p domains) are equilibrated with the displacement ones:
+//! with `s = μ/h` per pressure DOF (the material's shear modulus over the cell size, given
+//! by the model), the solve works on `D K D x̂ = D (−R)`, `δ = D x̂`, `D = diag(1, …, s, …)`,
+//! so that a pressure equation `∫ q (ln J − p/K) dV` (a volume) weighs as a force and a
+//! pressure correction (Pa) as a length: the residual and correction norms of the
+//! convergence criteria and of the Newton log stay meaningful, and the pivots of the
+//! saddle-point matrix are of one magnitude. The element blocks, the residual and the
+//! correction keep their physical units.
 
 use crate::assembly::{AssemblyPattern, BlockLayout};
 use crate::convergence::BlockNorms;
@@ -39,6 +48,10 @@ pub struct SystemLayout<'a> {
     pub frames: &'a [Slip],
     /// DOFs that share one equation.
     pub ties: &'a [DofTie],
+    /// Node of each pressure DOF (the `k`-th is DOF `roles.len()·dim + k`).
+    pub pressure_nodes: &'a [usize],
+    /// Equilibration scale `s = μ/h` (Pa/m) of each pressure DOF (see the module doc).
+    pub pressure_scales: &'a [f64],
     /// Linear solver.
     pub solver: LinearSolverKind,
 }
@@ -61,6 +74,12 @@ pub struct Assembler {
     rhs: Vec<f64>,
     /// Correction `δu` per DOF (global frame).
     delta: Vec<f64>,
+    /// Equilibration `D` per equation (empty without pressure equations).
+    scale: Vec<f64>,
+    /// `1/s` per pressure DOF (the weights of [`Assembler::dof_norm`]).
+    pressure_weights: Vec<f64>,
+    /// Whether `rhs` holds the correction of the last solve (else the residual).
+    solved: bool,
     rotations: SlipRotations,
     solver: LinearSolver,
 }
@@ -89,9 +108,30 @@ impl Assembler {
         for d in rotations.normal_dofs() {
             constrained[d] = true;
         }
-        let dofs = DofMap::with_roles(dim, &constrained, system.roles, system.ties);
+        let dofs = DofMap::with_roles(dim, &constrained, system.roles, system.pressure_nodes, system.ties);
         let pattern = AssemblyPattern::new(&dofs, &layout);
         let n_eq = dofs.num_equations();
+        let mut scale = Vec::new();
+        if !system.pressure_nodes.is_empty() {
+            scale = vec![1.0; n_eq];
+            let first = dofs.displacement_dofs();
+            for (k, &s) in system.pressure_scales.iter().enumerate() {
+                let e = dofs.equation(first + k);
+                if e != CONSTRAINED {
+                    scale[e] = s;
+                }
+            }
+        }
+        let mut solver = LinearSolver::new(system.solver);
+        if !scale.is_empty() {
+            let mut signs = vec![1i8; n_eq];
+            for (g, &e) in dofs.equations().iter().enumerate() {
+                if e != CONSTRAINED && dofs.is_pressure(g) {
+                    signs[e] = -1;
+                }
+            }
+            solver.set_saddle_point(signs);
+        }
         Self {
             matrices: vec![0.0; layout.matrix_len()],
             vectors: vec![0.0; layout.vector_len()],
@@ -99,9 +139,12 @@ impl Assembler {
             residual: vec![0.0; num_dofs],
             rhs: vec![0.0; n_eq],
             delta: vec![0.0; num_dofs],
+            scale,
+            pressure_weights: system.pressure_scales.iter().map(|s| 1.0 / s).collect(),
+            solved: false,
             buffer_dofs: layout.dofs,
             rotations,
-            solver: LinearSolver::new(system.solver),
+            solver,
             dofs,
             pattern,
             domain_matrix,
@@ -156,7 +199,8 @@ impl Assembler {
     }
 
     /// Step 2: `R = gather(r_e) − f_ext` per DOF (`f_ext` in local frames) and the right-hand
-    /// side `−R` per equation; returns `‖R‖` over the equations.
+    /// side `−R` per equation; returns `‖R‖` over the equations (pressure equations
+    /// equilibrated, see the module doc).
     pub fn residual(&mut self, f_ext: &[f64]) -> f64 {
         self.pattern.gather_vector(&self.vectors, &mut self.residual);
         for (r, f) in self.residual.iter_mut().zip(f_ext) {
@@ -168,15 +212,44 @@ impl Assembler {
                 self.rhs[e] -= self.residual[g];
             }
         }
-        norm(&self.rhs)
+        self.solved = false;
+        self.weighted_norm()
+    }
+
+    /// Weight of equation `e` in the norms: `D` on a residual, `D⁻¹` on a correction.
+    #[inline]
+    fn weight(&self, e: usize) -> f64 {
+        match self.scale.get(e) {
+            Some(&s) if self.solved => 1.0 / s,
+            Some(&s) => s,
+            None => 1.0,
+        }
+    }
+
+    /// `‖W rhs‖` with the weights of [`Assembler::weight`].
+    fn weighted_norm(&self) -> f64 {
+        if self.scale.is_empty() {
+            return norm(&self.rhs);
+        }
+        self.rhs.iter().enumerate().map(|(e, v)| (v * self.weight(e)).powi(2)).sum::<f64>().sqrt()
+    }
+
+    /// Norm of a correction given per DOF (full vector, e.g. the step's increment `Δu`), with
+    /// the pressure DOFs weighted as the corrections of [`Assembler::solve`] (`δp/s`).
+    pub fn dof_norm(&self, full: &[f64]) -> f64 {
+        let first = self.dofs.displacement_dofs();
+        let (u, p) = full.split_at(first.min(full.len()));
+        let sq: f64 = u.iter().map(|v| v * v).sum::<f64>()
+            + p.iter().zip(&self.pressure_weights).map(|(v, w)| (v * w).powi(2)).sum::<f64>();
+        sq.sqrt()
     }
 
     /// Norms of the right-hand side per block (before a solve: the residual; after it: the
-    /// correction).
+    /// correction; pressure equations equilibrated).
     pub fn block_norms(&self) -> BlockNorms {
         let mut sq = [0.0; 3];
         for (e, v) in self.rhs.iter().enumerate() {
-            sq[self.dofs.block(e) as usize] += v * v;
+            sq[self.dofs.block(e) as usize] += (v * self.weight(e)).powi(2);
         }
         BlockNorms { soil: sq[0].sqrt(), interface: sq[1].sqrt(), structure: sq[2].sqrt() }
     }
@@ -189,12 +262,28 @@ impl Assembler {
     /// Step 3b: solves `K δu = −R`; the correction per DOF is then [`Assembler::correction`]
     /// and `‖δu‖` over the equations is returned.
     pub fn solve(&mut self) -> Result<f64, LinearSolverError> {
-        self.solver.solve(&self.pattern, &self.values, &mut self.rhs)?;
+        if self.scale.is_empty() {
+            self.solver.solve(&self.pattern, &self.values, &mut self.rhs)?;
+        } else {
+            // D K D x̂ = D (−R), δ = D x̂ (module doc); the values are restored after
+            self.pattern.scale_symmetric(&mut self.values, &self.scale);
+            for (r, d) in self.rhs.iter_mut().zip(&self.scale) {
+                *r *= d;
+            }
+            let solved = self.solver.solve(&self.pattern, &self.values, &mut self.rhs);
+            let inverse: Vec<f64> = self.scale.iter().map(|d| 1.0 / d).collect();
+            self.pattern.scale_symmetric(&mut self.values, &inverse);
+            solved?;
+            for (r, d) in self.rhs.iter_mut().zip(&self.scale) {
+                *r *= d;
+            }
+        }
+        self.solved = true;
         for (g, &e) in self.dofs.equations().iter().enumerate() {
             self.delta[g] = if e != CONSTRAINED { self.rhs[e] } else { 0.0 };
         }
         self.rotations.to_global(&mut self.delta);
-        Ok(norm(&self.rhs))
+        Ok(self.weighted_norm())
     }
 
     /// The correction `δu` of the last solve (full DOF vector, global frame).
@@ -238,7 +327,7 @@ impl Assembler {
         out.fill(0.0);
         let dim = self.dofs.dim();
         let mut shared = vec![false; out.len()];
-        for (g, s) in shared.iter_mut().enumerate() {
+        for (g, s) in shared.iter_mut().enumerate().take(self.dofs.displacement_dofs()) {
             *s = roles[g / dim] != NodeRole::Grid;
         }
         for t in ties {

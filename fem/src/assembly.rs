@@ -171,6 +171,16 @@ impl AssemblyPattern {
         }
     }
 
+    /// `A ← D A D` for the diagonal `D = diag(d)` (one entry per equation), in place.
+    pub fn scale_symmetric(&self, values: &mut [f64], d: &[f64]) {
+        let (col_ptr, row_idx) = (self.symbolic.col_ptr(), self.symbolic.row_idx());
+        for (c, &dc) in d.iter().enumerate() {
+            for k in col_ptr[c]..col_ptr[c + 1] {
+                values[k] *= d[row_idx[k]] * dc;
+            }
+        }
+    }
+
     /// Sums the element matrices of `matrix_buffer` into `values` (one per nonzero).
     pub fn gather_matrix(&self, matrix_buffer: &[f64], values: &mut [f64]) {
         values.par_iter_mut().enumerate().with_min_len(4096).for_each(|(k, v)| {

@@ -1,9 +1,16 @@
 //! One node set, one DOF map: the seam that lets several domains share nodes.
 //!
-//! Every domain refers to nodes by global id. Node `n` has `dim` DOFs `n·dim + d`; a DOF is
-//! either an equation of the global system or constrained (prescribed displacement, or
-//! inactive: a background-grid node no material point touches). Domains that share a node
-//! contribute to the same equations, so coupling is plain assembly.
+//! Every domain refers to nodes by global id. Node `n` has `dim` displacement DOFs
+//! `n·dim + d`; a DOF is either an equation of the global system or constrained (prescribed
+//! displacement, or inactive: a background-grid node no material point touches). Domains that
+//! share a node contribute to the same equations, so coupling is plain assembly.
+//!
+//! **Pressure DOFs** (the mixed u–p formulation) come after all displacement DOFs: the `k`-th
+//! pressure DOF is `num_nodes·dim + k`, at node `pressure_nodes[k]`. Only nodes of u–p
+//! domains carry one (a node shared with a displacement-only domain has it, used by the
+//! u–p domain alone); two u–p domains sharing a node share its pressure. A pressure DOF
+//! takes the role (and so the Newton-log block) of its node; it has no velocity or
+//! acceleration.
 //!
 //! **Node roles are data** ([`NodeRole`]): a grid node is reset every step from the
 //! projection of the material points, a structure node keeps its state, an interface node
@@ -67,6 +74,8 @@ pub struct DofTie {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct DofMap {
     dim: usize,
+    /// Number of displacement DOFs (`num_nodes · dim`); pressure DOFs follow.
+    displacement_dofs: usize,
     equation: Vec<usize>,
     num_equations: usize,
     /// Block of each equation.
@@ -78,13 +87,23 @@ impl DofMap {
     /// `constrained[n·dim + d]` set, in node-major order; all nodes structure nodes, no ties.
     pub fn new(dim: usize, constrained: &[bool]) -> Self {
         let roles = vec![NodeRole::Structure; constrained.len() / dim.max(1)];
-        Self::with_roles(dim, constrained, &roles, &[])
+        Self::with_roles(dim, constrained, &roles, &[], &[])
     }
 
-    /// Numbers the DOFs as [`DofMap::new`], with the node `roles` deciding the block of
-    /// each equation, and every tie's follower taking its leader's equation (constrained
-    /// if the leader is).
-    pub fn with_roles(dim: usize, constrained: &[bool], roles: &[NodeRole], ties: &[DofTie]) -> Self {
+    /// Numbers the DOFs as [`DofMap::new`] — the displacement DOFs of the `roles.len()` nodes,
+    /// then one pressure DOF at each node of `pressure_nodes` (`constrained` covers both) —
+    /// with the node `roles` deciding the block of each equation, and every tie's follower
+    /// taking its leader's equation (constrained if the leader is).
+    pub fn with_roles(
+        dim: usize,
+        constrained: &[bool],
+        roles: &[NodeRole],
+        pressure_nodes: &[usize],
+        ties: &[DofTie],
+    ) -> Self {
+        let displacement_dofs = roles.len() * dim;
+        debug_assert_eq!(constrained.len(), displacement_dofs + pressure_nodes.len());
+        let node = |g: usize| if g < displacement_dofs { g / dim } else { pressure_nodes[g - displacement_dofs] };
         let mut leader: Vec<usize> = (0..constrained.len()).collect();
         for t in ties {
             leader[t.follower] = t.leader;
@@ -96,17 +115,28 @@ impl DofMap {
                 continue;
             }
             equation[g] = block.len();
-            block.push(Block::of(roles[g / dim]));
+            block.push(Block::of(roles[node(g)]));
         }
         for t in ties {
             let e = equation[t.leader];
             equation[t.follower] = e;
-            if e != CONSTRAINED && roles[t.follower / dim] != roles[t.leader / dim] {
+            if e != CONSTRAINED && roles[node(t.follower)] != roles[node(t.leader)] {
                 block[e] = Block::Interface;
             }
         }
         let num_equations = block.len();
-        Self { dim, equation, num_equations, block }
+        Self { dim, displacement_dofs, equation, num_equations, block }
+    }
+
+    /// Number of displacement DOFs (`num_nodes · dim`): DOFs from here on are pressures.
+    pub fn displacement_dofs(&self) -> usize {
+        self.displacement_dofs
+    }
+
+    /// Whether DOF `dof` is a pressure.
+    #[inline]
+    pub fn is_pressure(&self, dof: usize) -> bool {
+        dof >= self.displacement_dofs
     }
 
     /// Components per node.
@@ -119,7 +149,7 @@ impl DofMap {
         self.num_equations
     }
 
-    /// Number of DOFs, constrained or not (`num_nodes · dim`).
+    /// Number of DOFs, constrained or not (`num_nodes · dim` and the pressures).
     pub fn num_dofs(&self) -> usize {
         self.equation.len()
     }
@@ -152,14 +182,27 @@ mod tests {
     fn tied_dofs_share_an_equation_in_the_interface_block() {
         let roles = [NodeRole::Structure, NodeRole::Grid, NodeRole::Interface];
         let constrained = [true, false, false, false, false, false];
-        let map = DofMap::with_roles(2, &constrained, &roles, &[DofTie { leader: 1, follower: 2 }]);
+        let map = DofMap::with_roles(2, &constrained, &roles, &[], &[DofTie { leader: 1, follower: 2 }]);
         assert_eq!(map.equations(), &[CONSTRAINED, 0, 0, 1, 2, 3]);
         assert_eq!(map.num_equations(), 4);
         assert_eq!(map.block(0), Block::Interface);
         assert_eq!(map.block(1), Block::Soil);
         assert_eq!(map.block(2), Block::Interface);
         // a follower of a constrained leader is constrained
-        let map = DofMap::with_roles(2, &constrained, &roles, &[DofTie { leader: 0, follower: 3 }]);
+        let map = DofMap::with_roles(2, &constrained, &roles, &[], &[DofTie { leader: 0, follower: 3 }]);
         assert_eq!(map.equation(3), CONSTRAINED);
+    }
+
+    /// Pressure DOFs follow the displacement DOFs and take the block of their node.
+    #[test]
+    fn pressure_dofs_follow_and_take_their_nodes_block() {
+        let roles = [NodeRole::Structure, NodeRole::Grid];
+        let constrained = [false, false, true, false, false, false];
+        let map = DofMap::with_roles(2, &constrained, &roles, &[1, 0], &[]);
+        assert_eq!(map.equations(), &[0, 1, CONSTRAINED, 2, 3, 4]);
+        assert_eq!(map.displacement_dofs(), 4);
+        assert!(map.is_pressure(4) && !map.is_pressure(3));
+        assert_eq!(map.block(3), Block::Soil);
+        assert_eq!(map.block(4), Block::Structure);
     }
 }

@@ -143,6 +143,16 @@ impl ElementType {
         }
     }
 
+    /// The rule of the mixed u–p element ([`crate::mixed_kernel`]), exact for the pressure mass
+    /// `N_a N_b` on which its stabilisation acts: [`Self::gauss_points_high`] on simplices (3
+    /// or 4 points), [`Self::gauss_points`] (2×2(×2)) on quads and hexes.
+    pub fn gauss_points_mixed(self) -> Vec<GaussPoint> {
+        match self {
+            ElementType::Tri3 | ElementType::Tet4 => self.gauss_points_high(),
+            ElementType::Quad4 | ElementType::Hex8 => self.gauss_points(),
+        }
+    }
+
     /// A higher-order rule (3-point triangle, 4-point tetrahedron, 3×3(×3) for quads and
     /// hexes) used for consistent mass matrices and axisymmetric elements, where the
     /// integrand is not polynomial of the stiffness' degree.

@@ -59,6 +59,9 @@ pub enum KernelError {
         /// What the law reported.
         source: LawError,
     },
+    /// The law has no volumetric–deviatoric form for the mixed u–p element.
+    #[error("mixed u–p element: {0}")]
+    NoMixedForm(String),
     /// The isoparametric map is singular or inverted (`det J ≤ 0`).
     #[error("inverted element geometry (det J = {det_j:.3e})")]
     InvertedElement {
@@ -203,7 +206,7 @@ fn pull_back(f0: &Matrix3<f64>, inv_j0: f64, a: &mut Tangent, components: &[usiz
 
 /// The stress' pull-back `P̃ = J0⁻¹ P F0ᵀ` and the tangent's ([`pull_back`]) over `components`
 /// (none for a residual).
-fn pull_back_response(f0: &Matrix3<f64>, p: &mut Matrix3<f64>, a: &mut Tangent, components: &[usize]) {
+pub(crate) fn pull_back_response(f0: &Matrix3<f64>, p: &mut Matrix3<f64>, a: &mut Tangent, components: &[usize]) {
     if *f0 == Matrix3::identity() {
         return;
     }
@@ -212,6 +215,30 @@ fn pull_back_response(f0: &Matrix3<f64>, p: &mut Matrix3<f64>, a: &mut Tangent, 
     if !components.is_empty() {
         loam_laws::with_components!(components, |c| pull_back(f0, inv_j0, a, c));
     }
+}
+
+/// `ΔF = I + Σ_a u_a ⊗ ∂N_a/∂X̃` at one point for nodal displacements `disp` (from the step
+/// reference configuration), with the hoop stretch `ΔF33 = 1 + u_r/R` in axisymmetry.
+pub fn delta_deformation_gradient(
+    ctx: &KernelContext<'_>,
+    geometry: &PointGeometry,
+    disp: &[[f64; 3]],
+) -> Matrix3<f64> {
+    let nn = ctx.element.num_nodes();
+    let dim = ctx.element.dim();
+    let mut delta_f = Matrix3::<f64>::identity();
+    for a in 0..nn {
+        for i in 0..dim {
+            for j in 0..dim {
+                delta_f[(i, j)] += disp[a][i] * geometry.gradient[a][j];
+            }
+        }
+    }
+    if ctx.formulation == Formulation::Axisymmetric {
+        let ur: f64 = (0..nn).map(|a| geometry.shape[a] * disp[a][0]).sum();
+        delta_f[(2, 2)] = 1.0 + ur / geometry.radius;
+    }
+    delta_f
 }
 
 /// Evaluates the law at one point for nodal displacements `disp` (from the step reference
@@ -230,20 +257,7 @@ pub fn evaluate_point(
     with_tangent: bool,
     response: &mut StressResponse,
 ) -> Result<PointOutput, LawError> {
-    let nn = ctx.element.num_nodes();
-    let dim = ctx.element.dim();
-    let mut delta_f = Matrix3::<f64>::identity();
-    for a in 0..nn {
-        for i in 0..dim {
-            for j in 0..dim {
-                delta_f[(i, j)] += disp[a][i] * geometry.gradient[a][j];
-            }
-        }
-    }
-    if ctx.formulation == Formulation::Axisymmetric {
-        let ur: f64 = (0..nn).map(|a| geometry.shape[a] * disp[a][0]).sum();
-        delta_f[(2, 2)] = 1.0 + ur / geometry.radius;
-    }
+    let mut delta_f = delta_deformation_gradient(ctx, geometry, disp);
     let mut kin = Kinematics {
         deformation_gradient: delta_f * state.f0,
         previous_deformation_gradient: *state.f_prev,
@@ -318,7 +332,7 @@ impl Default for PointOutput {
 
 /// Rows of the discrete gradient operator at one point: `b[(a, i)][c]` is
 /// `∂F̃_{ACTIVE[c]}/∂u_ai`. Returns the number of active components.
-fn gradient_operator(
+pub(crate) fn gradient_operator(
     formulation: Formulation,
     element: ElementType,
     geometry: &PointGeometry,

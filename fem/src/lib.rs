@@ -5,7 +5,9 @@
 //! points to [`kernel::solid_element`], an MPM grid passes material points; both fill
 //! element blocks that one lock-free gather ([`assembly`]) adds into one sparse system
 //! solved by one Newton loop ([`newton::NewtonStrategy`], driven by [`model::Model::solve_step`]). Coupling MPM and FEM is then
-//! assembly over shared nodes, not a special solver.
+//! assembly over shared nodes, not a special solver. The mixed u–p element
+//! ([`mixed_kernel::mixed_element`]) goes through the same seam, with pressure DOFs appended
+//! to the DOF map ([`dofs`]).
 
 #![allow(non_snake_case)]
 
@@ -23,6 +25,7 @@ pub mod krylov;
 pub mod linear_solver;
 pub mod loads;
 pub mod mesh;
+pub mod mixed_kernel;
 pub mod model;
 pub mod newton;
 pub mod scheme;

@@ -7,6 +7,26 @@
 //! otherwise. On this project's FEM/MPM matrices Cholesky with AMD ordering was up to 10×
 //! faster than LU (whose column ordering fills in more), see `../shared/STACK.md`.
 //!
+//! **Saddle-point systems** (mixed u–p domains: `[K_uu K_up; K_pu K_pp]`, symmetric and
+//! indefinite for the hyperelastic laws and the pressure-independent plasticity) break
+//! Cholesky. The assembler equilibrates them (pressure rows and columns scaled by `μ/h`) and
+//! declares the expected pivot signs (`+` displacement, `−` pressure); then `auto` takes the
+//! sparse `L B Lᵀ` factorisation with Bunch–Kaufman pivoting inside the supernodes (faer's
+//! intranode factorisation, on the same symbolic AMD analysis as Cholesky; Bunch & Kaufman
+//! 1977, "Some stable methods for calculating inertia and solving symmetric linear systems",
+//! Math. Comp. 31:163–179, doi:10.1090/S0025-5718-1977-0428694-0) when the matrix is
+//! symmetric, LU when it is not (Mohr–Coulomb or Drucker–Prager with φ > 0, whose deviatoric
+//! stress depends on the pressure). Each symmetric solve is followed by up to
+//! [`LDLT_REFINEMENTS`] steps of iterative refinement while its residual is above round-off;
+//! one left above `1e-8` relative goes to LU, which then takes the next few solves
+//! ([`LDLT_BACKOFF`]). `ldlt` asks for `L D Lᵀ` without pivoting and with signed regularisation
+//! of the pivots (a pivot of the wrong sign or below `1e-13·max|a_ii|` replaced; stable for
+//! quasi-definite matrices, Vanderbei 1995, "Symmetric quasidefinite matrices", SIAM J.
+//! Optim. 5:100–113, doi:10.1137/0805005): 25 % cheaper than `L B Lᵀ`, but perfect plasticity
+//! makes `K_uu` indefinite in a collapse mechanism and it then fails. Measured on the u–p
+//! footing and Cook's membrane (LU 4× slower than `L B Lᵀ`): `docs/performance.md`, section
+//! "Mixed u–p".
+//!
 //! `symmetric_part_gmres` solves an unsymmetric tangent by GMRES ([`crate::krylov`])
 //! preconditioned with the Cholesky factors of its symmetric part, to [`KRYLOV_TOLERANCE`]
 //! within [`KRYLOV_MAX_ITERATIONS`], and falls back to LU for the rest of the pattern when that
@@ -16,7 +36,11 @@
 use std::time::Instant;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky};
+use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, IntranodeLbltRef, LdltRef, LltRef, SymbolicCholesky,
+};
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, NumericLu, SymbolicLu};
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::{Conj, MatMut, Side};
@@ -28,6 +52,13 @@ use crate::krylov::Gmres;
 /// Relative residual `‖b − A x‖/‖b‖` a GMRES solve must reach: far below the
 /// Newton tolerances, so that Newton takes the same path as with exact solves.
 pub const KRYLOV_TOLERANCE: f64 = 1e-9;
+/// Steps of iterative refinement at most after a symmetric indefinite (`L B Lᵀ`, `L D Lᵀ`)
+/// solve whose residual is not at round-off.
+pub const LDLT_REFINEMENTS: usize = 3;
+/// Longest run of LU solves after failures of the symmetric indefinite factorisation (a
+/// factorisation, or a solve not accurate to 1e-8): after each failure LU takes the next
+/// `2k + 1` solves (`k` the previous run), up to this many, before it is tried again.
+pub const LDLT_BACKOFF: u32 = 7;
 /// Arnoldi steps before GMRES is given up for LU.
 pub const KRYLOV_MAX_ITERATIONS: usize = 12;
 
@@ -35,13 +66,20 @@ pub const KRYLOV_MAX_ITERATIONS: usize = 12;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LinearSolverKind {
-    /// Cholesky when the matrix is symmetric positive definite, LU otherwise.
+    /// Cholesky when the matrix is symmetric positive definite, LU otherwise; on a saddle
+    /// point (mixed u–p) `L B Lᵀ` when symmetric, LU otherwise.
     #[default]
     Auto,
     /// Sparse LU with partial pivoting (any matrix).
     Lu,
     /// Sparse Cholesky (symmetric positive definite matrices only).
     Cholesky,
+    /// Sparse `L D Lᵀ` without pivoting, with the pivot signs of a saddle point (symmetric
+    /// matrices; LU if the matrix is unsymmetric or the factorisation fails).
+    Ldlt,
+    /// Sparse `L B Lᵀ` with Bunch–Kaufman pivoting inside the supernodes (symmetric
+    /// matrices; LU if the matrix is unsymmetric or the solve is not accurate).
+    Lblt,
     /// As `auto` for symmetric matrices; an unsymmetric one (non-associated plasticity) by
     /// GMRES preconditioned with the Cholesky factors of its symmetric part, LU if that part
     /// is not positive definite or GMRES does not converge. Pays in mass-dominated steps
@@ -76,6 +114,12 @@ pub struct SolverTimings {
     pub krylov_solves: usize,
     /// GMRES iterations of those solves (failed attempts included).
     pub krylov_iterations: usize,
+    /// Saddle-point systems whose symmetric indefinite factorisation (`L B Lᵀ`, `L D Lᵀ`)
+    /// failed (then solved by LU).
+    pub ldlt_failures: usize,
+    /// Saddle-point systems solved by LU (after a failure of `L B Lᵀ` / `L D Lᵀ`, or
+    /// unsymmetric).
+    pub saddle_point_lu: usize,
 }
 
 /// Symbolic Cholesky factorisation with the numeric factor and the workspace kept between
@@ -85,6 +129,24 @@ struct CholeskyState {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
     scratch: MemBuffer,
+}
+
+/// Symbolic `L D Lᵀ` factorisation (the Cholesky analysis) with the factor, the expected
+/// pivot signs and the workspace kept.
+struct LdltState {
+    symbolic: SymbolicCholesky<usize>,
+    values: Vec<f64>,
+    scratch: MemBuffer,
+    /// Bunch–Kaufman (`L B Lᵀ`): the subdiagonal of `B` and the pivoting permutation.
+    subdiag: Vec<f64>,
+    perm_forward: Vec<usize>,
+    perm_inverse: Vec<usize>,
+}
+
+impl std::fmt::Debug for LdltState {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LdltState").field("len_val", &self.values.len()).finish_non_exhaustive()
+    }
 }
 
 /// Symbolic LU factorisation with the numeric factor and the workspace kept.
@@ -143,8 +205,16 @@ pub struct LinearSolver {
     kind: LinearSolverKind,
     lu: Option<LuState>,
     llt: Option<CholeskyState>,
+    ldlt: Option<LdltState>,
+    /// Expected pivot sign of each equation of a saddle-point system (`+1` displacement,
+    /// `−1` pressure); empty otherwise.
+    signs: Vec<i8>,
     /// Set once Cholesky failed on this pattern (indefinite tangent): use LU from then on.
     llt_failed: bool,
+    /// Length of the last run of LU solves after an `L D Lᵀ` failure ([`LDLT_BACKOFF`]).
+    ldlt_backoff: u32,
+    /// Solves left to LU before `L D Lᵀ` is tried again.
+    ldlt_skip: u32,
     /// Set once GMRES on the symmetric part's factors failed on this pattern: LU from then on.
     symmetric_part_failed: bool,
     /// `(A + Aᵀ)/2` for its factorisation.
@@ -161,7 +231,11 @@ impl LinearSolver {
             kind,
             lu: None,
             llt: None,
+            ldlt: None,
+            signs: Vec::new(),
             llt_failed: false,
+            ldlt_backoff: 0,
+            ldlt_skip: 0,
             symmetric_part_failed: false,
             symmetric_values: Vec::new(),
             gmres: Gmres::default(),
@@ -184,8 +258,17 @@ impl LinearSolver {
     pub fn reset_pattern(&mut self) {
         self.lu = None;
         self.llt = None;
+        self.ldlt = None;
         self.llt_failed = false;
+        self.ldlt_backoff = 0;
+        self.ldlt_skip = 0;
         self.symmetric_part_failed = false;
+    }
+
+    /// Declares a saddle-point system: the expected pivot sign of every equation (`+1` on
+    /// displacement equations, `−1` on pressure equations), for `L D Lᵀ`.
+    pub fn set_saddle_point(&mut self, signs: Vec<i8>) {
+        self.signs = signs;
     }
 
     /// GMRES on `A x = b` preconditioned by the Cholesky factors held in the Cholesky state
@@ -222,10 +305,29 @@ impl LinearSolver {
         if n == 0 {
             return Ok(());
         }
-        let par = faer::get_global_parallelism();
+        let ldlt = match self.kind {
+            LinearSolverKind::Ldlt | LinearSolverKind::Lblt => true,
+            LinearSolverKind::Auto => !self.signs.is_empty(),
+            _ => false,
+        };
+        if ldlt {
+            if self.ldlt_skip > 0 {
+                self.ldlt_skip -= 1;
+            } else if pattern.is_symmetric(values, 1e-10) {
+                if self.solve_symmetric_indefinite(pattern, values, rhs)? {
+                    self.ldlt_backoff = 0;
+                    return check_finite(rhs);
+                }
+                self.ldlt_backoff = (2 * self.ldlt_backoff + 1).min(LDLT_BACKOFF);
+                self.ldlt_skip = self.ldlt_backoff;
+                self.timings.ldlt_failures += 1;
+            }
+            self.timings.saddle_point_lu += 1;
+            return self.solve_lu(pattern, values, rhs);
+        }
         let symmetric = match self.kind {
             LinearSolverKind::Cholesky => true,
-            LinearSolverKind::Lu => false,
+            LinearSolverKind::Lu | LinearSolverKind::Ldlt | LinearSolverKind::Lblt => false,
             LinearSolverKind::Auto | LinearSolverKind::SymmetricPartGmres => {
                 !self.llt_failed && pattern.is_symmetric(values, 1e-10)
             }
@@ -256,6 +358,18 @@ impl LinearSolver {
             }
             self.symmetric_part_failed = true;
         }
+        self.solve_lu(pattern, values, rhs)
+    }
+
+    /// Sparse LU with partial pivoting (symbolic analysis once per pattern).
+    fn solve_lu(
+        &mut self,
+        pattern: &AssemblyPattern,
+        values: &[f64],
+        rhs: &mut [f64],
+    ) -> Result<(), LinearSolverError> {
+        let n = pattern.num_equations();
+        let par = faer::get_global_parallelism();
         if self.lu.is_none() {
             let t = Instant::now();
             let a = pattern.matrix(values);
@@ -290,6 +404,134 @@ impl LinearSolver {
         );
         self.timings.solve += t.elapsed().as_secs_f64();
         check_finite(rhs)
+    }
+
+    /// `L B Lᵀ` (Bunch–Kaufman; `L D Lᵀ` with signed regularisation for the `ldlt` kind) of
+    /// the symmetric saddle-point matrix (module doc) and the solve, with up to
+    /// [`LDLT_REFINEMENTS`] steps of iterative refinement while the residual is not at
+    /// round-off; `false` if the factorisation failed or the solution is not accurate to 1e-8
+    /// (then `rhs` is unchanged).
+    fn solve_symmetric_indefinite(
+        &mut self,
+        pattern: &AssemblyPattern,
+        values: &[f64],
+        rhs: &mut [f64],
+    ) -> Result<bool, LinearSolverError> {
+        let a = pattern.matrix(values);
+        let par = faer::get_global_parallelism();
+        if self.ldlt.is_none() {
+            let t = Instant::now();
+            let params =
+                CholeskySymbolicParams { supernodal_flop_ratio_threshold: cholesky_threshold(), ..Default::default() };
+            let symbolic = factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), params)
+                .map_err(factorisation_error)?;
+            let scratch = buffer(StackReq::any_of(&[
+                symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
+                symbolic.factorize_numeric_intranode_lblt_scratch::<f64>(par, Default::default()),
+                symbolic.solve_in_place_scratch::<f64>(1, par),
+            ]))?;
+            let values = vec![0.0; symbolic.len_val()];
+            let n = symbolic.nrows();
+            self.ldlt = Some(LdltState {
+                symbolic,
+                values,
+                scratch,
+                subdiag: vec![0.0; n],
+                perm_forward: vec![0; n],
+                perm_inverse: vec![0; n],
+            });
+            self.timings.symbolic += t.elapsed().as_secs_f64();
+        }
+        let n = rhs.len();
+        let signs: Vec<i8> = if self.signs.len() == n { self.signs.clone() } else { vec![1; n] };
+        let diag_max = (0..n).fold(0.0f64, |m, c| {
+            let (col_ptr, row_idx) = (a.symbolic().col_ptr(), a.symbolic().row_idx());
+            (col_ptr[c]..col_ptr[c + 1]).filter(|&k| row_idx[k] == c).fold(m, |m, k| m.max(values[k].abs()))
+        });
+        let t = Instant::now();
+        let st = self.ldlt.as_mut().expect("symbolic LDLT present");
+        // `auto` on a saddle point, and `lblt`: Bunch–Kaufman; `ldlt`: signed regularisation
+        let pivoting = self.kind != LinearSolverKind::Ldlt;
+        if pivoting {
+            st.symbolic.factorize_numeric_intranode_lblt::<f64>(
+                &mut st.values,
+                &mut st.subdiag,
+                &mut st.perm_forward,
+                &mut st.perm_inverse,
+                a,
+                Side::Lower,
+                par,
+                MemStack::new(&mut st.scratch),
+                Default::default(),
+            );
+        } else {
+            let regularization = LdltRegularization {
+                dynamic_regularization_signs: Some(&signs),
+                dynamic_regularization_delta: 1e-8 * diag_max,
+                dynamic_regularization_epsilon: 1e-13 * diag_max,
+            };
+            let factor = st.symbolic.factorize_numeric_ldlt::<f64>(
+                &mut st.values,
+                a,
+                Side::Lower,
+                regularization,
+                par,
+                MemStack::new(&mut st.scratch),
+                Default::default(),
+            );
+            if factor.is_err() {
+                self.timings.factorisation += t.elapsed().as_secs_f64();
+                return Ok(false);
+            }
+        }
+        self.timings.factorisation += t.elapsed().as_secs_f64();
+        self.timings.factorisations += 1;
+        let t = Instant::now();
+        let b = rhs.to_vec();
+        let solve = |st: &mut LdltState, x: &mut [f64]| {
+            let x = MatMut::from_column_major_slice_mut(x, n, 1);
+            let stack = MemStack::new(&mut st.scratch);
+            if pivoting {
+                let perm = PermRef::new_checked(&st.perm_forward, &st.perm_inverse, n);
+                IntranodeLbltRef::new(&st.symbolic, &st.values, &st.subdiag, perm).solve_in_place_with_conj(
+                    Conj::No,
+                    x,
+                    par,
+                    stack,
+                );
+            } else {
+                LdltRef::new(&st.symbolic, &st.values).solve_in_place_with_conj(Conj::No, x, par, stack);
+            }
+        };
+        let mut x = b.clone();
+        solve(st, &mut x);
+        let mut r = vec![0.0; n];
+        pattern.multiply(values, &x, &mut r);
+        for (ri, bi) in r.iter_mut().zip(&b) {
+            *ri = bi - *ri;
+        }
+        let (bn, mut rn) = (norm2(&b), norm2(&r));
+        for _ in 0..LDLT_REFINEMENTS {
+            if rn <= 1e-12 * bn {
+                break;
+            }
+            solve(st, &mut r);
+            for (xi, di) in x.iter_mut().zip(&r) {
+                *xi += di;
+            }
+            pattern.multiply(values, &x, &mut r);
+            for (ri, bi) in r.iter_mut().zip(&b) {
+                *ri = bi - *ri;
+            }
+            rn = norm2(&r);
+        }
+        self.timings.solve += t.elapsed().as_secs_f64();
+        let accurate = rn <= 1e-8 * bn;
+        if !accurate {
+            return Ok(false);
+        }
+        rhs.copy_from_slice(&x);
+        Ok(true)
     }
 
     /// Cholesky factorisation of the symmetric matrix with nonzeros `values` (its lower
@@ -370,6 +612,10 @@ fn cholesky_threshold() -> SupernodalThreshold {
         Ok("auto") => SupernodalThreshold::AUTO,
         _ => SupernodalThreshold::FORCE_SUPERNODAL,
     }
+}
+
+fn norm2(x: &[f64]) -> f64 {
+    x.iter().map(|v| v * v).sum::<f64>().sqrt()
 }
 
 fn check_finite(x: &[f64]) -> Result<(), LinearSolverError> {

@@ -186,6 +186,11 @@ pub struct Model {
     pub frames: Vec<Slip>,
     /// DOFs that share one equation (the normal components of slip-interface pairs).
     pub ties: Vec<DofTie>,
+    /// Node of each pressure DOF of the mixed u–p domains: the `k`-th is DOF
+    /// `coords.len()·dim + k` ([`crate::dofs`]).
+    pub pressure_nodes: Vec<usize>,
+    /// Equilibration scale `s = μ/h` (Pa/m) of each pressure DOF ([`crate::assembler`]).
+    pub pressure_scales: Vec<f64>,
     /// Gravity (m/s²) and its time function.
     pub gravity: ([f64; 3], Amplitude),
     /// Time scheme.
@@ -225,6 +230,8 @@ impl Model {
             slips: Vec::new(),
             frames: Vec::new(),
             ties: Vec::new(),
+            pressure_nodes: Vec::new(),
+            pressure_scales: Vec::new(),
             gravity: ([0.0; 3], Amplitude::default()),
             scheme,
             settings,
@@ -239,9 +246,56 @@ impl Model {
         }
     }
 
-    /// Number of DOFs (constrained included).
+    /// Number of DOFs (constrained included): the displacements, then the pressures.
     pub fn num_dofs(&self) -> usize {
+        self.coords.len() * self.dim + self.pressure_nodes.len()
+    }
+
+    /// Number of displacement DOFs, `coords.len() · dim` (pressure DOFs follow).
+    pub fn displacement_dofs(&self) -> usize {
         self.coords.len() * self.dim
+    }
+
+    /// Gives `nodes` a pressure DOF each (a mixed u–p domain's nodes), reusing the one a node
+    /// already has (its scale becomes the larger of the two), and returns their DOF ids.
+    /// `scale` is the domain's `μ/h` (Pa/m, see [`crate::assembler`]). Call before the first
+    /// step.
+    pub fn add_pressure_dofs(&mut self, nodes: &[usize], scale: f64) -> Vec<usize> {
+        let first = self.displacement_dofs();
+        let mut of_node: std::collections::HashMap<usize, usize> =
+            self.pressure_nodes.iter().enumerate().map(|(k, &n)| (n, k)).collect();
+        let dofs = nodes
+            .iter()
+            .map(|&n| {
+                let k = *of_node.entry(n).or_insert_with(|| {
+                    self.pressure_nodes.push(n);
+                    self.pressure_scales.push(0.0);
+                    self.pressure_nodes.len() - 1
+                });
+                self.pressure_scales[k] = self.pressure_scales[k].max(scale);
+                first + k
+            })
+            .collect();
+        let n = self.num_dofs();
+        for v in [&mut self.state, &mut self.committed] {
+            v.u.resize(n, 0.0);
+            v.v.resize(n, 0.0);
+            v.a.resize(n, 0.0);
+        }
+        self.reactions.resize(n, 0.0);
+        self.soil_forces.resize(n, 0.0);
+        self.invalidate_pattern();
+        dofs
+    }
+
+    /// The node of DOF `dof` (displacement or pressure).
+    pub fn node_of_dof(&self, dof: usize) -> usize {
+        let first = self.displacement_dofs();
+        if dof < first {
+            dof / self.dim
+        } else {
+            self.pressure_nodes[dof - first]
+        }
     }
 
     /// Number of equations (after [`Model::prepare`]).
@@ -277,6 +331,8 @@ impl Model {
             slips: &self.slips,
             frames: &self.frames,
             ties: &self.ties,
+            pressure_nodes: &self.pressure_nodes,
+            pressure_scales: &self.pressure_scales,
             solver: self.settings.linear_solver,
         };
         let mut assembler = Assembler::new(&system, &self.domains);
@@ -377,13 +433,15 @@ impl Model {
         for (c, &f_n) in self.constraints.iter().zip(&self.applied_factors) {
             let f = c.amplitude.at(t);
             for (&d, &v) in c.dofs.iter().zip(&c.values) {
-                self.state.u[d] = match self.roles[d / self.dim] {
+                let role = self.roles[self.node_of_dof(d)];
+                self.state.u[d] = match role {
                     NodeRole::Grid => self.committed.u[d] + v * (f - f_n),
                     NodeRole::Structure | NodeRole::Interface => v * f,
                 };
             }
         }
-        self.scheme.update_kinematics(dt, &mut self.state, &self.committed);
+        let dofs = self.displacement_dofs();
+        self.scheme.update_kinematics(dt, &mut self.state, &self.committed, dofs);
     }
 
     /// Consistent initial acceleration for a dynamic analysis: solves
@@ -482,6 +540,7 @@ impl Model {
             time: t_new,
             gravity,
             f_ext: &f_ext,
+            kinematic_dofs: self.coords.len() * self.dim,
         };
         let result = NewtonStrategy { settings: self.settings }.solve(&mut problem, &mut report);
         // phase 3: convective phase
@@ -595,6 +654,18 @@ impl Linearisation<'_> {
         self.model.assembler.as_ref().expect("prepared").dofs().block(e)
     }
 
+    /// Whether each equation is a pressure equation (mixed u–p domains).
+    pub fn pressure_equations(&self) -> Vec<bool> {
+        let dofs = self.model.assembler.as_ref().expect("prepared").dofs();
+        let mut out = vec![false; dofs.num_equations()];
+        for (g, &e) in dofs.equations().iter().enumerate() {
+            if e != crate::dofs::CONSTRAINED && dofs.is_pressure(g) {
+                out[e] = true;
+            }
+        }
+        out
+    }
+
     /// Residual per equation and the tangent (dense, row-major) at `u = u_pred + δu`, where
     /// `δu` is the correction `delta` per equation taken to the DOFs as a Newton correction
     /// is (tied DOFs together, slip frames to the global frame).
@@ -606,7 +677,8 @@ impl Linearisation<'_> {
         for (u, d) in model.state.u.iter_mut().zip(&full) {
             *u += d;
         }
-        model.scheme.update_kinematics(self.dt, &mut model.state, &model.committed);
+        let dofs = model.displacement_dofs();
+        model.scheme.update_kinematics(self.dt, &mut model.state, &model.committed, dofs);
         let mut inertial = vec![0.0; model.num_dofs()];
         model.scheme.inertial_accelerations(&model.state, &model.committed, &mut inertial);
         let input = crate::newton::assembly_input(

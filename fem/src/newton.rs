@@ -18,7 +18,7 @@ use std::time::Instant;
 
 use serde::Deserialize;
 
-use crate::assembler::{norm, Assembler};
+use crate::assembler::Assembler;
 use crate::convergence::{Convergence, ConvergenceCriterion};
 use crate::domain::{AssemblyInput, Domain, NodalState};
 use crate::linear_solver::LinearSolverKind;
@@ -99,6 +99,8 @@ pub struct StepProblem<'a> {
     pub gravity: [f64; 3],
     /// External nodal forces at `t_{n+1}` (local frames at slip nodes).
     pub f_ext: &'a [f64],
+    /// Number of displacement DOFs (the DOFs with velocity and acceleration).
+    pub kinematic_dofs: usize,
 }
 
 impl StepProblem<'_> {
@@ -109,7 +111,7 @@ impl StepProblem<'_> {
             *u += s * d;
             *du += s * d;
         }
-        self.scheme.update_kinematics(self.dt, self.state, self.committed);
+        self.scheme.update_kinematics(self.dt, self.state, self.committed, self.kinematic_dofs);
     }
 }
 
@@ -161,7 +163,7 @@ impl NewtonStrategy {
                 problem.scheme.inertial_accelerations(problem.state, problem.committed, &mut inertial);
             }
             let r_prev = report.residuals.last().copied().unwrap_or(f64::INFINITY);
-            let du_step_norm = norm(&du_step);
+            let du_step_norm = problem.assembler.dof_norm(&du_step);
             let displacement_met = convergence.displacement_met(it, last_du, du_step_norm);
             let likely = convergence.likely(it, r_prev, last_du, previous_du, du_step_norm);
             let mut with_tangent = !likely;
@@ -191,7 +193,7 @@ impl NewtonStrategy {
                 let b = problem.assembler.block_norms();
                 eprintln!(
                     "newton t={:.6e} dt={:.3e} it={it} |r|={r_norm:.3e} (soil {:.3e} interface {:.3e} structure {:.3e}) |du|={last_du:.3e} |Du|={:.3e} backtracks={backtracks} tangent={with_tangent}",
-                    problem.time, problem.dt, b.soil, b.interface, b.structure, norm(&du_step)
+                    problem.time, problem.dt, b.soil, b.interface, b.structure, problem.assembler.dof_norm(&du_step)
                 );
             }
             if !r_norm.is_finite() {

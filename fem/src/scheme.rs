@@ -107,13 +107,14 @@ impl TimeScheme {
         self.coefficients().is_some()
     }
 
-    /// Updates `v` and `a` of every DOF of `state` from its displacement and the committed
-    /// state ([`TimeScheme::kinematics`]).
-    pub fn update_kinematics(self, dt: f64, state: &mut NodalState, committed: &NodalState) {
+    /// Updates `v` and `a` of the first `dofs` DOFs of `state` (the displacement DOFs:
+    /// pressures have no kinematics) from its displacement and the committed state
+    /// ([`TimeScheme::kinematics`]).
+    pub fn update_kinematics(self, dt: f64, state: &mut NodalState, committed: &NodalState, dofs: usize) {
         if !self.is_dynamic() {
             return;
         }
-        for g in 0..state.u.len() {
+        for g in 0..dofs {
             let (v, a) = self.kinematics(dt, state.u[g], committed.u[g], committed.v[g], committed.a[g]);
             state.v[g] = v;
             state.a[g] = a;

@@ -4,6 +4,10 @@
 //! reference mesh), so the geometry of every point is computed once. The mass matrix
 //! `M_ab = ∫ ρ0 N_a N_b dV0` is constant in a total-Lagrangian description and is also
 //! computed once (consistent with a higher-order rule, or lumped by row sums).
+//!
+//! A domain in the mixed u–p formulation ([`FemDomain::new_mixed`]) also carries a pressure
+//! DOF at each of its nodes and integrates with [`crate::mixed_kernel::mixed_element`] on the
+//! rule [`ElementType::gauss_points_mixed`].
 
 use std::sync::Arc;
 
@@ -17,6 +21,7 @@ use crate::element::{ElementType, MAX_NODES};
 use crate::formulation::Formulation;
 use crate::kernel::{point_geometry, solid_element, KernelContext, PointGeometry, PointOutput};
 use crate::mesh::Mesh;
+use crate::mixed_kernel::mixed_element;
 
 /// What an FEM domain carries from step to step beside the nodal unknowns.
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -47,6 +52,8 @@ pub struct FemDomain {
     trial_out: Vec<PointOutput>,
     mass: Vec<f64>,
     work: Vec<f64>,
+    /// Global pressure DOF of each local node (mixed u–p domains).
+    pressure_dofs: Option<Vec<usize>>,
 }
 
 impl FemDomain {
@@ -61,9 +68,50 @@ impl FemDomain {
         law: Arc<dyn ConstitutiveLaw>,
         lumped_mass: bool,
     ) -> Result<Self, DomainError> {
+        Self::build(name, mesh, node_ids, None, formulation, thickness, law, lumped_mass)
+    }
+
+    /// A domain in the mixed u–p formulation, as [`FemDomain::new`] on the u–p rule; its
+    /// nodes' pressure DOFs are given by [`FemDomain::set_pressure_dofs`] before it assembles.
+    pub fn new_mixed(
+        name: &str,
+        mesh: Mesh,
+        node_ids: Vec<usize>,
+        formulation: Formulation,
+        thickness: f64,
+        law: Arc<dyn ConstitutiveLaw>,
+        lumped_mass: bool,
+    ) -> Result<Self, DomainError> {
+        Self::build(name, mesh, node_ids, Some(Vec::new()), formulation, thickness, law, lumped_mass)
+    }
+
+    /// The global pressure DOF `dofs[a]` of each local node `a` (u–p domains).
+    ///
+    /// # Panics
+    /// If the domain is not a u–p one or `dofs` does not have one entry per node.
+    pub fn set_pressure_dofs(&mut self, dofs: Vec<usize>) {
+        assert!(self.pressure_dofs.is_some() && dofs.len() == self.node_ids.len(), "a u–p domain, one DOF per node");
+        self.pressure_dofs = Some(dofs);
+    }
+
+    /// The material's law.
+    pub fn law(&self) -> &dyn ConstitutiveLaw {
+        self.law.as_ref()
+    }
+
+    fn build(
+        name: &str,
+        mesh: Mesh,
+        node_ids: Vec<usize>,
+        pressure_dofs: Option<Vec<usize>>,
+        formulation: Formulation,
+        thickness: f64,
+        law: Arc<dyn ConstitutiveLaw>,
+        lumped_mass: bool,
+    ) -> Result<Self, DomainError> {
         let element = mesh.element;
         let nn = element.num_nodes();
-        let rule = element.gauss_points();
+        let rule = if pressure_dofs.is_some() { element.gauss_points_mixed() } else { element.gauss_points() };
         let mass_rule = element.gauss_points_high();
         let ngp = rule.len();
         let ne = mesh.num_cells();
@@ -127,6 +175,7 @@ impl FemDomain {
             trial_out: vec![PointOutput::default(); ne * ngp],
             mass,
             work: vec![0.0; ne * ngp],
+            pressure_dofs,
         })
     }
 
@@ -142,6 +191,12 @@ impl FemDomain {
 
     fn dim(&self) -> usize {
         self.element.dim()
+    }
+
+    /// DOFs of an element block: `nn·dim` displacements, then `nn` pressures if mixed.
+    fn block_len(&self) -> usize {
+        let nn = self.element.num_nodes();
+        nn * self.dim() + if self.pressure_dofs.is_some() { nn } else { 0 }
     }
 }
 
@@ -161,7 +216,9 @@ impl Domain for FemDomain {
     fn blocks(&self, layout: &mut BlockLayout) {
         let dim = self.dim();
         for e in 0..self.mesh.num_cells() {
-            layout.push(self.mesh.cell(e).iter().flat_map(|&a| (0..dim).map(move |i| self.node_ids[a] * dim + i)));
+            let cell = self.mesh.cell(e);
+            let pressures = self.pressure_dofs.iter().flat_map(|p| cell.iter().map(move |&a| p[a]));
+            layout.push(cell.iter().flat_map(|&a| (0..dim).map(move |i| self.node_ids[a] * dim + i)).chain(pressures));
         }
     }
 
@@ -173,8 +230,9 @@ impl Domain for FemDomain {
     ) -> Result<(), DomainError> {
         let nn = self.element.num_nodes();
         let dim = self.dim();
-        let nd = nn * dim;
+        let nd = self.block_len();
         let ngp = self.points_per_element;
+        let pressure_dofs = self.pressure_dofs.as_deref();
         let ctx = KernelContext {
             element: self.element,
             formulation: self.formulation,
@@ -207,25 +265,50 @@ impl Domain for FemDomain {
                 }
                 let points = e * ngp..(e + 1) * ngp;
                 let stride = self.state_stride;
-                solid_element(
-                    &ctx,
-                    &disp[..nn],
-                    &geometry[points.clone()],
-                    identity,
-                    &f_prev[points],
-                    &committed[e * stride..(e + 1) * stride],
-                    trial,
-                    out,
-                    fv,
-                    if input.with_tangent && input.stiffness {
-                        Some(&mut *km)
-                    } else {
-                        if input.with_tangent {
-                            km.fill(0.0);
+                let stiffness = if input.with_tangent && input.stiffness {
+                    Some(&mut *km)
+                } else {
+                    if input.with_tangent {
+                        km.fill(0.0);
+                    }
+                    None
+                };
+                let (geometry, f_prev, committed) =
+                    (&geometry[points.clone()], &f_prev[points], &committed[e * stride..(e + 1) * stride]);
+                match pressure_dofs {
+                    None => solid_element(
+                        &ctx,
+                        &disp[..nn],
+                        geometry,
+                        identity,
+                        f_prev,
+                        committed,
+                        trial,
+                        out,
+                        fv,
+                        stiffness,
+                    ),
+                    Some(p_dofs) => {
+                        let mut pressure = [0.0; MAX_NODES];
+                        for (a, &local) in cell.iter().enumerate() {
+                            pressure[a] = input.state.u[p_dofs[local]];
                         }
-                        None
-                    },
-                )
+                        mixed_element(
+                            &ctx,
+                            &disp[..nn],
+                            &pressure[..nn],
+                            geometry,
+                            identity,
+                            f_prev,
+                            committed,
+                            trial,
+                            out,
+                            fv,
+                            stiffness,
+                            None,
+                        )
+                    }
+                }
                 .map_err(|err| DomainError {
                     domain: name.clone(),
                     element: e,
@@ -250,6 +333,17 @@ impl Domain for FemDomain {
                             if mass_tangent {
                                 km[(a * dim + i) * nd + b * dim + i] += input.mass_coefficient * m;
                             }
+                        }
+                    }
+                }
+                if pressure_dofs.is_some() && !input.stiffness {
+                    // mass only (the consistent initial acceleration): pressures carry no
+                    // inertia, their rows are `1 · a_p = 0`
+                    let nu = nn * dim;
+                    fv[nu..].fill(0.0);
+                    if input.with_tangent {
+                        for a in 0..nn {
+                            km[(nu + a) * nd + nu + a] = 1.0;
                         }
                     }
                 }
@@ -384,11 +478,21 @@ impl FemDomain {
         DomainOutput {
             points: self.mesh.coords.clone(),
             cells: Some((self.element, self.mesh.connectivity.clone())),
-            point_fields: vec![
-                Field { name: "displacement".into(), components: 3, values: nodal(&committed.u) },
-                Field { name: "velocity".into(), components: 3, values: nodal(&committed.v) },
-                Field { name: "acceleration".into(), components: 3, values: nodal(&committed.a) },
-            ],
+            point_fields: {
+                let mut fields = vec![
+                    Field { name: "displacement".into(), components: 3, values: nodal(&committed.u) },
+                    Field { name: "velocity".into(), components: 3, values: nodal(&committed.v) },
+                    Field { name: "acceleration".into(), components: 3, values: nodal(&committed.a) },
+                ];
+                if let Some(p) = &self.pressure_dofs {
+                    fields.push(Field {
+                        name: "pressure".into(),
+                        components: 1,
+                        values: p.iter().map(|&d| committed.u[d]).collect(),
+                    });
+                }
+                fields
+            },
             cell_fields,
         }
     }

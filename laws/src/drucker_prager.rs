@@ -19,11 +19,19 @@
 //! - `inner` (extension cone): same with `3 + sin φ`;
 //! - `plane_strain` (same plane-strain collapse load): `η = 3 tan φ/√(9 + 12 tan² φ)`,
 //!   `ξ = 3/√(9 + 12 tan² φ)`.
+//!
+//! **u–p form** ([`crate::mixed`], ψ = 0 so that `η̄ = 0` and the flow is isochoric; φ = 0
+//! is von Mises): at the given pressure `p` (mean Kirchhoff stress) the trial deviator
+//! `s_tr = 2μ dev ε_tr` returns radially, `f_tr = √J₂,tr + η p − ξ c`, `G Δγ = f_tr`,
+//! `s = (1 − f_tr/√J₂,tr) s_tr`, `τ = s + p 1`, while `ξ c − η p ≥ 0`; beyond the apex
+//! `τ = p 1` and the volumetric law is capped at `θ ≤ p_apex/K`, `p_apex = ξ c/η`, as for
+//! Mohr–Coulomb. Tangents by dual numbers seeded on `(ε_tr, p)`.
 
 use nalgebra::Matrix3;
 use serde::Deserialize;
 
 use crate::dual::{Dual, Real};
+use crate::mixed::{elastic_strain_up, update_principal_mixed, MixedLaw, MixedPrincipalModel, MixedPrincipalResponse};
 use crate::multiplicative::{
     self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel, PrincipalResponse,
     PLASTIC_OUTPUT,
@@ -181,7 +189,86 @@ impl PrincipalModel for DruckerPrager {
     }
 }
 
-multiplicative::impl_principal_law!(impl[] DruckerPrager, name: "drucker_prager", outputs: &PLASTIC_OUTPUT, lame: |law| (law.lambda, law.mu));
+impl DruckerPrager {
+    /// The elastic volumetric strain at the apex, `θ_apex = p_apex/K`, `p_apex = ξ c/η`
+    /// (`+∞` without an apex: η = 0, von Mises).
+    fn apex_strain(&self) -> f64 {
+        if self.eta > 0.0 {
+            self.xi * self.cohesion / self.eta / (self.lambda + 2.0 * self.mu / 3.0)
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// The u–p return (module doc) at trial principal log strains `eps` and pressure `p`.
+    fn mixed_return<T: Real>(&self, eps: [T; 3], p: T) -> ([T; 3], DruckerPragerRegion) {
+        let s = crate::mixed::deviator(eps).map(|e| e * (2.0 * self.mu));
+        let j2 = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]) * 0.5;
+        let sq = if j2.re() > 0.0 { j2.sqrt() } else { T::cst(0.0) };
+        let f = sq + p * self.eta - self.xi * self.cohesion;
+        let values = s.map(|x| x.re() + p.re());
+        if f.re() <= self.yield_tolerance(values) {
+            return (s.map(|x| x + p), DruckerPragerRegion::Elastic);
+        }
+        if sq.re() - f.re() >= 0.0 && sq.re() > 0.0 {
+            let factor = -(f / sq) + 1.0;
+            (s.map(|x| x * factor + p), DruckerPragerRegion::Cone)
+        } else {
+            ([p, p, p], DruckerPragerRegion::Apex)
+        }
+    }
+}
+
+impl MixedPrincipalModel for DruckerPrager {
+    fn mixed_principal_update(
+        &self,
+        eps_tr: [f64; 3],
+        pressure: f64,
+        committed: &[f64],
+        trial: &mut [f64],
+    ) -> Result<MixedPrincipalResponse, LawError> {
+        let eps: [Dual<4>; 3] = [Dual::seed(eps_tr[0], 0), Dual::seed(eps_tr[1], 1), Dual::seed(eps_tr[2], 2)];
+        let (t, region) = self.mixed_return(eps, Dual::seed(pressure, 3));
+        let tau = t.map(|x| x.v);
+        let eps_e = elastic_strain_up(eps_tr, tau, self.mu, self.apex_strain());
+        accumulate_plastic_strain(committed, trial, eps_tr, eps_e, region != DruckerPragerRegion::Elastic);
+        let dtau_deps = Matrix3::from_fn(|a, b| t[a].d[b]);
+        Ok((PrincipalResponse { tau, eps_e, dtau_deps }, t.map(|x| x.d[3])))
+    }
+}
+
+impl MixedLaw for DruckerPrager {
+    fn bulk_modulus(&self) -> f64 {
+        self.lambda + 2.0 * self.mu / 3.0
+    }
+
+    fn shear_modulus(&self) -> f64 {
+        self.mu
+    }
+
+    fn volumetric_strain(&self, ln_j: f64, committed: &[f64]) -> (f64, f64) {
+        crate::mixed::principal_volumetric_strain(ln_j, committed, self.apex_strain())
+    }
+
+    fn update_mixed(
+        &self,
+        kinematics: &crate::Kinematics,
+        pressure: f64,
+        committed: &[f64],
+        trial: &mut [f64],
+        response: &mut crate::StressResponse,
+        pressure_tangent: &mut Matrix3<f64>,
+    ) -> Result<(), LawError> {
+        update_principal_mixed(self, kinematics, pressure, committed, trial, response, pressure_tangent)
+    }
+}
+
+multiplicative::impl_principal_law!(impl[] DruckerPrager, name: "drucker_prager", outputs: &PLASTIC_OUTPUT, lame: |law| (law.lambda, law.mu),
+mixed: |law| if law.eta_bar == 0.0 {
+    Ok(law)
+} else {
+    Err("mixed_up needs an isochoric plastic flow: dilatancy_angle must be 0".to_string())
+});
 
 #[cfg(test)]
 mod tests {
@@ -216,6 +303,32 @@ mod tests {
             let err = tangent_relative_error(&law, &Kinematics::at(f), &state).unwrap();
             println!("drucker_prager {expected:?}: tangent error vs FD {err:.2e} (tolerance 1e-6)");
             assert!(err < 1e-6);
+        }
+    }
+
+    /// u–p form: von Mises (φ = 0, incompressible) and φ = 30° (ψ = 0), tangents against
+    /// central differences on the cone, at the apex and elastic.
+    #[test]
+    fn mixed_tangent_on_cone_and_apex() {
+        let rot = nalgebra::Rotation3::from_euler_angles(0.7, -0.2, 0.4).into_inner();
+        let fit = DruckerPragerFit::PlaneStrain;
+        let von_mises = DruckerPrager::new(2000.0, 1.0e5, 0.5, 0.0, 1.0e3, 0.0, fit);
+        let frictional = DruckerPrager::new(2000.0, 5.0e7, 0.3, 30f64.to_radians(), 5e3, 0.0, fit);
+        for (law, dev, p_kpa, expected) in [
+            (&von_mises, [0.5, -0.2, -0.3], -50.0, DruckerPragerRegion::Elastic),
+            (&von_mises, [20.0, -5.0, -15.0], -50.0, DruckerPragerRegion::Cone),
+            (&frictional, [2.0, -0.5, -1.5], -100.0, DruckerPragerRegion::Cone),
+            (&frictional, [2.0, -0.5, -1.5], 20.0, DruckerPragerRegion::Apex),
+        ] {
+            let mut state = vec![0.0; law.state_len()];
+            law.initialise_state(&mut state);
+            let eps = dev.map(|e| e * 1e-3 - 0.001);
+            assert_eq!(law.mixed_return(eps, p_kpa * 1e3).1, expected);
+            let f = rot * Matrix3::from_diagonal(&eps.map(f64::exp).into()) * rot.transpose();
+            let (ea, ep) =
+                crate::mixed::mixed_tangent_relative_error(law, &Kinematics::at(f), p_kpa * 1e3, &state).unwrap();
+            println!("drucker_prager u–p {expected:?}: A error {ea:.2e}, ∂P/∂p error {ep:.2e} (tolerance 1e-6)");
+            assert!(ea < 1e-6 && ep < 1e-6, "{expected:?}");
         }
     }
 }

@@ -6,6 +6,11 @@
 //! Tangent: `τ(b)` is an isotropic tensor function with `∂τ_a/∂ε_b = λ + 2μ δ_ab`, differentiated
 //! by [`crate::multiplicative::kirchhoff_update`] (robust at repeated stretches).
 //!
+//! **u–p form** ([`crate::mixed`]): at the pressure `p` (mean Kirchhoff stress),
+//! `τ = 2μ dev ε + p 1`, i.e. principal `τ_a = 2μ (ε_a − tr ε/3) + p`,
+//! `∂τ_a/∂ε_b = 2μ (δ_ab − ⅓)`, `∂τ_a/∂p = 1`; the volumetric law `p = K ln J`,
+//! `K = λ + 2μ/3`, is imposed by the mixed element (`K = ∞` for `ν = 0.5`).
+//!
 //! Reference: Simo (1992), CMAME 99:61–112, doi:10.1016/0045-7825(92)90123-2;
 //! Bruhns, Xiao & Meyers (2001), "Constitutive inequalities for an isotropic elastic strain-energy
 //! function based on Hencky's logarithmic strain tensor", Proc. R. Soc. A 457:2207–2226,
@@ -13,6 +18,7 @@
 
 use nalgebra::Matrix3;
 
+use crate::mixed::{deviator, mixed_kirchhoff_update, MixedLaw};
 use crate::multiplicative::{checked_inverse, hencky_matrix, hencky_stress, kirchhoff_update, PrincipalResponse};
 use crate::tensor::piola_from_kirchhoff;
 use crate::{ConstitutiveLaw, Kinematics, LawError, StressResponse};
@@ -49,6 +55,10 @@ impl ConstitutiveLaw for Hencky {
         (self.lambda, self.mu)
     }
 
+    fn mixed(&self) -> Result<&dyn MixedLaw, String> {
+        Ok(self)
+    }
+
     fn update(
         &self,
         kinematics: &Kinematics,
@@ -71,6 +81,36 @@ impl ConstitutiveLaw for Hencky {
     }
 }
 
+impl MixedLaw for Hencky {
+    fn bulk_modulus(&self) -> f64 {
+        self.lambda + 2.0 * self.mu / 3.0
+    }
+
+    fn shear_modulus(&self) -> f64 {
+        self.mu
+    }
+
+    fn update_mixed(
+        &self,
+        kinematics: &Kinematics,
+        pressure: f64,
+        _committed: &[f64],
+        _trial: &mut [f64],
+        response: &mut StressResponse,
+        pressure_tangent: &mut Matrix3<f64>,
+    ) -> Result<(), LawError> {
+        let components = kinematics.tangent.components();
+        let f = &kinematics.deformation_gradient;
+        let two_mu = 2.0 * self.mu;
+        mixed_kirchhoff_update(f, &Matrix3::identity(), components, response, pressure_tangent, |eps| {
+            let tau = deviator(eps).map(|e| two_mu * e + pressure);
+            let dtau_deps = Matrix3::from_fn(|a, b| two_mu * (if a == b { 1.0 } else { 0.0 } - 1.0 / 3.0));
+            Ok((PrincipalResponse { tau, eps_e: eps, dtau_deps }, [1.0; 3]))
+        })?;
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -83,6 +123,20 @@ mod tests {
             let err = tangent_relative_error(&law, &Kinematics::at(f), &[]).unwrap();
             println!("hencky tangent: relative error vs central FD {err:.2e} (tolerance 1e-6)");
             assert!(err < 1e-6);
+        }
+    }
+
+    /// u–p form: tangents against central differences, compressible and incompressible.
+    #[test]
+    fn mixed_tangents_match_central_differences() {
+        for nu in [0.3, 0.5] {
+            let law = Hencky::new(1000.0, 1.0e7, nu);
+            for f in [Matrix3::identity(), Matrix3::new(1.1, 0.2, 0.05, -0.1, 0.95, 0.02, 0.03, 0.01, 1.05)] {
+                let (ea, ep) =
+                    crate::mixed::mixed_tangent_relative_error(&law, &Kinematics::at(f), -3.0e5, &[]).unwrap();
+                println!("hencky u–p (ν = {nu}): A error {ea:.2e}, ∂P/∂p error {ep:.2e} (tolerance 1e-6)");
+                assert!(ea < 1e-6 && ep < 1e-6);
+            }
         }
     }
 }

@@ -181,6 +181,13 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     }
 
     /// Small-strain elastic constants `(λ, μ)` at the reference state, used for time-step
-    /// estimates and penalty scaling.
+    /// estimates and penalty scaling (`λ = ∞` for an incompressible material, which only the
+    /// mixed u–p formulation accepts).
     fn elastic_lame(&self) -> (f64, f64);
+
+    /// The law in volumetric–deviatoric form for the mixed u–p formulation
+    /// ([`crate::mixed`]), or why it has none (e.g. a dilatant plastic flow).
+    fn mixed(&self) -> Result<&dyn crate::mixed::MixedLaw, String> {
+        Err(format!("law `{}` has no volumetric–deviatoric (u–p) form", self.name()))
+    }
 }

@@ -18,6 +18,11 @@
 //! with the isotropic-function derivative of [`spectral`] for the tangent and forward-mode
 //! differentiation ([`dual`]) of the return algorithm for its algorithmic tangent.
 //!
+//! The mixed displacement–pressure formulation sees a law through [`mixed::MixedLaw`]: the
+//! deviatoric stress at `F` with the mean stress given as an independent pressure `p`, and
+//! the volumetric law `p = K ln J` (Neo-Hookean, Hencky, and the plasticity laws whose flow
+//! is isochoric).
+//!
 //! [`driver`] runs one material point along a laboratory path (triaxial, oedometer,
 //! simple shear, …) from a JSON path file.
 
@@ -31,6 +36,7 @@ pub mod hencky;
 pub mod law;
 pub mod linear_elastic;
 pub mod material;
+pub mod mixed;
 pub mod modified_cam_clay;
 pub mod mohr_coulomb;
 pub mod mohr_coulomb_softening;

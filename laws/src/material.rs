@@ -49,6 +49,21 @@ impl ElasticParameters {
         }
         Ok(())
     }
+
+    /// Range checks of a law with a u–p form: as [`ElasticParameters::check`], and `ν = 0.5`
+    /// (incompressible, `λ = ∞`; only the mixed u–p formulation accepts it).
+    pub fn check_up_to_incompressible(&self) -> Result<(), ParameterError> {
+        if self.poisson_ratio == 0.5 {
+            return ElasticParameters { poisson_ratio: 0.0, ..*self }.check();
+        }
+        self.check().map_err(|e| match e.parameter {
+            "poisson_ratio" => ParameterError::new(
+                "poisson_ratio",
+                format!("must lie in (-1, 0.5] (0.5: incompressible, mixed_up only), got {}", self.poisson_ratio),
+            ),
+            _ => e,
+        })
+    }
 }
 
 /// Checks that a parameter is finite and strictly positive.
@@ -227,8 +242,9 @@ pub enum MaterialSpec {
 impl MaterialSpec {
     /// Checks the parameters and builds the law. The error names the offending key.
     pub fn build(&self) -> Result<Box<dyn ConstitutiveLaw>, ParameterError> {
-        let elastic =
-            |density, young_modulus, poisson_ratio| ElasticParameters { density, young_modulus, poisson_ratio }.check();
+        let elastic = |density, young_modulus, poisson_ratio| {
+            ElasticParameters { density, young_modulus, poisson_ratio }.check_up_to_incompressible()
+        };
         Ok(match *self {
             MaterialSpec::LinearElastic(p) => {
                 p.check()?;
@@ -239,11 +255,11 @@ impl MaterialSpec {
                 Box::new(SaintVenantKirchhoff::new(p.density, p.young_modulus, p.poisson_ratio))
             }
             MaterialSpec::NeoHookean(p) => {
-                p.check()?;
+                p.check_up_to_incompressible()?;
                 Box::new(NeoHookean::new(p.density, p.young_modulus, p.poisson_ratio))
             }
             MaterialSpec::Hencky(p) => {
-                p.check()?;
+                p.check_up_to_incompressible()?;
                 Box::new(Hencky::new(p.density, p.young_modulus, p.poisson_ratio))
             }
             MaterialSpec::MohrCoulomb(p) => {

@@ -28,10 +28,22 @@
 //! ([`crate::mohr_coulomb_softening`]) the strength parameters depend on the accumulated
 //! plastic deviatoric strain κ, the scalar equation `κ = κ_n + Δκ(κ)` is solved by Newton
 //! and the tangent includes `∂τ/∂κ · dκ/dε_tr` (implicit function theorem).
+//!
+//! **u–p form** ([`crate::mixed`]; constant strength and ψ = 0, the isochoric flow of
+//! undrained soil and of Tresca, φ = 0): the trial stress keeps the given pressure `p` as its
+//! mean, `τ_B,a = 2μ (ε_tr,a − tr ε_tr/3) + p`. The plane and edge returns above move along
+//! the flow directions `D b`, which are deviatoric for ψ = 0 (and free of λ), so they are the
+//! same algorithm at the fixed mean stress `p`. Beyond the apex (`p ≥ σ_c/(k − 1) = c cot φ`)
+//! no deviatoric stress is admissible: `τ = p 1`, and the volumetric law is capped there,
+//! `θ = min(ln J_e, p_apex/K)` (the grains separate: the flow beyond the apex is a volume
+//! increase, as in the displacement form's apex return). The elastic strains are
+//! `ε_e = min(tr ε_tr, p_apex/K)/3 + dev τ/(2μ)` (`J_e = J` below the apex), and
+//! `∂τ_a/∂ε_tr,b`, `∂τ_a/∂p` come from the same dual numbers, seeded on `(ε_tr, p)`.
 
 use nalgebra::Matrix3;
 
 use crate::dual::{Dual, Real};
+use crate::mixed::{elastic_strain_up, update_principal_mixed, MixedLaw, MixedPrincipalModel, MixedPrincipalResponse};
 use crate::multiplicative::{
     self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel, PrincipalResponse,
     PLASTIC_OUTPUT,
@@ -299,7 +311,102 @@ impl<S: StrengthEvolution> PrincipalModel for MohrCoulombLaw<S> {
     }
 }
 
-multiplicative::impl_principal_law!(impl[S: StrengthEvolution] MohrCoulombLaw<S>, name: S::NAME, outputs: &PLASTIC_OUTPUT, lame: |law| (law.lambda, law.mu));
+impl<S: StrengthEvolution> MohrCoulombLaw<S> {
+    /// Why this law has no u–p form (strain softening, or a dilatant flow), if it has none.
+    pub fn mixed_problem(&self) -> Option<String> {
+        if self.strength.evolves() {
+            return Some("strain softening has no u–p form in Loam (mixed_up takes mohr_coulomb)".into());
+        }
+        let psi = self.strength.at(0.0_f64).dilatancy_angle;
+        (psi != 0.0).then(|| {
+            format!("mixed_up needs an isochoric plastic flow: dilatancy_angle must be 0, got {}", psi.to_degrees())
+        })
+    }
+
+    /// The elastic volumetric strain at the apex, `θ_apex = p_apex/K`, `p_apex = σ_c/(k − 1)`
+    /// (`+∞` without an apex: φ = 0).
+    fn apex_strain(&self) -> f64 {
+        let (k, sc, _) = mohr_coulomb_coefficients(&self.strength.at(0.0_f64));
+        if k - 1.0 > 1e-12 {
+            sc / (k - 1.0) / (self.lambda + 2.0 * self.mu / 3.0)
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// The u–p return (module doc) at trial principal log strains `eps` and pressure `p`.
+    fn mixed_return<T: Real>(&self, eps: [T; 3], p: T) -> Result<([T; 3], Region), LawError> {
+        let (k, sc, m) = mohr_coulomb_coefficients(&self.strength.at(T::cst(0.0)));
+        let tau_b = crate::mixed::deviator(eps).map(|e| e * (2.0 * self.mu) + p);
+        let values = tau_b.map(|t| t.re());
+        if self.yield_function(values, 0.0) <= self.yield_tolerance(values) {
+            return Ok((tau_b, Region::Elastic));
+        }
+        let apex = [p, p, p];
+        if k.re() - 1.0 > 1e-12 && p.re() >= sc.re() / (k.re() - 1.0) {
+            return Ok((apex, Region::Apex));
+        }
+        let mut perm = [0usize, 1, 2];
+        perm.sort_by(|&a, &b| values[b].partial_cmp(&values[a]).unwrap_or(std::cmp::Ordering::Equal));
+        // λ does not enter a return along deviatoric flow directions
+        let (ts, region) = clausen_return(perm.map(|a| tau_b[a]), 0.0, self.mu, k, sc, m)?;
+        if region == Region::Apex {
+            return Ok((apex, Region::Apex));
+        }
+        let mut tau = tau_b;
+        for (i, &a) in perm.iter().enumerate() {
+            tau[a] = ts[i];
+        }
+        Ok((tau, region))
+    }
+}
+
+impl<S: StrengthEvolution> MixedPrincipalModel for MohrCoulombLaw<S> {
+    fn mixed_principal_update(
+        &self,
+        eps_tr: [f64; 3],
+        pressure: f64,
+        committed: &[f64],
+        trial: &mut [f64],
+    ) -> Result<MixedPrincipalResponse, LawError> {
+        let eps: [Dual<4>; 3] = [Dual::seed(eps_tr[0], 0), Dual::seed(eps_tr[1], 1), Dual::seed(eps_tr[2], 2)];
+        let (t, region) = self.mixed_return(eps, Dual::seed(pressure, 3))?;
+        let tau = t.map(|x| x.v);
+        let eps_e = elastic_strain_up(eps_tr, tau, self.mu, self.apex_strain());
+        accumulate_plastic_strain(committed, trial, eps_tr, eps_e, region != Region::Elastic);
+        let dtau_deps = Matrix3::from_fn(|a, b| t[a].d[b]);
+        Ok((PrincipalResponse { tau, eps_e, dtau_deps }, t.map(|x| x.d[3])))
+    }
+}
+
+impl<S: StrengthEvolution> MixedLaw for MohrCoulombLaw<S> {
+    fn bulk_modulus(&self) -> f64 {
+        self.lambda + 2.0 * self.mu / 3.0
+    }
+
+    fn shear_modulus(&self) -> f64 {
+        self.mu
+    }
+
+    fn volumetric_strain(&self, ln_j: f64, committed: &[f64]) -> (f64, f64) {
+        crate::mixed::principal_volumetric_strain(ln_j, committed, self.apex_strain())
+    }
+
+    fn update_mixed(
+        &self,
+        kinematics: &crate::Kinematics,
+        pressure: f64,
+        committed: &[f64],
+        trial: &mut [f64],
+        response: &mut crate::StressResponse,
+        pressure_tangent: &mut Matrix3<f64>,
+    ) -> Result<(), LawError> {
+        update_principal_mixed(self, kinematics, pressure, committed, trial, response, pressure_tangent)
+    }
+}
+
+multiplicative::impl_principal_law!(impl[S: StrengthEvolution] MohrCoulombLaw<S>, name: S::NAME, outputs: &PLASTIC_OUTPUT, lame: |law| (law.lambda, law.mu),
+    mixed: |law| match law.mixed_problem() { Some(problem) => Err(problem), None => Ok(law) });
 
 #[cfg(test)]
 mod tests {
@@ -335,5 +442,38 @@ mod tests {
             println!("mohr_coulomb {expected:?}: tangent relative error vs central FD {err:.2e} (tolerance 1e-6)");
             assert!(err < 1e-6);
         }
+    }
+
+    /// u–p form, φ = 0 (Tresca, undrained, incompressible) and φ = 25° (ψ = 0): the tangents
+    /// against central differences in every region, with a deviatoric trial of the sizes
+    /// below and the given pressure (kPa); the mean stress stays the pressure.
+    #[test]
+    fn mixed_tangent_in_every_region() {
+        let rot = nalgebra::Rotation3::from_euler_angles(0.2, 0.5, -0.3).into_inner();
+        let tresca = MohrCoulomb::new(2000.0, 1.0e5, 0.5, 0.0, 1.0e3, 0.0);
+        let frictional = MohrCoulomb::new(2000.0, 5.0e7, 0.3, 25f64.to_radians(), 5.0e3, 0.0);
+        // (law, deviatoric trial strain × 1e-3, pressure kPa, expected region)
+        let cases: [(&MohrCoulomb, [f64; 3], f64, Region); 7] = [
+            (&tresca, [0.5, -0.2, -0.3], -50.0, Region::Elastic),
+            (&tresca, [20.0, -5.0, -15.0], -50.0, Region::Plane),
+            (&tresca, [20.0, 18.0, -38.0], 10.0, Region::CompressionEdge),
+            (&tresca, [24.0, -12.0, -12.0], -10.0, Region::ExtensionEdge),
+            (&frictional, [2.0, -0.5, -1.5], -100.0, Region::Plane),
+            (&frictional, [1.0, 1.0, -2.0], -100.0, Region::CompressionEdge),
+            (&frictional, [2.0, -0.5, -1.5], 20.0, Region::Apex),
+        ];
+        for (law, dev, p_kpa, expected) in cases {
+            let mut state = vec![0.0; law.state_len()];
+            law.initialise_state(&mut state);
+            let eps = dev.map(|e| e * 1e-3 + 0.002);
+            let (_, region) = law.mixed_return(eps, p_kpa * 1e3).unwrap();
+            assert_eq!(region, expected, "{dev:?} at {p_kpa} kPa");
+            let f = rot * Matrix3::from_diagonal(&eps.map(f64::exp).into()) * rot.transpose();
+            let (ea, ep) =
+                crate::mixed::mixed_tangent_relative_error(law, &Kinematics::at(f), p_kpa * 1e3, &state).unwrap();
+            println!("mohr_coulomb u–p {expected:?}: A error {ea:.2e}, ∂P/∂p error {ep:.2e} (tolerance 1e-6)");
+            assert!(ea < 1e-6 && ep < 1e-6, "{expected:?}");
+        }
+        assert!(MohrCoulomb::new(2000.0, 5.0e7, 0.3, 0.5, 5.0e3, 0.1).mixed().is_err());
     }
 }

@@ -88,6 +88,8 @@ pub struct KirchhoffUpdate {
     pub tau: Matrix3<f64>,
     /// Updated elastic left Cauchy–Green tensor `b_e`.
     pub b_e: Matrix3<f64>,
+    /// The principal directions `n_a` of the trial `b_e,tr` (shared by τ and `b_e`).
+    pub spectral: Spectral,
 }
 
 /// Steps 2–6 of the module doc for a given `F` and `Cp⁻¹` with the principal return
@@ -130,7 +132,11 @@ pub fn kirchhoff_update(
             }
         }
     }
-    Ok(KirchhoffUpdate { tau: spec.compose(r.tau), b_e: spec.compose(r.eps_e.map(|e| (2.0 * e).exp())) })
+    Ok(KirchhoffUpdate {
+        tau: spec.compose(r.tau),
+        b_e: spec.compose(r.eps_e.map(|e| (2.0 * e).exp())),
+        spectral: spec,
+    })
 }
 
 /// Inverse of `F` with the inversion check used by every law.
@@ -245,6 +251,10 @@ pub fn hencky_matrix(lambda: f64, mu: f64) -> Matrix3<f64> {
 /// variable) and `lame` (`|law| (λ, μ)` at the reference state) are what differs.
 macro_rules! impl_principal_law {
     (impl[$($generics:tt)*] $ty:ty, name: $name:expr, outputs: $outputs:expr, lame: |$law:ident| $lame:expr) => {
+        $crate::multiplicative::impl_principal_law!(impl[$($generics)*] $ty, name: $name, outputs: $outputs, lame: |$law| $lame,
+            mixed: |law| Err(format!("law `{}` has no volumetric–deviatoric (u–p) form", $crate::ConstitutiveLaw::name(law))));
+    };
+    (impl[$($generics:tt)*] $ty:ty, name: $name:expr, outputs: $outputs:expr, lame: |$law:ident| $lame:expr, mixed: |$mlaw:ident| $mixed:expr) => {
         impl<$($generics)*> $crate::ConstitutiveLaw for $ty {
             fn name(&self) -> &'static str {
                 $name
@@ -292,6 +302,11 @@ macro_rules! impl_principal_law {
             fn elastic_lame(&self) -> (f64, f64) {
                 let $law = self;
                 $lame
+            }
+
+            fn mixed(&self) -> Result<&dyn $crate::mixed::MixedLaw, String> {
+                let $mlaw = self;
+                $mixed
             }
         }
     };

@@ -558,7 +558,7 @@ fn parameter_checks_name_the_key() {
     };
     let cases = [
         (mc("young_modulus", 0.0), "young_modulus"),
-        (mc("poisson_ratio", 0.5), "poisson_ratio"),
+        (mc("poisson_ratio", 0.51), "poisson_ratio"),
         (mc("poisson_ratio", -1.0), "poisson_ratio"),
         (cohesionless, "friction_angle"),
         (mc("dilatancy_angle", 30.0), "dilatancy_angle"),

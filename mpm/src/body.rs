@@ -20,6 +20,7 @@ use loam_fem::domain::{AssemblyInput, PointExtent, PointLoad};
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
 use loam_fem::kernel::{point_geometry, solid_element, KernelContext, KernelError, PointGeometry, PointOutput};
+use loam_fem::mixed_kernel::mixed_element;
 use loam_laws::ConstitutiveLaw;
 use nalgebra::Matrix3;
 use rayon::prelude::*;
@@ -334,13 +335,18 @@ impl Body {
 
     /// Compute internal forces of one cell: the kernel over the body's points in `cell`
     /// (`trial`, `out` their views), written into `f_int` and `stiffness` (overwritten), then
-    /// the lumped mass terms `r_I += M_I (ã_I − g)`, `K_II += c_M M_I` added.
+    /// the lumped mass terms `r_I += M_I (ã_I − g)`, `K_II += c_M M_I` added. With the
+    /// nodal `pressure` of the cell the kernel is the mixed u–p one
+    /// ([`loam_fem::mixed_kernel`]): `f_int` then holds the displacement rows and the `nn`
+    /// pressure rows (which carry no mass; in a mass-only assembly they are `1 · a_p = 0`),
+    /// and `cell_rule` is the cell's Gauss rule on which it integrates its pressure projection.
     #[allow(clippy::too_many_arguments)]
     pub fn cell_contribution(
         &self,
         ctx: &KernelContext<'_>,
         cell: usize,
         disp: &[[f64; 3]],
+        pressure: Option<(&[f64], &[PointGeometry])>,
         inertia: &[[f64; 3]],
         input: &AssemblyInput<'_>,
         trial: &mut [f64],
@@ -352,24 +358,30 @@ impl Body {
         let sl = self.law.state_len();
         let nn = ctx.element.num_nodes();
         let dim = ctx.element.dim();
-        let nd = nn * dim;
+        let nd = f_int.len();
         let f = &self.points.deformation_gradient[range.clone()];
         let with_stiffness = input.with_tangent && input.stiffness;
         let mut stiffness = stiffness;
-        solid_element(
-            ctx,
-            disp,
-            &self.geometry[range.clone()],
-            f,
-            f,
-            &self.points.state[range.start * sl..range.end * sl],
-            trial,
-            out,
-            f_int,
-            if with_stiffness { stiffness.as_deref_mut() } else { None },
-        )?;
+        let (geometry, committed) =
+            (&self.geometry[range.clone()], &self.points.state[range.start * sl..range.end * sl]);
+        let k = if with_stiffness { stiffness.as_deref_mut() } else { None };
+        match pressure {
+            None => solid_element(ctx, disp, geometry, f, f, committed, trial, out, f_int, k)?,
+            Some((p, cell_rule)) => {
+                mixed_element(ctx, disp, p, geometry, f, f, committed, trial, out, f_int, k, Some(cell_rule))?
+            }
+        }
         if let (Some(km), false) = (stiffness.as_deref_mut(), with_stiffness) {
             km.fill(0.0);
+        }
+        if pressure.is_some() && !input.stiffness {
+            let nu = nn * dim;
+            f_int[nu..].fill(0.0);
+            if let Some(km) = stiffness.as_deref_mut() {
+                for a in 0..nn {
+                    km[(nu + a) * nd + nu + a] = 1.0;
+                }
+            }
         }
         let mut lumped = [0.0; MAX_NODES];
         for p in range {
@@ -551,6 +563,20 @@ impl Body {
             };
             PointExtent { position: x, size: size(pts.volume[p]), initial_size: size(pts.initial_volume[p]) }
         })
+    }
+
+    /// Adds `Σ_p N_I m_p p_p` to `sums` (per grid node): the mass-weighted projection of the
+    /// points' pressure `p_p = J_p tr σ_p / 3` (the mean Kirchhoff stress of the u–p
+    /// formulation), the start of a step's nodal pressures.
+    pub fn project_pressure(&self, grid: &Grid, sums: &mut [f64]) {
+        let nn = grid.mesh.element.num_nodes();
+        for (p, &cell) in self.cell_of_point.iter().enumerate() {
+            let f = &self.points.deformation_gradient[p];
+            let pressure = f.determinant() * self.points.cauchy[p].trace() / 3.0;
+            for (a, &node) in grid.mesh.cell(cell).iter().enumerate().take(nn) {
+                sums[node] += self.geometry[p].shape[a] * self.points.mass[p] * pressure;
+            }
+        }
     }
 
     /// Nodal mass `Σ_p N_I m_p` of this body's points (per grid node).

@@ -15,6 +15,15 @@
 //!    over the cells of the pattern, then the walls' penalty blocks;
 //! 3. **convective phase** ([`Domain::commit`]): [`MpmDomain::interpolate_to_points`]
 //!    (g2p: the bodies' points move and commit), the walls record their forces.
+//!
+//! A grid in the **mixed u–p formulation** ([`MpmDomain::set_pressure_dofs`]) carries a
+//! pressure DOF at every node: its bodies' cells go through
+//! [`loam_fem::mixed_kernel::mixed_element`] with the material points as integration points
+//! (the pressure projection acts on the points of each body in each cell), and the
+//! initialisation phase starts the nodal pressures from the mass-weighted projection of the
+//! points' mean Kirchhoff stress, `p_I = Σ_p N_I m_p p_p / Σ_p N_I m_p` (as the velocities).
+//! Like the displacements, the pressures of nodes that no active cell touches keep their
+//! start value (`r = p − p_n`, unit diagonal).
 
 use std::ops::Range;
 
@@ -25,7 +34,7 @@ use loam_fem::domain::{
 };
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
-use loam_fem::kernel::KernelContext;
+use loam_fem::kernel::{point_geometry, KernelContext, PointGeometry};
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 
@@ -37,8 +46,8 @@ use crate::penalty_boundary::{GridNodes, PenaltyBoundary};
 /// Marker of a block without an occupying body.
 const NONE: u8 = u8::MAX;
 
-/// Largest element block (hex8 in 3D): 24 DOFs.
-const MAX_BLOCK: usize = MAX_NODES * 3;
+/// Largest element block (hex8 in 3D, u–p): 32 DOFs.
+const MAX_BLOCK: usize = loam_fem::mixed_kernel::MAX_MIXED_DOFS;
 
 /// Rings of inactive cells kept in the sparsity pattern around the active ones (default 1;
 /// `LOAM_MPM_PATTERN_RINGS=0` rebuilds the pattern at every change of the active set).
@@ -62,6 +71,9 @@ struct CellBlocks {
     /// For each block: bit `a` set if it carries the equation `Δu = 0` of its node `a`, which
     /// no active cell touches (residual `Δu`, unit diagonal).
     orphans: Vec<u8>,
+    /// As `orphans` for the pressure DOFs (u–p grids): also at interface nodes, whose
+    /// pressure only the soil has.
+    pressure_orphans: Vec<u8>,
     /// Rings of cells around the active ones in the pattern (0: the pattern is the active
     /// set and is rebuilt whenever it changes).
     rings: usize,
@@ -89,6 +101,8 @@ pub struct MpmDomain {
     start: Vec<[f64; 3]>,
     sums: GridSums,
     blocks: CellBlocks,
+    /// Global pressure DOF of every grid node (u–p grids).
+    pressure_dofs: Option<Vec<usize>>,
 }
 
 impl MpmDomain {
@@ -108,7 +122,25 @@ impl MpmDomain {
             start: vec![[0.0; 3]; nodes],
             sums: GridSums::default(),
             blocks: CellBlocks { rings: pattern_rings(), ..Default::default() },
+            pressure_dofs: None,
         }
+    }
+
+    /// Makes the grid a mixed u–p one: grid node `a` carries the global pressure DOF
+    /// `dofs[a]` (see the module doc).
+    pub fn set_pressure_dofs(&mut self, dofs: Vec<usize>) {
+        self.pressure_dofs = Some(dofs);
+    }
+
+    /// Global pressure DOF of every grid node, if the grid is a u–p one.
+    pub fn pressure_dofs(&self) -> Option<&[usize]> {
+        self.pressure_dofs.as_deref()
+    }
+
+    /// DOFs of a cell's block: `nn·dim` displacements, then `nn` pressures on a u–p grid.
+    fn block_len(&self) -> usize {
+        let nn = self.grid.mesh.element.num_nodes();
+        nn * self.dim() + if self.pressure_dofs.is_some() { nn } else { 0 }
     }
 
     /// Adds another body (material) on the same grid.
@@ -245,12 +277,14 @@ impl MpmDomain {
                 live[a] = true;
             }
         }
+        let mut live_pressure = live.clone();
         cb.first_body.clear();
         cb.orphans.clear();
+        cb.pressure_orphans.clear();
         for &c in &cb.pattern {
             let first = self.bodies.iter().position(|b| b.occupies(c));
             cb.first_body.push(first.map_or(NONE, |k| k as u8));
-            let mut mask = 0u8;
+            let (mut mask, mut pressure_mask) = (0u8, 0u8);
             if first.is_none() {
                 for (a, &node) in mesh.cell(c).iter().enumerate() {
                     let tied = self.attachment.as_ref().is_some_and(|att| att.kind[node] == GridNodeKind::Tied);
@@ -258,9 +292,14 @@ impl MpmDomain {
                         live[node] = true; // owned by this block
                         mask |= 1 << a;
                     }
+                    if !live_pressure[node] {
+                        live_pressure[node] = true;
+                        pressure_mask |= 1 << a;
+                    }
                 }
             }
             cb.orphans.push(mask);
+            cb.pressure_orphans.push(pressure_mask);
         }
         changed
     }
@@ -302,6 +341,16 @@ impl MpmDomain {
             committed.v[g * dim..(g + 1) * dim].copy_from_slice(&v[..dim]);
             committed.a[g * dim..(g + 1) * dim].copy_from_slice(&acc[..dim]);
         }
+        if let Some(pressure_dofs) = &self.pressure_dofs {
+            let mut sums = vec![0.0; self.grid.mesh.coords.len()];
+            for body in &self.bodies {
+                body.project_pressure(&self.grid, &mut sums);
+            }
+            for (a, &dof) in pressure_dofs.iter().enumerate() {
+                let m = self.sums.mass[a];
+                committed.u[dof] = if m > 0.0 { sums[a] / m } else { 0.0 };
+            }
+        }
     }
 
     /// Phase 1e: the walls place their penalty points where the bodies' mass is. Returns
@@ -331,7 +380,9 @@ impl MpmDomain {
         let element = self.grid.mesh.element;
         let nn = element.num_nodes();
         let dim = self.dim();
-        let nd = nn * dim;
+        let nd = self.block_len();
+        let pressure_dofs = self.pressure_dofs.as_deref();
+        let (formulation, thickness) = (self.formulation, self.thickness);
         let (grid, node_ids, name, blocks) = (&self.grid, &self.node_ids, &self.name, &self.blocks);
         let attachment = self.attachment.as_ref();
         // blocks without points: zero, but for the orphan nodes' equations `r = Δu` (`K = I`:
@@ -367,6 +418,18 @@ impl MpmDomain {
                         }
                     }
                 }
+                if let Some(pressure_dofs) = pressure_dofs {
+                    let nu = nn * dim;
+                    for (a, &node) in grid.mesh.cell(blocks.pattern[b]).iter().enumerate() {
+                        if blocks.pressure_orphans[b] & (1 << a) != 0 {
+                            let dof = pressure_dofs[node];
+                            fv[nu + a] = input.state.u[dof] - input.committed.u[dof];
+                            if input.with_tangent {
+                                km[(nu + a) * nd + nu + a] = 1.0;
+                            }
+                        }
+                    }
+                }
             });
         for (k, body) in self.bodies.iter_mut().enumerate() {
             let mut trial = body.take_trial();
@@ -390,6 +453,7 @@ impl MpmDomain {
                     let nodes = grid.mesh.cell(cell);
                     let mut disp = [[0.0; 3]; MAX_NODES];
                     let mut inertia = [[0.0; 3]; MAX_NODES];
+                    let mut pressure = [0.0; MAX_NODES];
                     for (a, &local) in nodes.iter().enumerate() {
                         let dof = node_ids[local] * dim;
                         for i in 0..dim {
@@ -398,7 +462,37 @@ impl MpmDomain {
                                 inertia[a][i] = acc[dof + i];
                             }
                         }
+                        if let Some(p) = pressure_dofs {
+                            pressure[a] = input.state.u[p[local]];
+                        }
                     }
+                    // the cell's Gauss rule in the step's configuration, for the projection
+                    let cell_rule: Vec<PointGeometry> = if pressure_dofs.is_some() {
+                        let coords = grid.cell_coords(cell);
+                        element
+                            .gauss_points_mixed()
+                            .iter()
+                            .map(|gp| {
+                                point_geometry(
+                                    element,
+                                    formulation,
+                                    thickness,
+                                    &coords[..nn],
+                                    &gp.xi,
+                                    gp.weight,
+                                    grid.cell_map(cell),
+                                )
+                            })
+                            .collect::<Result<_, _>>()
+                            .map_err(|err| DomainError {
+                                domain: name.clone(),
+                                element: cell,
+                                message: err.to_string(),
+                            })?
+                    } else {
+                        Vec::new()
+                    };
+                    let pressure = pressure_dofs.map(|_| (&pressure[..nn], cell_rule.as_slice()));
                     let fail = |err: loam_fem::kernel::KernelError| DomainError {
                         domain: name.clone(),
                         element: cell,
@@ -406,8 +500,19 @@ impl MpmDomain {
                     };
                     let body = body_ref;
                     let mut contribute = |f: &mut [f64], k: Option<&mut [f64]>| {
-                        body.cell_contribution(&ctx, cell, &disp[..nn], &inertia[..nn], input, trial, out, f, k)
-                            .map_err(fail)
+                        body.cell_contribution(
+                            &ctx,
+                            cell,
+                            &disp[..nn],
+                            pressure,
+                            &inertia[..nn],
+                            input,
+                            trial,
+                            out,
+                            f,
+                            k,
+                        )
+                        .map_err(fail)
                     };
                     if blocks.first_body[b] as usize == k {
                         return contribute(fv, input.with_tangent.then_some(&mut *km));
@@ -481,6 +586,14 @@ impl MpmDomain {
             Field { name: "acceleration".into(), components: 3, values: nodal(&committed.a, None) },
             Field { name: "active".into(), components: 1, values: active },
         ];
+        let mut point_fields = point_fields;
+        if let Some(p) = &self.pressure_dofs {
+            point_fields.push(Field {
+                name: "pressure".into(),
+                components: 1,
+                values: p.iter().map(|&d| committed.u[d]).collect(),
+            });
+        }
         DomainOutput {
             points: mesh.coords.clone(),
             cells: Some((mesh.element, mesh.connectivity.clone())),
@@ -529,6 +642,12 @@ impl MpmDomain {
         for (k, name) in names.iter().enumerate() {
             point_fields.push(Field { name: name.to_string(), components: 1, values: std::mem::take(&mut states[k]) });
         }
+        if self.pressure_dofs.is_some() {
+            // the mean Kirchhoff stress interpolated from the nodal pressures at convergence
+            let values =
+                pts.cauchy.iter().zip(&pts.deformation_gradient).map(|(s, f)| f.determinant() * s.trace() / 3.0);
+            point_fields.push(Field { name: "pressure".into(), components: 1, values: values.collect() });
+        }
         DomainOutput { points: pts.position.clone(), cells: None, point_fields, cell_fields: Vec::new() }
     }
 
@@ -567,7 +686,9 @@ impl Domain for MpmDomain {
     fn blocks(&self, layout: &mut BlockLayout) {
         let dim = self.dim();
         for &c in &self.blocks.pattern {
-            layout.push(self.grid.mesh.cell(c).iter().flat_map(|&a| (0..dim).map(move |i| self.node_ids[a] * dim + i)));
+            let cell = self.grid.mesh.cell(c);
+            let pressures = self.pressure_dofs.iter().flat_map(|p| cell.iter().map(move |&a| p[a]));
+            layout.push(cell.iter().flat_map(|&a| (0..dim).map(move |i| self.node_ids[a] * dim + i)).chain(pressures));
         }
         for wall in &self.walls {
             wall.blocks(self.at(), layout);
@@ -581,7 +702,7 @@ impl Domain for MpmDomain {
         matrices: &mut [f64],
         vectors: &mut [f64],
     ) -> Result<(), DomainError> {
-        let nd = self.grid.mesh.element.num_nodes() * self.dim();
+        let nd = self.block_len();
         let cells = self.blocks.pattern.len();
         let (cell_matrices, mut wall_matrices) = matrices.split_at_mut(cells * nd * nd);
         let (cell_vectors, mut wall_vectors) = vectors.split_at_mut(cells * nd);

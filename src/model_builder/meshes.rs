@@ -28,7 +28,8 @@ use nalgebra::Matrix3;
 use super::regions::{line_tolerance, select_region};
 use super::{check_len, check_positive};
 use crate::case::{
-    BodySpec, Case, CaseError, DomainKind, GridSpec, InitialStressSpec, InitialVelocity, MassMatrix, MeshSpec,
+    BodySpec, Case, CaseError, DomainKind, ElementFormulation, GridSpec, InitialStressSpec, InitialVelocity,
+    MassMatrix, MeshSpec,
 };
 
 /// A part of the model: an FEM domain, or a grid with its bodies.
@@ -305,6 +306,41 @@ impl BodyRegion {
     }
 }
 
+/// The element formulation of domain `k` against its material, its kinematics and its
+/// material points: the combinations that cannot work are refused.
+fn check_element_formulation(case: &Case, k: usize, law: &dyn ConstitutiveLaw) -> Result<(), CaseError> {
+    let d = &case.domains[k];
+    let loc = format!("domains[{k}].element_formulation");
+    match d.element_formulation {
+        ElementFormulation::Displacement if law.elastic_lame().0.is_infinite() => Err(CaseError::new(
+            format!("domains[{k}].material"),
+            format!(
+                "material '{}' is incompressible (poisson_ratio 0.5): it needs \"element_formulation\": \"mixed_up\"",
+                d.material
+            ),
+        )),
+        ElementFormulation::Displacement => Ok(()),
+        ElementFormulation::MixedUp => {
+            if case.formulation == Formulation::PlaneStress {
+                return Err(CaseError::new(
+                    loc,
+                    "mixed_up does not apply to plane_stress (no incompressibility constraint): use plane_strain, \
+                     axisymmetric or 3d",
+                ));
+            }
+            law.mixed().map_err(|why| CaseError::new(&loc, format!("material '{}': {why}", d.material)))?;
+            if let Some(BodySpec::Cells { points_per_cell: 1, .. }) = &d.material_points {
+                return Err(CaseError::new(
+                    format!("domains[{k}].material_points.cells.points_per_cell"),
+                    "mixed_up needs several material points per cell (its pressure stabilisation acts on the points \
+                     of each cell): 3 or more",
+                ));
+            }
+            Ok(())
+        }
+    }
+}
+
 /// The material points of the MPM domain `k` (`density` of its material), checked to lie
 /// in `grid`, and the region they fill.
 fn material_points(
@@ -567,6 +603,7 @@ pub(super) fn discretise(
             ));
         }
         check_keys(case, k)?;
+        check_element_formulation(case, k, laws[d.material.as_str()].as_ref())?;
     }
     // FEM meshes, and grids with their bodies (identical specs: one grid)
     let mut fem_meshes: BTreeMap<usize, Mesh> = BTreeMap::new();
@@ -787,7 +824,11 @@ fn number(
     }
     for ((k, mesh), ids) in fem_list.into_iter().zip(fem_ids) {
         let d = &case.domains[k];
-        let domain = FemDomain::new(
+        let build = match d.element_formulation {
+            ElementFormulation::Displacement => FemDomain::new,
+            ElementFormulation::MixedUp => FemDomain::new_mixed,
+        };
+        let domain = build(
             &d.name,
             mesh,
             ids,
@@ -837,8 +878,18 @@ fn grid_domain(
     let mut indices = Vec::with_capacity(bodies.len());
     let mut grid = Some(grid);
     let mut node_ids = Some(node_ids);
+    let first = bodies[0].0;
     for (k, mut points) in bodies {
         let d = &case.domains[k];
+        if d.element_formulation != case.domains[first].element_formulation {
+            return Err(CaseError::new(
+                format!("domains[{k}].element_formulation"),
+                format!(
+                    "the bodies on one grid share their element formulation: '{}' on the same grid has {:?}",
+                    case.domains[first].name, case.domains[first].element_formulation
+                ),
+            ));
+        }
         let law = laws[d.material.as_str()].clone();
         if let Some(v0) = &d.initial_velocity {
             for (x, v) in points.position.iter().zip(points.velocity.iter_mut()) {
@@ -1001,4 +1052,46 @@ pub(super) fn place_domains(case: &Case, model: &mut Model, parts: Vec<Part>) ->
         }
     }
     Ok(())
+}
+
+/// Mean cell size `h = (V_box / cells)^(1/dim)` of a mesh (the length in the equilibration
+/// scale `μ/h` of the pressure equations).
+fn mean_cell_size(mesh: &Mesh) -> f64 {
+    let dim = mesh.element.dim();
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for c in &mesh.coords {
+        for d in 0..dim {
+            lo[d] = lo[d].min(c[d]);
+            hi[d] = hi[d].max(c[d]);
+        }
+    }
+    let volume: f64 = (0..dim).map(|d| (hi[d] - lo[d]).max(1e-300)).product();
+    (volume / mesh.num_cells().max(1) as f64).powf(1.0 / dim as f64)
+}
+
+/// Gives every node of the mixed u–p parts a pressure DOF in `model` (shared where two u–p
+/// parts share a node), with the equilibration scale `μ/h` of the part's material and cells.
+pub(super) fn assign_pressure_dofs(case: &Case, model: &mut Model, parts: &mut [Part]) {
+    for part in parts.iter_mut() {
+        match part {
+            Part::Fem(k, domain) if case.domains[*k].element_formulation == ElementFormulation::MixedUp => {
+                let mu = domain.law().mixed().expect("checked").shear_modulus();
+                let scale = mu / mean_cell_size(domain.mesh());
+                let dofs = model.add_pressure_dofs(domain.node_ids(), scale);
+                domain.set_pressure_dofs(dofs);
+            }
+            Part::Grid(grid) if case.domains[grid.bodies[0]].element_formulation == ElementFormulation::MixedUp => {
+                let mu = grid
+                    .domain
+                    .bodies()
+                    .iter()
+                    .map(|b| b.law().mixed().expect("checked").shear_modulus())
+                    .fold(0.0, f64::max);
+                let scale = mu / mean_cell_size(&grid.domain.grid().mesh);
+                let dofs = model.add_pressure_dofs(grid.domain.node_ids(), scale);
+                grid.domain.set_pressure_dofs(dofs);
+            }
+            _ => {}
+        }
+    }
 }

@@ -99,6 +99,7 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     model.roles.clone_from(&discretisation.roles);
     let regions = regions::select_all(case, &model.coords, &discretisation.groups)?;
     let mut parts = discretisation.parts;
+    meshes::assign_pressure_dofs(case, &mut model, &mut parts);
     let bcs = conditions::boundary_conditions(case, &mut model, &regions, &mut parts)?;
     interfaces::attach(case, &mut model, &mut parts)?;
     meshes::place_domains(case, &mut model, parts)?;

@@ -142,7 +142,10 @@ pub(super) fn build(
                 MonitorKind::StrainEnergy { domain: energy_domain(model, &loc, domain.as_deref())? }
             }
         };
-        monitors.push(Monitor { name: m.name().to_string(), kind });
+        if !m.scale().is_finite() {
+            return Err(CaseError::new(format!("{loc}.scale"), format!("must be finite, got {}", m.scale())));
+        }
+        monitors.push(Monitor { name: m.name().to_string(), kind, scale: m.scale() });
     }
     Ok(monitors)
 }

@@ -107,6 +107,13 @@ pub struct LinearSolverReport {
     pub krylov_solves: usize,
     /// GMRES iterations.
     pub krylov_iterations: usize,
+    /// Saddle-point systems (mixed u–p) solved by LU, after a symmetric indefinite
+    /// factorisation that failed or on an unsymmetric matrix (the others by `L B Lᵀ`).
+    #[serde(default)]
+    pub saddle_point_lu: usize,
+    /// Saddle-point systems whose symmetric indefinite factorisation failed.
+    #[serde(default)]
+    pub ldlt_failures: usize,
 }
 
 /// Wall time per phase (s).
@@ -289,6 +296,8 @@ impl RunSummary {
                 factorisations: solver.factorisations,
                 krylov_solves: solver.krylov_solves,
                 krylov_iterations: solver.krylov_iterations,
+                saddle_point_lu: solver.saddle_point_lu,
+                ldlt_failures: solver.ldlt_failures,
             },
             wall_time,
             monitors,

@@ -181,6 +181,12 @@ pub fn run_path_file(path: &Path, out_dir: &Path) -> Result<PathSummary, DriverE
 /// Drives the material point of a parsed path file and writes `out_dir/path.csv`.
 pub fn run_parsed_path(file: &PathFile, out_dir: &Path) -> Result<PathSummary, DriverError> {
     let law = file.material.build()?;
+    if law.elastic_lame().0.is_infinite() {
+        return Err(DriverError::input(
+            "material.poisson_ratio",
+            "0.5 (incompressible) needs the mixed u–p formulation of a domain; a material point path takes ν < 0.5",
+        ));
+    }
     let table = run_path(law.as_ref(), file)?;
     std::fs::create_dir_all(out_dir).map_err(|source| DriverError::Write { file: out_dir.into(), source })?;
     let csv = out_dir.join("path.csv");

@@ -1,0 +1,419 @@
+//! The mixed displacement–pressure (u–p) element kernel for nearly and exactly
+//! incompressible materials, shared by FEM (Gauss points) and MPM (material points) through
+//! the same seam as [`crate::kernel::solid_element`].
+//!
+//! **Unknowns.** Equal-order nodal displacements `u_a` (from the step reference
+//! configuration `X̃`, as in [`crate::kernel`]) and nodal pressures `p_a` (total values of
+//! the mean Kirchhoff stress, [`loam_laws::mixed`]): P1–P1 on tri3 and tet4, Q1–Q1 on quad4
+//! and hex8, in plane strain, axisymmetry and 3D. An element block lists the displacement
+//! DOFs node by node, then the `nn` pressure DOFs.
+//!
+//! **Point kinematics and stress.** At each integration point (weight `w` = its volume in
+//! `X̃`, `F0` the deformation of `X̃`, `J0 = det F0`, `w0 = w/J0` its volume in the
+//! stress-free configuration):
+//!
+//! `ΔF = I + Σ_a u_a ⊗ ∇_X̃ N_a`, `F = ΔF F0`, `J = det F`, `p = Σ_a N_a p_a`,
+//! `(P, A, ∂P/∂p) = law(F, p)` (u–p form), pulled back to `X̃` as in [`crate::kernel`]:
+//! `P̃ = J0⁻¹ P F0ᵀ`, `Ã`, `B̃ = J0⁻¹ (∂P/∂p) F0ᵀ`.
+//!
+//! **Weak form.** Stationarity of the saddle-point functional
+//!
+//! `Π(u, p) = ∫_Ω0 [W_dev(F) + p ln J − p²/(2K)] dV0 − 1/(2μ) ∫_Ω0 (p − Π₀p)² dV0 − W_ext`,
+//!
+//! whose first two terms give `τ = τ_dev + p 1` and the volumetric law `p = K ln J` weakly,
+//! and whose last term is the **polynomial pressure projection** stabilisation of Dohrmann &
+//! Bochev (2004), "A stabilized finite element method for the Stokes problem based on
+//! polynomial pressure projections", Int. J. Numer. Meth. Fluids 46:183–201,
+//! doi:10.1002/fld.752 (the seed's choice, and Kratos' u–p MPM element after Iaconeta,
+//! Larese, Rossi & Oñate 2019, doi:10.1007/s00466-018-1647-9): `Π₀` is the L2 projection onto
+//! constants per element (per grid cell and body in MPM), `Π₀p = Σ_b m_b p_b / V`,
+//! `m_b = ∫ N_b dV0`, `V = ∫ dV0`. It penalises the part of the equal-order pressure that
+//! the piecewise-constant space — inf–sup stable with these displacements in the sense of
+//! Dohrmann & Bochev — cannot represent, with the weight `1/μ` (elasticity in place of the
+//! viscosity of Stokes flow; White & Borja 2008, doi:10.1016/j.cma.2008.06.008). It needs
+//! no tuning parameter and vanishes for element-wise constant pressures (patch test).
+//! Residuals:
+//!
+//! `r_u,ai = Σ_p w P̃_iJ ∂N_a/∂X̃_J` (as the displacement element),
+//!
+//! `r_p,a = Σ_p w0 N_a (θ − p/K) − (1/μ) Σ_p w0 N_a (p − Π₀p)`, `θ = ln J_e`
+//! (`ln J` unless the history carries an elastic prestrain or the law caps `θ` at its apex in
+//! tension, [`loam_laws::mixed::MixedLaw::volumetric_strain`]),
+//!
+//! and the consistent tangent (symmetric for the hyperelastic laws and the
+//! pressure-independent plasticity, where `B̃ = J0⁻¹ ΔF⁻ᵀ`):
+//!
+//! `K_uu = Σ_p w ∇N_a · Ã · ∇N_b`, `K_up,(ai)b = Σ_p w B̃_iJ ∂N_a/∂X̃_J N_b`,
+//! `K_pu,a(bk) = Σ_p w0 N_a θ' ΔF⁻ᵀ_kL ∂N_b/∂X̃_L` (`∂ ln J/∂ΔF = ΔF⁻ᵀ`, `θ' = dθ/d ln J`),
+//! `K_pp = −Σ_p w0 N_a N_b / K − (1/μ) (M − m mᵀ / V)`, `M_ab = Σ_p w0 N_a N_b`.
+//!
+//! With `K = ∞` (incompressible) `ln J = 0` holds weakly and `K_pp` is the stabilisation
+//! alone. FEM integrates everything on a rule exact for `N_a N_b` (3 points on tri3, 4 on
+//! tet4, 2×2(×2) on quads and hexes). An MPM cell integrates the momentum, the volumetric law
+//! and `K_up`, `K_pu` on its material points, but its projection term (`M`, `m`, `V`) on the
+//! cell's own Gauss rule scaled by the cell's fill fraction `φ = Σ_p w0_p / V_cell`: with its
+//! points alone a cell holding one or two points would have `M − m mᵀ/V ≈ 0` and leave its
+//! pressures unstabilised (observed: Newton stalling on the footing, whose surface cells
+//! empty as the soil flows), while the fill-weighted cell rule keeps the projection's
+//! kernel the element-wise constants whatever the points.
+//! Components of `F` follow [`crate::kernel::active_components`] through the general gradient
+//! operator (axisymmetry adds the hoop row `N_a/R`); plane stress has no incompressibility
+//! constraint and no u–p form.
+
+use loam_laws::mixed::MixedLaw;
+use loam_laws::{StressResponse, TangentRequest};
+use nalgebra::Matrix3;
+
+use crate::element::MAX_NODES;
+use crate::formulation::Formulation;
+use crate::kernel::{
+    active_components, cauchy_stress, delta_deformation_gradient, gradient_operator, pull_back_response, KernelContext,
+    KernelError, PointGeometry, PointOutput, MAX_DOFS,
+};
+
+/// Largest u–p element block (hex8: 8 × (3 + 1) DOFs).
+pub const MAX_MIXED_DOFS: usize = MAX_DOFS + MAX_NODES;
+
+/// Number of DOFs of a u–p block of `ctx.element` (`nn · (dim + 1)`).
+pub fn mixed_block_len(ctx: &KernelContext<'_>) -> usize {
+    ctx.element.num_nodes() * (ctx.element.dim() + 1)
+}
+
+/// The u–p law of `ctx.law`, or why it has none.
+fn mixed_law<'a>(ctx: &KernelContext<'a>) -> Result<&'a dyn MixedLaw, KernelError> {
+    if ctx.formulation == Formulation::PlaneStress {
+        return Err(KernelError::NoMixedForm("plane stress has no incompressibility constraint".into()));
+    }
+    ctx.law.mixed().map_err(KernelError::NoMixedForm)
+}
+
+/// Residual `[r_u; r_p]` (length `nn·(dim+1)`, see the module doc) and, if asked, the
+/// consistent tangent (row-major) of one u–p element over its integration points, for nodal
+/// displacements `disp` and nodal pressures `pressure`.
+///
+/// Arguments as [`crate::kernel::solid_element`]; outputs are overwritten.
+/// `projection_rule`: the cell's own Gauss points (weights: their share of the cell's
+/// volume) on which an MPM cell integrates the pressure projection, scaled by its fill
+/// fraction; `None` integrates it on the integration points (FEM).
+pub fn mixed_element(
+    ctx: &KernelContext<'_>,
+    disp: &[[f64; 3]],
+    pressure: &[f64],
+    geometry: &[PointGeometry],
+    f0: &[Matrix3<f64>],
+    f_prev: &[Matrix3<f64>],
+    committed: &[f64],
+    trial: &mut [f64],
+    point_out: &mut [PointOutput],
+    residual: &mut [f64],
+    mut stiffness: Option<&mut [f64]>,
+    projection_rule: Option<&[PointGeometry]>,
+) -> Result<(), KernelError> {
+    let law = mixed_law(ctx)?;
+    let nn = ctx.element.num_nodes();
+    let dim = ctx.element.dim();
+    let nu = nn * dim;
+    let nd = nu + nn;
+    let stride = ctx.law.state_len();
+    let inv_k = 1.0 / law.bulk_modulus();
+    let inv_mu = 1.0 / law.shear_modulus();
+    residual[..nd].fill(0.0);
+    if let Some(k) = stiffness.as_deref_mut() {
+        k[..nd * nd].fill(0.0);
+    }
+    let active = active_components(ctx.formulation);
+    let request = if stiffness.is_some() { TangentRequest::Components(active) } else { TangentRequest::None };
+    let mut b = [[0.0; 9]; MAX_DOFS];
+    let mut bt_a = [[0.0; 9]; MAX_DOFS];
+    let mut response = StressResponse::default();
+    let mut dp_df = Matrix3::zeros();
+    // the projection's moments: m_a = Σ w0 N_a, V = Σ w0, and Σ w0 N_a p (for Π₀p)
+    let mut moments = [0.0; MAX_NODES];
+    let mut volume = 0.0;
+    for (q, g) in geometry.iter().enumerate() {
+        let delta_f = delta_deformation_gradient(ctx, g, disp);
+        let f = delta_f * f0[q];
+        let p: f64 = (0..nn).map(|a| g.shape[a] * pressure[a]).sum();
+        let kin = loam_laws::Kinematics {
+            deformation_gradient: f,
+            previous_deformation_gradient: f_prev[q],
+            time_step: ctx.time_step,
+            tangent: request,
+        };
+        law.update_mixed(
+            &kin,
+            p,
+            &committed[q * stride..(q + 1) * stride],
+            &mut trial[q * stride..(q + 1) * stride],
+            &mut response,
+            &mut dp_df,
+        )
+        .map_err(|source| KernelError::Law { point: q, source })?;
+        let mut stress = response.first_piola;
+        pull_back_response(&f0[q], &mut stress, &mut response.tangent, request.components());
+        let j0 = f0[q].determinant();
+        let dp_tilde = dp_df * f0[q].transpose() / j0;
+        point_out[q] =
+            PointOutput { deformation_gradient: f, stress, cauchy: cauchy_stress(&response.first_piola, &f) };
+        let (w, w0) = (g.weight, g.weight / j0);
+        let det_f = f.determinant();
+        if det_f <= 0.0 || !det_f.is_finite() {
+            return Err(KernelError::Law { point: q, source: loam_laws::LawError::InvertedDeformation { det_f } });
+        }
+        let (theta, dtheta) = law.volumetric_strain(det_f.ln(), &committed[q * stride..(q + 1) * stride]);
+        let volumetric = theta - p * inv_k;
+        let nc = gradient_operator(ctx.formulation, ctx.element, g, &mut b);
+        for r in 0..nu {
+            let v: f64 = (0..nc).map(|c| stress[(active[c] / 3, active[c] % 3)] * b[r][c]).sum();
+            residual[r] += w * v;
+        }
+        for a in 0..nn {
+            residual[nu + a] += w0 * g.shape[a] * volumetric;
+        }
+        volume += w0;
+        let Some(k) = stiffness.as_deref_mut() else { continue };
+        // ∂ ln J/∂ΔF = ΔF⁻ᵀ over the active components
+        let dfi = delta_f.try_inverse().unwrap_or_else(Matrix3::zeros).transpose();
+        for r in 0..nu {
+            for d in 0..nc {
+                let v: f64 = (0..nc).map(|c| b[r][c] * response.tangent[(active[c], active[d])]).sum();
+                bt_a[r][d] = w * v;
+            }
+        }
+        for r in 0..nu {
+            let row = &mut k[r * nd..(r + 1) * nd];
+            for s in 0..nu {
+                row[s] += (0..nc).map(|d| bt_a[r][d] * b[s][d]).sum::<f64>();
+            }
+            // K_up
+            let bp: f64 = (0..nc).map(|c| b[r][c] * dp_tilde[(active[c] / 3, active[c] % 3)]).sum();
+            for a in 0..nn {
+                row[nu + a] += w * bp * g.shape[a];
+            }
+        }
+        for s in 0..nu {
+            let dj: f64 = dtheta * (0..nc).map(|c| dfi[(active[c] / 3, active[c] % 3)] * b[s][c]).sum::<f64>();
+            for a in 0..nn {
+                k[(nu + a) * nd + s] += w0 * g.shape[a] * dj;
+            }
+        }
+        for a in 0..nn {
+            for c in 0..nn {
+                k[(nu + a) * nd + nu + c] -= w0 * g.shape[a] * g.shape[c] * inv_k;
+            }
+        }
+    }
+    if volume <= 0.0 {
+        return Ok(());
+    }
+    // the projection term −(1/μ) (M p − m Π₀p), Π₀p = mᵀp / V, on the points (FEM) or on the
+    // cell's rule scaled by the fill fraction (MPM)
+    let rule: Vec<(f64, &[f64; MAX_NODES])> = match projection_rule {
+        None => geometry.iter().zip(f0).map(|(g, f)| (g.weight / f.determinant(), &g.shape)).collect(),
+        Some(cell) => {
+            let fill = volume / cell.iter().map(|g| g.weight).sum::<f64>();
+            cell.iter().map(|g| (g.weight * fill, &g.shape)).collect()
+        }
+    };
+    let mut mass = [[0.0; MAX_NODES]; MAX_NODES];
+    for (w, n) in &rule {
+        for a in 0..nn {
+            moments[a] += w * n[a];
+            for c in 0..nn {
+                mass[a][c] += w * n[a] * n[c];
+            }
+        }
+    }
+    let mean: f64 = (0..nn).map(|b| moments[b] * pressure[b]).sum::<f64>() / volume;
+    for a in 0..nn {
+        let mp: f64 = (0..nn).map(|c| mass[a][c] * pressure[c]).sum();
+        residual[nu + a] -= inv_mu * (mp - moments[a] * mean);
+    }
+    if let Some(k) = stiffness {
+        for a in 0..nn {
+            for c in 0..nn {
+                k[(nu + a) * nd + nu + c] -= inv_mu * (mass[a][c] - moments[a] * moments[c] / volume);
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::element::ElementType;
+    use crate::kernel::point_geometry;
+    use loam_laws::mohr_coulomb::MohrCoulomb;
+    use loam_laws::neo_hookean::NeoHookean;
+    use loam_laws::ConstitutiveLaw;
+
+    fn element_coords(element: ElementType) -> Vec<[f64; 3]> {
+        match element {
+            ElementType::Tri3 => vec![[0.1, 0.2, 0.0], [1.3, 0.1, 0.0], [0.5, 1.1, 0.0]],
+            ElementType::Quad4 => vec![[0.2, 0.1, 0.0], [1.4, 0.0, 0.0], [1.5, 1.2, 0.0], [0.1, 0.9, 0.0]],
+            ElementType::Tet4 => vec![[0.0, 0.0, 0.0], [1.1, 0.1, 0.0], [0.1, 0.9, 0.1], [0.2, 0.1, 1.2]],
+            ElementType::Hex8 => {
+                let mut c = Vec::new();
+                for z in [0.0, 1.0] {
+                    for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+                        c.push([x + 0.1 * y * z, y + 0.05 * x, z + 0.1 * x * y]);
+                    }
+                }
+                c
+            }
+        }
+    }
+
+    /// The coupled u–p element tangent against central differences of its residual in every
+    /// displacement and pressure, for every element and formulation, with `F0 ≠ I` (the MPM
+    /// pull-back): Neo-Hookean (ν = 0.4999 and exactly incompressible), and Mohr–Coulomb
+    /// with φ = 0 (Tresca) and φ = 25° (ψ = 0: the unsymmetric coupling) on its yield
+    /// surface. Relative error < 1e-6 of the largest entry.
+    #[test]
+    fn mixed_tangent_matches_finite_differences_of_residual() {
+        let nh = NeoHookean::new(1000.0, 1.0e6, 0.4999);
+        let nh_incompressible = NeoHookean::new(1000.0, 1.0e6, 0.5);
+        let tresca = MohrCoulomb::new(1000.0, 1.0e6, 0.5, 0.0, 2.0e3, 0.0);
+        let frictional = MohrCoulomb::new(1000.0, 1.0e6, 0.3, 25f64.to_radians(), 2.0e3, 0.0);
+        let laws: [(&dyn ConstitutiveLaw, bool); 4] =
+            [(&nh, false), (&nh_incompressible, false), (&tresca, true), (&frictional, true)];
+        let cases = [
+            (ElementType::Tri3, Formulation::PlaneStrain),
+            (ElementType::Quad4, Formulation::PlaneStrain),
+            (ElementType::Tri3, Formulation::Axisymmetric),
+            (ElementType::Quad4, Formulation::Axisymmetric),
+            (ElementType::Tet4, Formulation::ThreeD),
+            (ElementType::Hex8, Formulation::ThreeD),
+        ];
+        for (law, plastic) in laws {
+            for (element, formulation) in cases {
+                for cell_rule in [false, true] {
+                    let err = check(law, element, formulation, plastic, cell_rule);
+                    println!(
+                        "{} (K = {:.3e}) {element:?} {formulation:?}{}: u–p element tangent vs central FD, relative \
+                         error {err:.2e} (tolerance 1e-6)",
+                        law.name(),
+                        law.mixed().unwrap().bulk_modulus(),
+                        if cell_rule { ", projection on the cell rule" } else { "" }
+                    );
+                    assert!(err < 1e-6, "{element:?} {formulation:?}: {err}");
+                }
+            }
+        }
+    }
+
+    fn check(
+        law: &dyn ConstitutiveLaw,
+        element: ElementType,
+        formulation: Formulation,
+        plastic: bool,
+        cell_rule: bool,
+    ) -> f64 {
+        let coords = element_coords(element);
+        let (nn, dim) = (element.num_nodes(), element.dim());
+        let nd = nn * (dim + 1);
+        let rule = if matches!(element, ElementType::Tri3 | ElementType::Tet4) {
+            element.gauss_points_high()
+        } else {
+            element.gauss_points()
+        };
+        let geometry: Vec<PointGeometry> = rule
+            .iter()
+            .map(|g| point_geometry(element, formulation, 1.0, &coords, &g.xi, g.weight, None).unwrap())
+            .collect();
+        let np = geometry.len();
+        // as an MPM cell would: the projection on the cell's standard rule
+        let projection: Option<Vec<PointGeometry>> = cell_rule.then(|| {
+            element
+                .gauss_points_mixed()
+                .iter()
+                .map(|g| point_geometry(element, formulation, 1.0, &coords, &g.xi, g.weight, None).unwrap())
+                .collect()
+        });
+        let mut f0 = Matrix3::new(1.05, 0.03, 0.0, -0.02, 0.97, 0.0, 0.0, 0.0, 1.0);
+        if dim == 3 {
+            f0[(0, 2)] = 0.02;
+            f0[(2, 1)] = -0.01;
+            f0[(2, 2)] = 1.03;
+        } else if formulation == Formulation::Axisymmetric {
+            f0[(2, 2)] = 1.02;
+        }
+        let f0s = vec![f0; np];
+        let ctx = KernelContext { element, formulation, law, time_step: 0.0 };
+        let stride = law.state_len();
+        let mut committed = vec![0.0; np * stride];
+        for p in 0..np {
+            law.initialise_state(&mut committed[p * stride..(p + 1) * stride]);
+        }
+        // displacements of a few per cent (plastic for the weak soils), pressures of the
+        // order of the shear modulus
+        let scale = if plastic { 0.05 } else { 0.03 };
+        let mut x = vec![0.0; nd];
+        for (s, v) in x.iter_mut().enumerate() {
+            *v =
+                if s < nn * dim { scale * ((s * 3 + 1) as f64).sin() } else { -3.0e3 * (1.0 + 0.3 * (s as f64).cos()) };
+        }
+        let residual = |x: &[f64], k: Option<&mut [f64]>| {
+            let disp: Vec<[f64; 3]> = (0..nn)
+                .map(|a| {
+                    let mut d = [0.0; 3];
+                    d[..dim].copy_from_slice(&x[a * dim..(a + 1) * dim]);
+                    d
+                })
+                .collect();
+            let mut r = vec![0.0; nd];
+            let mut out = vec![PointOutput::default(); np];
+            let mut trial = committed.clone();
+            mixed_element(
+                &ctx,
+                &disp,
+                &x[nn * dim..],
+                &geometry,
+                &f0s,
+                &f0s,
+                &committed,
+                &mut trial,
+                &mut out,
+                &mut r,
+                k,
+                projection.as_deref(),
+            )
+            .unwrap();
+            (r, trial)
+        };
+        let mut k = vec![0.0; nd * nd];
+        let (_, trial) = residual(&x, Some(&mut k));
+        if plastic {
+            let flag = law.state_variables().iter().position(|v| *v == "yield_flag").unwrap();
+            let mut values = vec![0.0; law.state_variables().len()];
+            let yielded = trial.chunks(stride).filter(|st| {
+                law.state_output(st, &mut values);
+                values[flag] > 0.0
+            });
+            assert!(yielded.count() > 0, "{element:?} {formulation:?}: the check must reach the yield surface");
+        }
+        // rows and columns in the physical units of each; compare per block against the
+        // block's largest entry
+        let mut err = 0.0f64;
+        let kmax = |rows: std::ops::Range<usize>, cols: std::ops::Range<usize>| {
+            rows.flat_map(|r| cols.clone().map(move |c| (r, c))).fold(0.0f64, |m, (r, c)| m.max(k[r * nd + c].abs()))
+        };
+        let nu = nn * dim;
+        let blocks = [(0..nu, 0..nu), (0..nu, nu..nd), (nu..nd, 0..nu), (nu..nd, nu..nd)];
+        let maxes: Vec<f64> = blocks.iter().map(|(r, c)| kmax(r.clone(), c.clone())).collect();
+        for s in 0..nd {
+            let h = if s < nu { 1e-6 } else { 1e-3 };
+            let (mut xp, mut xm) = (x.clone(), x.clone());
+            xp[s] += h;
+            xm[s] -= h;
+            let (rp, rm) = (residual(&xp, None).0, residual(&xm, None).0);
+            for r in 0..nd {
+                let block = usize::from(r >= nu) * 2 + usize::from(s >= nu);
+                let fd = (rp[r] - rm[r]) / (2.0 * h);
+                err = err.max((fd - k[r * nd + s]).abs() / maxes[block].max(1e-300));
+            }
+        }
+        err
+    }
+}

@@ -1,0 +1,211 @@
+//! Laws in volumetric–deviatoric form, for the mixed displacement–pressure (u–p)
+//! formulation of nearly and exactly incompressible materials (undrained soil, rubber).
+//!
+//! In the u–p formulation the mean stress is an unknown field of its own (Iaconeta, Larese,
+//! Rossi & Oñate 2019, "A stabilized mixed implicit Material Point Method for non-linear
+//! incompressible solid mechanics", Comput. Mech. 63:1243–1260,
+//! doi:10.1007/s00466-018-1647-9). Here that field `p` is the **mean Kirchhoff stress**
+//! `p = tr τ / 3` (tension positive, as every stress in Loam; the Cauchy mean stress is
+//! `p / J`, and `J → 1` where the formulation matters). A law in u–p form gives, at the
+//! deformation gradient `F`, the pressure `p` and its history,
+//!
+//! - the stress `τ = τ_dev(F, p) + p 1`, `P = τ F⁻ᵀ`, with the tangents `A = ∂P/∂F` at fixed
+//!   `p` and `∂P/∂p` at fixed `F` (`τ_dev` depends on `p` only through a pressure-dependent
+//!   yield surface: Mohr–Coulomb or Drucker–Prager with φ > 0);
+//! - the volumetric law `p = K θ`, `θ = ln J_e`, through its bulk modulus `K` (`∞` for an
+//!   exactly incompressible material): the mixed element imposes `θ − p/K = 0` weakly, where
+//!   `θ` is `ln J` unless the history carries an elastic volume change from the start (a
+//!   geostatic prestrain) or the law has an apex in tension ([`MixedLaw::volumetric_strain`]).
+//!
+//! `K ln J` is the mean Kirchhoff stress of Hencky elasticity, and of every Hencky-based
+//! plasticity law of this crate whose plastic flow is isochoric (`det Cp = 1`, so that
+//! `J_e = J`): Tresca and Mohr–Coulomb with ψ = 0, von Mises and Drucker–Prager with ψ = 0.
+//! Their u–p return is the return of the displacement form at a fixed mean stress, which a
+//! deviatoric flow keeps; beyond the apex of a frictional surface (`p ≥ c cot φ`) no
+//! deviatoric stress is admissible and `τ = p 1` (a tension cut-off, continuous with the
+//! cone as it shrinks to its apex). For Neo-Hookean the u–p form is the decoupled energy
+//! `ψ = μ/2 (J^{-2/3} tr C − 3) + K/2 (ln J)²` (Simo, Taylor & Pister 1985,
+//! doi:10.1016/0045-7825(85)90033-7), equal to the compressible law of
+//! [`crate::neo_hookean`] to first order in the strain.
+//!
+//! The principal-space laws go through [`mixed_kirchhoff_update`]: the frame of
+//! [`crate::multiplicative`] (Simo 1992) with the principal return given `p`, which also
+//! returns `∂τ_a/∂p`; then `∂τ/∂p = Σ_a ∂τ_a/∂p n_a ⊗ n_a` and `∂P/∂p = ∂τ/∂p F⁻ᵀ`.
+
+use nalgebra::Matrix3;
+
+use crate::multiplicative::{checked_inverse, kirchhoff_update, PrincipalResponse};
+use crate::tensor::piola_from_kirchhoff;
+use crate::{Kinematics, LawError, StressResponse};
+
+/// A law in volumetric–deviatoric form (see the module doc).
+pub trait MixedLaw: Send + Sync {
+    /// Bulk modulus `K` (Pa) of the volumetric law `p = K ln J`; `f64::INFINITY` when the
+    /// material is incompressible.
+    fn bulk_modulus(&self) -> f64;
+
+    /// Elastic shear modulus μ (Pa): the scale of the pressure stabilisation.
+    fn shear_modulus(&self) -> f64;
+
+    /// The elastic volumetric strain `θ = ln J_e` of the volumetric law `p = K θ` at the total
+    /// volume change `ln J`, from the committed history, with `dθ/d ln J`. By default
+    /// `θ = ln J`. A history may carry an elastic volume change from the start, `θ₀`
+    /// (a geostatic prestrain stored in `Cp⁻¹`: `θ = ln J + θ₀`, `θ₀ = ½ ln det Cp⁻¹`), and a
+    /// frictional law caps `θ` at its apex, `θ ≤ p_apex/K` (beyond it the grains separate:
+    /// the plastic flow is a volume increase and the mean stress stays at the apex, as the
+    /// displacement form's apex return; `dθ/d ln J = 0` there).
+    fn volumetric_strain(&self, ln_j: f64, _committed: &[f64]) -> (f64, f64) {
+        (ln_j, 1.0)
+    }
+
+    /// Stress and tangents at `kinematics` and the pressure `pressure` (mean Kirchhoff stress,
+    /// Pa): writes `P` and the requested entries of `A = ∂P/∂F` into `response` (as
+    /// [`crate::ConstitutiveLaw::update`]) and `∂P/∂p` (every entry) into
+    /// `pressure_tangent`, and the trial history into `trial`.
+    fn update_mixed(
+        &self,
+        kinematics: &Kinematics,
+        pressure: f64,
+        committed: &[f64],
+        trial: &mut [f64],
+        response: &mut StressResponse,
+        pressure_tangent: &mut Matrix3<f64>,
+    ) -> Result<(), LawError>;
+}
+
+/// Result of a principal-space return in u–p form: the principal response at the trial
+/// strains and `∂τ_a/∂p`.
+pub type MixedPrincipalResponse = (PrincipalResponse, [f64; 3]);
+
+/// The frame of [`crate::multiplicative::update`] for a principal-space law in u–p form:
+/// `b_e,tr = F Cp⁻¹ Fᵀ`, the return `principal_return(ε_tr)` (which knows `p`), `τ`,
+/// `P = τ F⁻ᵀ`, `A` (requested `components`) and `∂P/∂p`. Returns the updated elastic `b_e`.
+pub fn mixed_kirchhoff_update(
+    F: &Matrix3<f64>,
+    cp_inv: &Matrix3<f64>,
+    components: &[usize],
+    response: &mut StressResponse,
+    pressure_tangent: &mut Matrix3<f64>,
+    principal_return: impl FnOnce([f64; 3]) -> Result<MixedPrincipalResponse, LawError>,
+) -> Result<Matrix3<f64>, LawError> {
+    let f_inv = checked_inverse(F)?;
+    let mut dtau_dp = [0.0; 3];
+    let ku = kirchhoff_update(F, cp_inv, components, &mut response.tangent, |eps_tr| {
+        let (r, d) = principal_return(eps_tr)?;
+        dtau_dp = d;
+        Ok(r)
+    })?;
+    *pressure_tangent = ku.spectral.compose(dtau_dp) * f_inv.transpose();
+    response.first_piola = piola_from_kirchhoff(&f_inv, &ku.tau, &mut response.tangent, components);
+    Ok(ku.b_e)
+}
+
+/// The deviatoric part `e_a = ε_a − tr ε / 3` of principal strains (generic for the dual
+/// numbers of the returns).
+pub fn deviator<T: crate::dual::Real>(eps: [T; 3]) -> [T; 3] {
+    let mean = (eps[0] + eps[1] + eps[2]) / 3.0;
+    eps.map(|e| e - mean)
+}
+
+/// Updated principal elastic log strains of a u–p return: the volumetric part of the trial
+/// up to the apex cap `θ_apex` (isochoric flow below it, `J_e = J`; dilation beyond it) and
+/// the deviator carrying `dev τ`: `ε_e,a = min(tr ε_tr, θ_apex)/3 + (τ_a − tr τ/3)/(2μ)`.
+pub fn elastic_strain_up(eps_tr: [f64; 3], tau: [f64; 3], mu: f64, theta_apex: f64) -> [f64; 3] {
+    let vol = (eps_tr[0] + eps_tr[1] + eps_tr[2]).min(theta_apex) / 3.0;
+    let s = deviator(tau);
+    s.map(|si| vol + si / (2.0 * mu))
+}
+
+/// Relative errors `(‖A − A_FD‖, ‖∂P/∂p − FD‖)` (each over the magnitude of its tangent) of
+/// a law in u–p form at `kinematics` and `pressure`, against central differences of its
+/// stress in `F` (step 1e-6, Richardson-extrapolated as [`crate::tensor::tangent_relative_error`])
+/// and in `p` (step 1e-6 of the stress scale). For the verification tests.
+pub fn mixed_tangent_relative_error(
+    law: &dyn MixedLaw,
+    kinematics: &Kinematics,
+    pressure: f64,
+    committed: &[f64],
+) -> Result<(f64, f64), LawError> {
+    let mut trial = committed.to_vec();
+    let mut r = StressResponse::default();
+    let mut dp = Matrix3::zeros();
+    law.update_mixed(kinematics, pressure, committed, &mut trial, &mut r, &mut dp)?;
+    let mut stress = |f: &Matrix3<f64>, p: f64| -> Result<Matrix3<f64>, LawError> {
+        let kin = Kinematics { deformation_gradient: *f, tangent: crate::TangentRequest::None, ..*kinematics };
+        let mut s = StressResponse::default();
+        let mut scratch = Matrix3::zeros();
+        law.update_mixed(&kin, p, committed, &mut trial, &mut s, &mut scratch)?;
+        Ok(s.first_piola)
+    };
+    let f = kinematics.deformation_gradient;
+    let mut failure = None;
+    let mut at_f = |g: &Matrix3<f64>| {
+        stress(g, pressure).unwrap_or_else(|e| {
+            failure = Some(e);
+            Matrix3::zeros()
+        })
+    };
+    let h = 2e-6;
+    let coarse = crate::tensor::finite_difference_tangent(&f, h, &mut at_f);
+    let fine = crate::tensor::finite_difference_tangent(&f, 0.5 * h, &mut at_f);
+    let a_fd = (4.0 * fine - coarse) / 3.0;
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    let scale = r.first_piola.amax().max(pressure.abs()).max(law.shear_modulus() * 1e-3);
+    let hp = 1e-6 * scale;
+    let (plus, minus) = (stress(&f, pressure + hp)?, stress(&f, pressure - hp)?);
+    let dp_fd = (plus - minus) / (2.0 * hp);
+    Ok(((r.tangent - a_fd).amax() / r.tangent.amax(), (dp - dp_fd).amax() / dp.amax().max(1e-300)))
+}
+
+/// A principal-space elasto-plastic model (history `[Cp⁻¹ | internal]` as in
+/// [`crate::multiplicative`]) with a return in u–p form.
+pub trait MixedPrincipalModel: Send + Sync {
+    /// The return at trial principal elastic log strains `eps_tr` and pressure `pressure`,
+    /// from the committed internal variables, writing the trial ones.
+    fn mixed_principal_update(
+        &self,
+        eps_tr: [f64; 3],
+        pressure: f64,
+        committed: &[f64],
+        trial: &mut [f64],
+    ) -> Result<MixedPrincipalResponse, LawError>;
+}
+
+/// [`MixedLaw::volumetric_strain`] of a history `[Cp⁻¹ | internal]` with the apex cap
+/// `θ_apex`: `θ = min(ln J + ½ ln det Cp⁻¹, θ_apex)`.
+pub fn principal_volumetric_strain(ln_j: f64, committed: &[f64], theta_apex: f64) -> (f64, f64) {
+    let offset =
+        0.5 * crate::multiplicative::read_sym(&committed[..crate::multiplicative::CP_INV_LEN]).determinant().ln();
+    let theta = ln_j + offset;
+    if theta > theta_apex {
+        (theta_apex, 0.0)
+    } else {
+        (theta, 1.0)
+    }
+}
+
+/// [`MixedLaw::update_mixed`] of a [`MixedPrincipalModel`]: [`mixed_kirchhoff_update`] with
+/// `Cp⁻¹` read from the committed history and the updated one written to the trial history.
+pub fn update_principal_mixed<M: MixedPrincipalModel + ?Sized>(
+    model: &M,
+    kinematics: &Kinematics,
+    pressure: f64,
+    committed: &[f64],
+    trial: &mut [f64],
+    response: &mut StressResponse,
+    pressure_tangent: &mut Matrix3<f64>,
+) -> Result<(), LawError> {
+    use crate::multiplicative::{read_sym, write_sym, CP_INV_LEN};
+    let F = &kinematics.deformation_gradient;
+    let f_inv = checked_inverse(F)?;
+    let cp_inv = read_sym(&committed[..CP_INV_LEN]);
+    let (trial_cp, trial_internal) = trial.split_at_mut(CP_INV_LEN);
+    let components = kinematics.tangent.components();
+    let b_e = mixed_kirchhoff_update(F, &cp_inv, components, response, pressure_tangent, |eps_tr| {
+        model.mixed_principal_update(eps_tr, pressure, &committed[CP_INV_LEN..], trial_internal)
+    })?;
+    write_sym(&(f_inv * b_e * f_inv.transpose()), trial_cp);
+    Ok(())
+}

@@ -1,0 +1,541 @@
+//! The mixed displacement–pressure (u–p) formulation (issue 15): validation against closed
+//! forms, Prandtl's bearing capacity and Kratos' own u–p test, with the displacement
+//! (irreducible) element beside it showing the locking the mixed element removes. Every
+//! test prints measured vs reference and fails for a wrong implementation.
+//!
+//! Long runs (`cargo test --release --test mixed_up -- --ignored`): the footing in FEM at
+//! h = B/20, the FEM footing coupled to u–p soil (benchmark 15), the Bui collapse with u–p.
+
+mod common;
+
+use std::path::Path;
+
+use common::{case, monitor, report, run, History};
+use loam::case::Case;
+use loam::simulation::Simulation;
+use nalgebra::DMatrix;
+
+/// Prandtl's bearing capacity factor of a strip footing on weightless Tresca soil, `2 + π`.
+const PRANDTL: f64 = 2.0 + std::f64::consts::PI;
+
+/// A bundled case with some of its JSON replaced (`pointer`, value) before parsing, its
+/// relative paths still taken from `cases/`.
+fn variant(name: &str, edits: &[(&str, serde_json::Value)]) -> Case {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases");
+    let text = std::fs::read_to_string(dir.join(name)).expect("bundled case");
+    let mut json: serde_json::Value = serde_json::from_str(&text).expect("case JSON");
+    for (pointer, value) in edits {
+        *json.pointer_mut(pointer).unwrap_or_else(|| panic!("{name}: no {pointer}")) = value.clone();
+    }
+    let mut case = Case::parse(&json.to_string()).expect("case parses");
+    case.directory = dir;
+    case.name = name.trim_end_matches(".json").to_string();
+    case
+}
+
+/// The nodal field `field` of the output `name` with its points.
+fn point_field(sim: &Simulation, name: &str, field: &str) -> (Vec<[f64; 3]>, Vec<f64>) {
+    let out = sim.model.outputs(true).into_iter().find(|o| o.name == name).expect("output exists").output;
+    let f = out.point_fields.iter().find(|f| f.name == field).expect("field exists");
+    (out.points, f.values.clone())
+}
+
+/// Cook's membrane (Kratos' `UP_incompressible_cook_membrane_2D`: E = 70, ν = 0.499999,
+/// 0.0625 per unit length on the free edge): the vertical displacement of the loaded edge's
+/// lower corner (48, 44) with the u–p element on quadrilateral meshes of 8, 16 and 32 cells
+/// a side converges (differences shrinking, observed order > 1), and on Kratos' own
+/// triangles it is within 1.5 % of Kratos' u–p result 0.25689; the displacement element on
+/// the same meshes locks (less than 40 % of the mixed displacement, hardly converging).
+#[test]
+fn cooks_membrane_converges_and_the_displacement_element_locks() {
+    let corner = |mesh: &str, formulation: &str| -> f64 {
+        // the locking element's round-off floor (λ/μ = 5e5) lies above the case's 1e-10
+        let tolerance = if formulation == "displacement" { 1e-6 } else { 1e-10 };
+        let c = variant(
+            "cooks_membrane_up.json",
+            &[
+                ("/domains/0/mesh/gmsh", serde_json::json!(format!("meshes/{mesh}"))),
+                ("/domains/0/element_formulation", serde_json::json!(formulation)),
+                ("/solver/residual_relative_tolerance", serde_json::json!(tolerance)),
+                ("/solver/displacement_relative_tolerance", serde_json::json!(tolerance)),
+            ],
+        );
+        let (sim, h) = run(c);
+        h.last().unwrap().1[monitor(&sim, "uy_lower_corner")]
+    };
+    let levels = [8, 16, 32];
+    let up: Vec<f64> = levels.iter().map(|n| corner(&format!("cooks_membrane_quad_{n}.msh"), "mixed_up")).collect();
+    let u: Vec<f64> = levels.iter().map(|n| corner(&format!("cooks_membrane_quad_{n}.msh"), "displacement")).collect();
+    let kratos_mesh = corner("cooks_membrane_kratos.msh", "mixed_up");
+    let kratos_mesh_u = corner("cooks_membrane_kratos.msh", "displacement");
+    println!("Cook's membrane, u_y at (48, 44): cells/side | u–p (Q1–Q1) | displacement (Q1)");
+    for ((n, a), b) in levels.iter().zip(&up).zip(&u) {
+        println!("  {n:>3} | {a:.5} | {b:.5}");
+    }
+    let (d1, d2) = (up[1] - up[0], up[2] - up[1]);
+    let order = (d1 / d2).log2();
+    let extrapolated = up[2] + d2 / (d1 / d2 - 1.0);
+    println!("  differences {d1:.5}, {d2:.5}: observed order {order:.2}; Richardson extrapolation {extrapolated:.5}");
+    println!(
+        "  Kratos' triangles (1 720 nodes): u–p {kratos_mesh:.5}, displacement {kratos_mesh_u:.5}; Kratos' u–p MPM \
+         element 0.25689"
+    );
+    assert!(d1 > 0.0 && d2 > 0.0 && d2 < 0.5 * d1, "converging from below with shrinking differences");
+    assert!(order > 1.0, "observed order {order}");
+    report("Cook's membrane u–p on Kratos' mesh vs Kratos", kratos_mesh, 0.25689, 0.015);
+    report("Cook's membrane u–p at 32 cells vs its extrapolation", up[2], extrapolated, 0.01);
+    for (a, b) in up.iter().zip(&u) {
+        assert!(*b < 0.4 * a, "the displacement element locks: {b} vs {a}");
+    }
+    assert!(kratos_mesh_u < 0.7 * kratos_mesh, "the displacement element locks on triangles too");
+    assert!((u[2] - u[0]) / u[2] < 0.05, "and hardly converges");
+}
+
+/// Patch test of the u–p element (quad4 and tri3, plane strain and axisymmetric): a
+/// homogeneous finite deformation imposed on the boundary of a distorted patch is
+/// reproduced inside (to 1e-10 m), with the uniform pressure `p = K ln J` of the volumetric
+/// law at every node (relative error < 1e-8). ν = 0.45: a patch whose boundary imposes a
+/// volume change must be compressible (an enclosed incompressible patch leaves the constant
+/// pressure free, see [`inf_sup_no_spurious_pressure_modes`]).
+#[test]
+fn patch_test_of_the_mixed_element() {
+    for (element, formulation) in
+        [("quad4", "plane_strain"), ("tri3", "plane_strain"), ("quad4", "axisymmetric"), ("tri3", "axisymmetric")]
+    {
+        // F = [[1.02, 0.01], [0.005, 0.99]] in the plane; in axisymmetry F = diag(1.02, 0.99,
+        // 1.02) (u_r = 0.02 R: a uniform hoop stretch 1 + u_r/R, and σ_rr = σ_θθ, σ_rz = 0, so
+        // that the uniform stress is in equilibrium with the hoop terms)
+        let axisymmetric = formulation == "axisymmetric";
+        let (fxy, fyx) = if axisymmetric { (0.0, 0.0) } else { (0.01, 0.005) };
+        let (fxx, fyy) = (1.02, 0.99);
+        let text = format!(
+            r#"{{
+  "description": "u-p patch test",
+  "formulation": "{formulation}",
+  "materials": {{ "rubber": {{ "law": "neo_hookean", "density": 1000.0, "young_modulus": 1.0e6, "poisson_ratio": 0.45 }} }},
+  "domains": [ {{ "name": "patch", "material": "rubber", "element_formulation": "mixed_up",
+                  "mesh": {{ "gmsh": "patch_{element}.msh" }} }} ],
+  "regions": {{ "boundary": {{ "polyline": [[1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0], [1.0, 0.0]] }} }},
+  "boundary_conditions": [],
+  "analysis": {{ "type": "static", "time_step": 1.0, "end_time": 1.0 }},
+  "solver": {{ "residual_relative_tolerance": 1e-12, "residual_absolute_tolerance": 1e-14, "displacement_relative_tolerance": 1e-12 }},
+  "output": {{ "vtk": false }}
+}}"#
+        );
+        let dir = std::env::temp_dir().join("loam_mixed_up_patch");
+        std::fs::create_dir_all(&dir).unwrap();
+        write_patch_mesh(&dir.join(format!("patch_{element}.msh")), element == "tri3");
+        let mut c = Case::parse(&text).unwrap();
+        c.directory = dir.clone();
+        // the boundary nodes follow u = (F − I) X
+        let mut sim = Simulation::new(c).unwrap();
+        let dim = 2;
+        let boundary = sim.model.coords.iter().enumerate().filter(|(_, x)| {
+            (x[0] - 1.0).abs() < 1e-12 || (x[0] - 2.0).abs() < 1e-12 || x[1].abs() < 1e-12 || (x[1] - 1.0).abs() < 1e-12
+        });
+        let (mut dofs, mut values) = (Vec::new(), Vec::new());
+        for (n, x) in boundary {
+            dofs.extend([n * dim, n * dim + 1]);
+            values.extend([(fxx - 1.0) * x[0] + fxy * x[1], fyx * x[0] + (fyy - 1.0) * x[1]]);
+        }
+        sim.model.constraints.push(loam_fem::model::Constraint {
+            dofs,
+            values,
+            amplitude: loam_fem::amplitude::Amplitude::default(),
+        });
+        sim.model.invalidate_pattern();
+        while !sim.finished() {
+            sim.step().unwrap();
+        }
+        let law = loam_laws::neo_hookean::NeoHookean::new(1000.0, 1.0e6, 0.45);
+        let k = law.lambda + 2.0 * law.mu / 3.0;
+        let hoop = if axisymmetric { fxx } else { 1.0 };
+        let expected_p = k * ((fxx * fyy - fxy * fyx) * hoop).ln();
+        let (_, p) = point_field(&sim, "patch", "pressure");
+        let (points, u) = point_field(&sim, "patch", "displacement");
+        let mut worst_u: f64 = 0.0;
+        for (x, d) in points.iter().zip(u.chunks(3)) {
+            let exact = [(fxx - 1.0) * x[0] + fxy * x[1], fyx * x[0] + (fyy - 1.0) * x[1]];
+            worst_u = worst_u.max((d[0] - exact[0]).abs().max((d[1] - exact[1]).abs()));
+        }
+        let worst_p = p.iter().map(|v| (v - expected_p).abs()).fold(0.0, f64::max) / expected_p.abs();
+        println!(
+            "patch test {element} {formulation}: interior displacement error {worst_u:.2e} m (of 2e-2), pressure \
+             {:.6e} vs K ln J = {expected_p:.6e}, relative error {worst_p:.2e} (tolerance 1e-8)",
+            p[0]
+        );
+        assert!(worst_u < 1e-10, "{element} {formulation}: homogeneous deformation reproduced");
+        assert!(worst_p < 1e-8, "{element} {formulation}: uniform pressure");
+    }
+}
+
+/// A distorted patch of 5 cells on [1, 2] × [0, 1] (quads, or each split into two
+/// triangles) as a Gmsh file, with interior nodes off the lattice.
+fn write_patch_mesh(path: &Path, triangles: bool) {
+    let nodes = [[1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0], [1.3, 0.25], [1.75, 0.3], [1.7, 0.8], [1.25, 0.7]];
+    let quads = [[0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7], [4, 5, 6, 7]];
+    let cells: Vec<Vec<usize>> = if triangles {
+        quads.iter().flat_map(|q| [vec![q[0], q[1], q[2]], vec![q[0], q[2], q[3]]]).collect()
+    } else {
+        quads.iter().map(|q| q.to_vec()).collect()
+    };
+    let mut s =
+        String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Entities\n0 0 1 0\n1 1 0 0 2 1 0 0 0\n$EndEntities\n");
+    s += &format!("$Nodes\n1 {n} 1 {n}\n2 1 0 {n}\n", n = nodes.len());
+    for k in 0..nodes.len() {
+        s += &format!("{}\n", k + 1);
+    }
+    for x in &nodes {
+        s += &format!("{} {} 0\n", x[0], x[1]);
+    }
+    let kind = if triangles { 2 } else { 3 };
+    s += &format!("$EndNodes\n$Elements\n1 {n} 1 {n}\n2 1 {kind} {n}\n", n = cells.len());
+    for (k, c) in cells.iter().enumerate() {
+        s += &format!("{} {}\n", k + 1, c.iter().map(|a| (a + 1).to_string()).collect::<Vec<_>>().join(" "));
+    }
+    s += "$EndElements\n";
+    std::fs::write(path, s).unwrap();
+}
+
+/// A pressurised thick cylinder of incompressible Neo-Hookean rubber (ν = 0.5 exactly),
+/// a = 1 m, b = 2 m, μ = 1 MPa, internal pressure 1 kPa, plane strain (axisymmetric with the
+/// ends held axially): Lamé's closed form `u_r = p a² b² / (2μ (b² − a²) r)`, and a uniform
+/// mean stress `p a² / (b² − a²)`. Measured: the inner and outer radial displacements
+/// within 1 % and the nodal pressure within 1 % of the mean stress at every node, on quads
+/// and triangles; the displacement element with ν = 0.4999 locks (under 70 % of it).
+#[test]
+fn pressurised_thick_cylinder_incompressible() {
+    let (a, b, mu, p) = (1.0, 2.0, 1.0e6, 1.0e3);
+    let u_r = |r: f64| p * a * a * b * b / (2.0 * mu * (b * b - a * a) * r);
+    let mean = p * a * a / (b * b - a * a);
+    for element in ["quad4", "tri3"] {
+        let (sim, h) = run(variant(
+            "thick_cylinder_up.json",
+            &[("/domains/0/mesh/rectangle/element", serde_json::json!(element))],
+        ));
+        let (inner, outer) =
+            (h.last().unwrap().1[monitor(&sim, "u_inner")], h.last().unwrap().1[monitor(&sim, "u_outer")]);
+        report(&format!("thick cylinder {element}: u_r(a)"), inner, u_r(a), 0.01);
+        report(&format!("thick cylinder {element}: u_r(b)"), outer, u_r(b), 0.01);
+        // the pressure of the stabilised equal-order element has a boundary layer of two
+        // cells at the loaded and the free surface (its weak consistency, O(h)); inside it
+        // is the closed form's
+        let (points, pressure) = point_field(&sim, "cylinder", "pressure");
+        let h = 0.05;
+        let (mut inside, mut boundary) = (0.0f64, 0.0f64);
+        for (x, v) in points.iter().zip(&pressure) {
+            let e = (v - mean).abs() / mean;
+            if x[0] > a + 2.0 * h - 1e-9 && x[0] < b - 2.0 * h + 1e-9 {
+                inside = inside.max(e);
+            } else {
+                boundary = boundary.max(e);
+            }
+        }
+        println!(
+            "thick cylinder {element}: nodal pressure vs the closed form's uniform mean stress {mean:.2} Pa: largest \
+             error {:.3} % two cells or more inside the surfaces (tolerance 1 %), {:.2} % in the surface layer \
+             (tolerance 10 %)",
+            100.0 * inside,
+            100.0 * boundary
+        );
+        assert!(inside < 0.01 && boundary < 0.1);
+    }
+    let (sim, h) = run(variant(
+        "thick_cylinder_up.json",
+        &[
+            ("/domains/0/element_formulation", serde_json::json!("displacement")),
+            ("/materials/rubber/poisson_ratio", serde_json::json!(0.4999)),
+            // the locking element's round-off floor lies above the case's 1e-10
+            ("/solver/residual_relative_tolerance", serde_json::json!(1e-6)),
+            ("/solver/displacement_relative_tolerance", serde_json::json!(1e-6)),
+        ],
+    ));
+    let locked = h.last().unwrap().1[monitor(&sim, "u_inner")];
+    println!(
+        "thick cylinder, displacement element (ν = 0.4999): u_r(a) = {locked:.4e} vs {:.4e} ({:.0} %): locking",
+        u_r(a),
+        100.0 * locked / u_r(a)
+    );
+    assert!(locked < 0.7 * u_r(a));
+}
+
+/// Benchmark 5's hydrostatic column with ν = 0.4999 in u–p MPM: the base stress, and the
+/// nodal pressure field against the exact mean stress `p(y) = −ρ g (H − y)(1 + ν)/(3(1 − ν))`
+/// at every active grid node below the surface row: pointwise error under 5 % of ρ g H and no
+/// checkerboard (the alternation `|p_i − (p_{i−1} + p_{i+1})/2|` between vertical neighbours
+/// under 1 % of ρ g H).
+#[test]
+fn hydrostatic_column_has_no_pressure_checkerboard() {
+    let (sim, h) = run(case("hydrostatic_column_mpm_up.json"));
+    let (rho, g, height, nu) = (1800.0, 9.81, 0.1, 0.4999);
+    let last = &h.last().unwrap().1;
+    let (s1, s2) = (last[monitor(&sim, "row1_syy")], last[monitor(&sim, "row2_syy")]);
+    report(
+        "hydrostatic column u–p: base vertical stress (extrapolated)",
+        (3.0 * s1 - s2) / 2.0,
+        -rho * g * height,
+        0.01,
+    );
+    let (points, pressure) = point_field(&sim, "column_grid", "pressure");
+    let (_, mass) = point_field(&sim, "column_grid", "mass");
+    let exact = |y: f64| -rho * g * (height - y) * (1.0 + nu) / (3.0 * (1.0 - nu));
+    let scale = rho * g * height;
+    let cell = 0.01;
+    let at = |x: f64, y: f64| {
+        points.iter().position(|q| (q[0] - x).abs() < 1e-9 && (q[1] - y).abs() < 1e-9).map(|k| pressure[k])
+    };
+    // every node with mass (the surface row included), and the nodes two rows or more
+    // inside the base and the surface
+    let (mut all, mut inside, mut alternation) = (0.0f64, 0.0f64, 0.0f64);
+    for (k, x) in points.iter().enumerate() {
+        if mass[k] <= 0.0 {
+            continue;
+        }
+        let e = (pressure[k] - exact(x[1])).abs() / scale;
+        all = all.max(e);
+        if x[1] > 2.0 * cell - 1e-9 && x[1] < height - 2.0 * cell + 1e-9 {
+            inside = inside.max(e);
+            if let (Some(below), Some(above)) = (at(x[0], x[1] - cell), at(x[0], x[1] + cell)) {
+                alternation = alternation.max((pressure[k] - 0.5 * (below + above)).abs() / scale);
+            }
+        }
+    }
+    let profile: Vec<String> = (0..=10)
+        .map(|i| {
+            let y = i as f64 * cell;
+            format!("{y:.2}: {:.1} ({:.1})", at(0.1, y).unwrap(), exact(y))
+        })
+        .collect();
+    println!("hydrostatic column u–p: nodal pressure at x = 0.1, y: p (exact)  {}", profile.join(", "));
+    println!(
+        "hydrostatic column u–p: nodal pressure vs the exact mean stress, largest error over every node with mass \
+         {:.2} % of ρ g H (tolerance 5 %: the base and surface rows), two rows or more inside {:.3} % (tolerance \
+         0.5 %); checkerboard indicator |p_i − (p_(i−1) + p_(i+1))/2| inside {:.3} % of ρ g H (tolerance 0.5 %)",
+        100.0 * all,
+        100.0 * inside,
+        100.0 * alternation
+    );
+    assert!(all < 0.05 && inside < 0.005 && alternation < 0.005);
+}
+
+/// Inf–sup behaviour: for an exactly incompressible material on the unit square with every
+/// boundary node held (Q1–Q1 and P1–P1 on 4, 8 and 16 cells a side), the pressure Schur
+/// complement `S = −K_pp + K_pu K_uu⁻¹ K_up` against the pressure mass matrix has exactly one
+/// zero eigenvalue (the constant pressure that an enclosed incompressible body leaves free)
+/// and no spurious mode: its smallest nonzero eigenvalue does not fall with refinement
+/// (bounded below by 0.5 of the coarsest level's).
+#[test]
+fn inf_sup_no_spurious_pressure_modes() {
+    for element in ["quad4", "tri3"] {
+        let mut first_nonzero = None;
+        for n in [4usize, 8, 16] {
+            let text = format!(
+                r#"{{
+  "description": "enclosed incompressible square",
+  "materials": {{ "rubber": {{ "law": "neo_hookean", "density": 1000.0, "young_modulus": 3.0, "poisson_ratio": 0.5 }} }},
+  "domains": [ {{ "name": "square", "material": "rubber", "element_formulation": "mixed_up",
+                  "mesh": {{ "rectangle": {{ "origin": [0.0, 0.0], "size": [1.0, 1.0], "cells": [{n}, {n}], "element": "{element}" }} }} }} ],
+  "regions": {{ "boundary": {{ "polyline": [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.0, 0.0]] }} }},
+  "boundary_conditions": [ {{ "region": "boundary", "displacement": [0.0, 0.0] }} ],
+  "analysis": {{ "type": "static", "time_step": 1.0, "end_time": 1.0 }},
+  "output": {{ "vtk": false }}
+}}"#
+            );
+            let mut sim = Simulation::new(Case::parse(&text).unwrap()).unwrap();
+            let mut lin = sim.model.linearise(1.0).unwrap();
+            let m = lin.num_equations();
+            let is_p = lin.pressure_equations();
+            let (_, k) = lin.evaluate(&vec![0.0; m]).unwrap();
+            drop(lin);
+            let (us, ps): (Vec<usize>, Vec<usize>) = (0..m).partition(|&e| !is_p[e]);
+            let block = |rows: &[usize], cols: &[usize]| {
+                DMatrix::from_fn(rows.len(), cols.len(), |i, j| k[rows[i] * m + cols[j]])
+            };
+            let (kuu, kup, kpu, kpp) = (block(&us, &us), block(&us, &ps), block(&ps, &us), block(&ps, &ps));
+            let s = -kpp + kpu * kuu.lu().solve(&kup).unwrap();
+            let s = 0.5 * (&s + s.transpose());
+            // pressure mass matrix of the same mesh (the stabilisation's M with μ = 1 is not
+            // separable here, so the lumped mass of unit-area cells: h² per node share)
+            let h2 = 1.0 / (n * n) as f64;
+            let mass_inv_sqrt = 1.0 / h2.sqrt();
+            let scaled = s * (mass_inv_sqrt * mass_inv_sqrt);
+            let mut ev: Vec<f64> = scaled.symmetric_eigen().eigenvalues.iter().copied().collect();
+            ev.sort_by(f64::total_cmp);
+            let largest = *ev.last().unwrap();
+            let zeros = ev.iter().filter(|v| v.abs() < 1e-10 * largest).count();
+            let smallest = ev[zeros];
+            println!(
+                "inf–sup {element} {n}×{n}: {} pressures, zero modes {zeros} (expected 1: the constant), smallest nonzero \
+                 eigenvalue {smallest:.4e} (largest {largest:.4e})",
+                ps.len()
+            );
+            assert_eq!(zeros, 1, "{element} {n}: spurious pressure modes");
+            let reference = *first_nonzero.get_or_insert(smallest);
+            assert!(smallest > 0.5 * reference, "{element} {n}: the inf–sup constant falls with refinement");
+        }
+    }
+}
+
+/// Combinations that cannot work are refused with a one-line error naming the JSON path.
+#[test]
+fn element_formulation_errors_name_the_json_path() {
+    let base = |material: &str, formulation: &str, extra: &str| {
+        format!(
+            r#"{{
+  "description": "errors", "formulation": "{formulation}",
+  "materials": {{ "m": {material}, "soft": {{ "law": "hencky", "density": 1.0, "young_modulus": 1.0, "poisson_ratio": 0.3 }} }},
+  "domains": [ {{ "name": "d", "material": "m", "element_formulation": "mixed_up",
+                  "mesh": {{ "rectangle": {{ "origin": [0.0, 0.0], "size": [1.0, 1.0], "cells": [2, 2], "element": "quad4" }} }} }} {extra} ],
+  "analysis": {{ "type": "static", "time_step": 1.0, "end_time": 1.0 }}
+}}"#
+        )
+    };
+    let nh = r#"{ "law": "neo_hookean", "density": 1.0, "young_modulus": 1.0, "poisson_ratio": 0.5 }"#;
+    let mc_dilatant = r#"{ "law": "mohr_coulomb", "density": 1.0, "young_modulus": 1.0, "poisson_ratio": 0.3, "friction_angle": 30.0, "cohesion": 1.0, "dilatancy_angle": 5.0 }"#;
+    let mcc = r#"{ "law": "modified_cam_clay", "density": 1.0, "preconsolidation_pressure": 1e5, "ocr": 1.0, "swelling_slope": 0.01, "compression_slope": 0.1, "critical_state_slope": 1.0, "initial_shear_modulus": 1e6, "alpha_shear": 0.0 }"#;
+    let mpm_body = |ppc: usize, formulation: &str| {
+        format!(
+            r#", {{ "name": "soil{ppc}{formulation}", "type": "mpm", "material": "soft", "element_formulation": "{formulation}",
+              "grid": {{ "origin": [2.0, 0.0], "size": [1.0, 1.0], "cells": [2, 2], "element": "quad4" }},
+              "material_points": {{ "cells": {{ "mesh": {{ "rectangle": {{ "origin": [2.0, 0.0], "size": [1.0, 0.5], "cells": [2, 1], "element": "quad4" }} }}, "points_per_cell": {ppc} }} }} }}"#
+        )
+    };
+    let cases = [
+        (base(nh, "plane_stress", ""), "domains[0].element_formulation", "plane_stress"),
+        (base(mc_dilatant, "plane_strain", ""), "domains[0].element_formulation", "dilatancy_angle must be 0"),
+        (base(mcc, "plane_strain", ""), "domains[0].element_formulation", "no volumetric"),
+        (
+            base(nh, "plane_strain", "").replace("\"mixed_up\"", "\"displacement\""),
+            "domains[0].material",
+            "incompressible",
+        ),
+        (
+            base(nh, "plane_strain", &mpm_body(1, "mixed_up")),
+            "domains[1].material_points.cells.points_per_cell",
+            "several",
+        ),
+        (
+            base(
+                nh,
+                "plane_strain",
+                &(mpm_body(4, "mixed_up") + &mpm_body(9, "mixed_up").replace("\"mixed_up\"", "\"displacement\"")),
+            ),
+            "domains[2].element_formulation",
+            "share their element formulation",
+        ),
+    ];
+    for (text, path, words) in cases {
+        let err = match Case::parse(&text) {
+            Ok(c) => Simulation::new(c).err().expect("refused").to_string(),
+            Err(e) => e.to_string(),
+        };
+        println!("refused: {err}");
+        assert!(err.starts_with(path), "{err}: expected at {path}");
+        assert!(err.contains(words), "{err}: expected '{words}'");
+        assert_eq!(err.lines().count(), 1);
+    }
+}
+
+/// Plateau of a bearing-capacity history: the mean of `q_over_su` over the last 20 % of the
+/// settlement.
+fn plateau(sim: &Simulation, h: &History) -> (f64, f64) {
+    let (q, s) = (monitor(sim, "q_over_su"), monitor(sim, "settlement"));
+    let end = h.last().unwrap().1[s];
+    let tail: Vec<f64> = h.iter().filter(|r| r.1[s] >= 0.8 * end - 1e-12).map(|r| r.1[q]).collect();
+    (tail.iter().sum::<f64>() / tail.len() as f64, end)
+}
+
+/// Prints a footing's load–settlement curve every `every` steps.
+fn print_curve(label: &str, sim: &Simulation, h: &History, every: usize) {
+    let (q, s) = (monitor(sim, "q_over_su"), monitor(sim, "settlement"));
+    let points: Vec<String> = h.iter().step_by(every).map(|r| format!("{:.3}: {:.3}", r.1[s], r.1[q])).collect();
+    println!("{label}: settlement (m): q/s_u  {}", points.join(", "));
+}
+
+/// Benchmark 11 in MPM (the acceptance of issue 15), which is also benchmark 15 with a smooth
+/// contact: the concrete footing (rigid for the soil) on undrained Tresca soil, u–p
+/// (ν = 0.4999) and displacement (ν = 0.495) on the same grid. The mixed plateau (mean over
+/// the last 20 % of the settlement) is within 5 % of 2 + π; the displacement element's is
+/// higher (by more than 15 %) and still rising: it locks. The footing's reaction equals the
+/// soil's force on its base.
+#[test]
+fn footing_on_undrained_soil_mpm() {
+    let (sim_up, h_up) = run(case("footing_undrained_mpm_up.json"));
+    let (sim_u, h_u) = run(case("footing_undrained_mpm_u.json"));
+    print_curve("footing MPM u–p", &sim_up, &h_up, 5);
+    print_curve("footing MPM displacement", &sim_u, &h_u, 5);
+    let (up, end) = plateau(&sim_up, &h_up);
+    let (u, _) = plateau(&sim_u, &h_u);
+    println!("footing MPM: plateau over the last 20 % of {end:.3} m: u–p {up:.3}, displacement {u:.3}");
+    report("footing MPM u–p: q/s_u plateau vs Prandtl 2 + π", up, PRANDTL, 0.05);
+    assert!(u > 1.15 * up, "the displacement element locks above the mixed one");
+    let q = monitor(&sim_u, "q_over_su");
+    let rise = h_u.last().unwrap().1[q] - h_u[h_u.len() * 4 / 5].1[q];
+    println!("footing MPM displacement: rise over the last 20 % of the steps {rise:.3} (no plateau)");
+    assert!(rise > 0.05 * u, "the displacement element's load keeps rising");
+    // the footing's reaction is the force the soil exerts on its base (static, weightless)
+    let (q, f) = (monitor(&sim_up, "q_over_su"), monitor(&sim_up, "interface_force_y"));
+    let last = &h_up.last().unwrap().1;
+    report("footing MPM u–p: soil force on the base vs the footing's reaction", last[f], last[q], 1e-6);
+}
+
+/// Benchmark 15 with a rough contact: the concrete footing tied to the u–p soil; Prandtl's
+/// 2 + π holds for rough footings too, plateau within 5 %.
+#[test]
+#[ignore = "about 15 s in release; run with --ignored"]
+fn coupled_footing_rough_contact() {
+    let (sim, h) = run(case("coupled_footing_rough_up.json"));
+    print_curve("footing MPM u–p, rough", &sim, &h, 5);
+    let (plateau, end) = plateau(&sim, &h);
+    println!("footing MPM rough: plateau over the last 20 % of {end:.3} m: {plateau:.3}");
+    report("footing MPM u–p rough: q/s_u plateau vs Prandtl 2 + π", plateau, PRANDTL, 0.05);
+}
+
+/// Benchmark 11 in FEM (half model, h = B/20): the u–p plateau (mean over the last 20 % of
+/// the settlement) within 5 % of 2 + π; the displacement element (ν = 0.495) on the same
+/// mesh locks above it (by more than 15 %).
+#[test]
+#[ignore = "about 25 s in release; run with --ignored"]
+fn footing_on_undrained_soil_fem() {
+    let (sim_up, h_up) = run(case("footing_undrained_fem_up.json"));
+    let (sim_u, h_u) = run(variant(
+        "footing_undrained_fem_up.json",
+        &[
+            ("/domains/0/element_formulation", serde_json::json!("displacement")),
+            ("/materials/clay/poisson_ratio", serde_json::json!(0.495)),
+        ],
+    ));
+    print_curve("footing FEM u–p", &sim_up, &h_up, 5);
+    print_curve("footing FEM displacement", &sim_u, &h_u, 5);
+    let (up, end) = plateau(&sim_up, &h_up);
+    let (u, _) = plateau(&sim_u, &h_u);
+    println!("footing FEM: plateau over the last 20 % of {end:.3} m: u–p {up:.3}, displacement {u:.3}");
+    report("footing FEM u–p: q/s_u plateau vs Prandtl 2 + π", up, PRANDTL, 0.05);
+    assert!(u > 1.15 * up, "the displacement element locks above the mixed one");
+}
+
+/// Benchmark 8 (Bui et al. 2008) with the u–p element: the isochoric flow of a frictional
+/// soil with ψ = 0 must not stiffen (or soften) the collapse: runout within 5 % of the
+/// displacement run on the same grid, which comes to rest (about 0.7 s).
+#[test]
+#[ignore = "about 8 min in release; currently fails: the u–p run spreads to 0.657 m against 0.416 m and is not at rest at 2 s (issue 15, see the README's mixed u–p section)"]
+fn bui_collapse_with_mixed_up() {
+    let (sim_u, h_u) = run(case("collapse_bui2008_quad.json"));
+    let (sim_up, h_up) = run(case("collapse_bui2008_quad_up.json"));
+    let runout = |sim: &Simulation, h: &History| h.last().unwrap().1[monitor(sim, "runout")];
+    let height = |sim: &Simulation, h: &History| h.last().unwrap().1[monitor(sim, "height_at_wall")];
+    println!(
+        "Bui collapse: displacement element runout {:.4} m, height at the wall {:.4} m, {} steps, at rest {}; u–p \
+         runout {:.4} m, height {:.4} m, {} steps, at rest {}",
+        runout(&sim_u, &h_u),
+        height(&sim_u, &h_u),
+        sim_u.stats.steps,
+        sim_u.at_rest,
+        runout(&sim_up, &h_up),
+        height(&sim_up, &h_up),
+        sim_up.stats.steps,
+        sim_up.at_rest
+    );
+    report("Bui collapse u–p runout vs the displacement run", runout(&sim_up, &h_up), runout(&sim_u, &h_u), 0.05);
+    assert!(sim_up.at_rest, "the u–p column comes to rest");
+}
