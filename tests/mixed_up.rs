@@ -397,7 +397,9 @@ fn element_formulation_errors_name_the_json_path() {
         format!(
             r#", {{ "name": "soil{ppc}{formulation}", "type": "mpm", "material": "soft", "element_formulation": "{formulation}",
               "grid": {{ "origin": [2.0, 0.0], "size": [1.0, 1.0], "cells": [2, 2], "element": "quad4" }},
-              "material_points": {{ "cells": {{ "mesh": {{ "rectangle": {{ "origin": [2.0, 0.0], "size": [1.0, 0.5], "cells": [2, 1], "element": "quad4" }} }}, "points_per_cell": {ppc} }} }} }}"#
+              "material_points": {{ "cells": {{ "mesh": {{ "rectangle": {{ "origin": [2.0, {y0}], "size": [1.0, 0.5], "cells": [2, 1], "element": "quad4" }} }}, "points_per_cell": {ppc} }} }} }}"#,
+            // two bodies on the grid fill its two halves
+            y0 = if ppc == 9 { 0.5 } else { 0.0 }
         )
     };
     let cases = [
