@@ -25,7 +25,9 @@
 //! `s_tr = 2μ dev ε_tr` returns radially, `f_tr = √J₂,tr + η p − ξ c`, `G Δγ = f_tr`,
 //! `s = (1 − f_tr/√J₂,tr) s_tr`, `τ = s + p 1`, while `ξ c − η p ≥ 0`; beyond the apex
 //! `τ = p 1` and the volumetric law is capped at `θ ≤ p_apex/K`, `p_apex = ξ c/η`, as for
-//! Mohr–Coulomb. Tangents by dual numbers seeded on `(ε_tr, p)`.
+//! Mohr–Coulomb; the excess of `tr ε_tr` over the cap is committed as plastic dilation only
+//! where the point's pressure is at the apex ([`elastic_strain_up`]). Tangents by dual
+//! numbers seeded on `(ε_tr, p)`.
 
 use nalgebra::Matrix3;
 use serde::Deserialize;
@@ -230,7 +232,8 @@ impl MixedPrincipalModel for DruckerPrager {
         let eps: [Dual<4>; 3] = [Dual::seed(eps_tr[0], 0), Dual::seed(eps_tr[1], 1), Dual::seed(eps_tr[2], 2)];
         let (t, region) = self.mixed_return(eps, Dual::seed(pressure, 3));
         let tau = t.map(|x| x.v);
-        let eps_e = elastic_strain_up(eps_tr, tau, self.mu, self.apex_strain());
+        let eps_e =
+            elastic_strain_up(eps_tr, tau, self.mu, (region == DruckerPragerRegion::Apex).then(|| self.apex_strain()));
         accumulate_plastic_strain(committed, trial, eps_tr, eps_e, region != DruckerPragerRegion::Elastic);
         let dtau_deps = Matrix3::from_fn(|a, b| t[a].d[b]);
         Ok((PrincipalResponse { tau, eps_e, dtau_deps }, t.map(|x| x.d[3])))

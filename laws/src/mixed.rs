@@ -107,11 +107,22 @@ pub fn deviator<T: crate::dual::Real>(eps: [T; 3]) -> [T; 3] {
     eps.map(|e| e - mean)
 }
 
-/// Updated principal elastic log strains of a u–p return: the volumetric part of the trial
-/// up to the apex cap `θ_apex` (isochoric flow below it, `J_e = J`; dilation beyond it) and
-/// the deviator carrying `dev τ`: `ε_e,a = min(tr ε_tr, θ_apex)/3 + (τ_a − tr τ/3)/(2μ)`.
-pub fn elastic_strain_up(eps_tr: [f64; 3], tau: [f64; 3], mu: f64, theta_apex: f64) -> [f64; 3] {
-    let vol = (eps_tr[0] + eps_tr[1] + eps_tr[2]).min(theta_apex) / 3.0;
+/// Updated principal elastic log strains of a u–p return: the volumetric part of the trial,
+/// capped at `θ_apex` where the point's **pressure** has reached the apex (`apex_cap =
+/// Some(θ_apex)`: the grains separate and the excess is a plastic dilation; isochoric flow
+/// below it, `J_e = J`), and the deviator carrying `dev τ`:
+/// `ε_e,a = vol/3 + (τ_a − tr τ/3)/(2μ)`.
+///
+/// Only the pressure decides the apex. The volumetric law holds weakly, so a point's own
+/// `ln J_e` scatters about `p/K`; committing as plastic dilation the part above `θ_apex` of a
+/// point whose pressure is still compressive would ratchet that scatter into a growing
+/// volume, step after step (measured on the Bui collapse with u–p: the column's volume
+/// doubled, its runout grew to 0.66 m against 0.42 m and it never came to rest). Such a point
+/// keeps its volume change elastic; the residual still caps its `θ`
+/// ([`principal_volumetric_strain`]), so the weak volumetric law cannot pull `p` past the apex.
+pub fn elastic_strain_up(eps_tr: [f64; 3], tau: [f64; 3], mu: f64, apex_cap: Option<f64>) -> [f64; 3] {
+    let trace = eps_tr[0] + eps_tr[1] + eps_tr[2];
+    let vol = apex_cap.map_or(trace, |cap| trace.min(cap)) / 3.0;
     let s = deviator(tau);
     s.map(|si| vol + si / (2.0 * mu))
 }

@@ -37,7 +37,9 @@
 //! no deviatoric stress is admissible: `τ = p 1`, and the volumetric law is capped there,
 //! `θ = min(ln J_e, p_apex/K)` (the grains separate: the flow beyond the apex is a volume
 //! increase, as in the displacement form's apex return). The elastic strains are
-//! `ε_e = min(tr ε_tr, p_apex/K)/3 + dev τ/(2μ)` (`J_e = J` below the apex), and
+//! `ε_e = tr ε_tr/3 + dev τ/(2μ)` (`J_e = J`), with `tr ε_tr` capped at `p_apex/K` (the
+//! plastic dilation) only where the point's pressure is at the apex
+//! ([`crate::mixed::elastic_strain_up`] says why the pressure, not `ln J`, decides), and
 //! `∂τ_a/∂ε_tr,b`, `∂τ_a/∂p` come from the same dual numbers, seeded on `(ε_tr, p)`.
 
 use nalgebra::Matrix3;
@@ -372,7 +374,7 @@ impl<S: StrengthEvolution> MixedPrincipalModel for MohrCoulombLaw<S> {
         let eps: [Dual<4>; 3] = [Dual::seed(eps_tr[0], 0), Dual::seed(eps_tr[1], 1), Dual::seed(eps_tr[2], 2)];
         let (t, region) = self.mixed_return(eps, Dual::seed(pressure, 3))?;
         let tau = t.map(|x| x.v);
-        let eps_e = elastic_strain_up(eps_tr, tau, self.mu, self.apex_strain());
+        let eps_e = elastic_strain_up(eps_tr, tau, self.mu, (region == Region::Apex).then(|| self.apex_strain()));
         accumulate_plastic_strain(committed, trial, eps_tr, eps_e, region != Region::Elastic);
         let dtau_deps = Matrix3::from_fn(|a, b| t[a].d[b]);
         Ok((PrincipalResponse { tau, eps_e, dtau_deps }, t.map(|x| x.d[3])))
@@ -475,5 +477,40 @@ mod tests {
             assert!(ea < 1e-6 && ep < 1e-6, "{expected:?}");
         }
         assert!(MohrCoulomb::new(2000.0, 5.0e7, 0.3, 0.5, 5.0e3, 0.1).mixed().is_err());
+    }
+
+    /// u–p form, c = 0 (apex at p = 0, `θ_apex = 0`): a point stretched by 1 % in volume
+    /// (`θ = ln J = 0.01 > θ_apex`) dilates plastically only if its pressure is at the apex.
+    /// Under a compressive pressure the stretch is the weak volumetric law's pointwise scatter
+    /// and stays elastic: committed plastic volume change 0 and `det Cp⁻¹ = 1`, so that the
+    /// next step sees `θ = ln J` again; at p ≥ 0 the whole 0.01 is plastic dilation
+    /// (`det Cp⁻¹ = e^{−0.02}`). Both points cap θ at 0 in the residual.
+    #[test]
+    fn mixed_apex_dilation_only_where_the_pressure_is_at_the_apex() {
+        use crate::mixed::MixedLaw;
+        let law = MohrCoulomb::new(2650.0, 8.4e5, 0.3, 19.8f64.to_radians(), 0.0, 0.0);
+        let names = law.state_variables();
+        let volumetric = names.iter().position(|v| *v == "accumulated_plastic_volumetric_strain").unwrap();
+        let ln_j = 0.01;
+        let f = Matrix3::from_diagonal_element((ln_j / 3.0f64).exp());
+        for (pressure, expected) in [(-2.0e3, 0.0), (1.0, ln_j)] {
+            let mut committed = vec![0.0; law.state_len()];
+            law.initialise_state(&mut committed);
+            let mut trial = committed.clone();
+            let (mut response, mut dp) = (crate::StressResponse::default(), Matrix3::zeros());
+            law.update_mixed(&Kinematics::at(f), pressure, &committed, &mut trial, &mut response, &mut dp).unwrap();
+            let mut values = vec![0.0; names.len()];
+            law.state_output(&trial, &mut values);
+            let det = crate::multiplicative::read_sym(&trial[..CP_INV_LEN]).determinant();
+            let (theta, _) = law.volumetric_strain(ln_j, &committed);
+            println!(
+                "u–p apex, ln J = {ln_j}, p = {pressure} Pa: plastic dilation {:.3e} (expected {expected:.3e}), \
+                 det Cp⁻¹ {det:.6}, residual θ {theta:.1e}",
+                values[volumetric]
+            );
+            assert!((values[volumetric] - expected).abs() < 1e-12);
+            assert!((det - (-2.0 * expected).exp()).abs() < 1e-12);
+            assert_eq!(theta, 0.0);
+        }
     }
 }
