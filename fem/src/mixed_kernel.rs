@@ -37,14 +37,15 @@
 //! `r_u,ai = Σ_p w P̃_iJ ∂N_a/∂X̃_J` (as the displacement element),
 //!
 //! `r_p,a = Σ_p w0 N_a (θ − p/K) − (1/μ) Σ_p w0 N_a (p − Π₀p)`, `θ = ln J_e`
-//! (`ln J` unless the history carries an elastic prestrain or the law caps `θ` at its apex in
-//! tension, [`loam_laws::mixed::MixedLaw::volumetric_strain`]),
+//! (`ln J` unless the history carries an elastic prestrain or a committed plastic dilation,
+//! [`loam_laws::mixed::MixedLaw::volumetric_strain`]; the apex of a frictional law is a
+//! return at the end of the step, not a cap here: [`loam_laws::mixed::elastic_strain_up`]),
 //!
 //! and the consistent tangent (symmetric for the hyperelastic laws and the
 //! pressure-independent plasticity, where `B̃ = J0⁻¹ ΔF⁻ᵀ`):
 //!
 //! `K_uu = Σ_p w ∇N_a · Ã · ∇N_b`, `K_up,(ai)b = Σ_p w B̃_iJ ∂N_a/∂X̃_J N_b`,
-//! `K_pu,a(bk) = Σ_p w0 N_a θ' ΔF⁻ᵀ_kL ∂N_b/∂X̃_L` (`∂ ln J/∂ΔF = ΔF⁻ᵀ`, `θ' = dθ/d ln J`),
+//! `K_pu,a(bk) = Σ_p w0 N_a ΔF⁻ᵀ_kL ∂N_b/∂X̃_L` (`∂ ln J/∂ΔF = ΔF⁻ᵀ`),
 //! `K_pp = −Σ_p w0 N_a N_b / K − (1/μ) (M − m mᵀ / V)`, `M_ab = Σ_p w0 N_a N_b`.
 //!
 //! With `K = ∞` (incompressible) `ln J = 0` holds weakly and `K_pp` is the stabilisation
@@ -160,7 +161,7 @@ pub fn mixed_element(
         if det_f <= 0.0 || !det_f.is_finite() {
             return Err(KernelError::Law { point: q, source: loam_laws::LawError::InvertedDeformation { det_f } });
         }
-        let (theta, dtheta) = law.volumetric_strain(det_f.ln(), &committed[q * stride..(q + 1) * stride]);
+        let theta = law.volumetric_strain(det_f.ln(), &committed[q * stride..(q + 1) * stride]);
         let volumetric = theta - p * inv_k;
         let nc = gradient_operator(ctx.formulation, ctx.element, g, &mut b);
         for r in 0..nu {
@@ -192,7 +193,7 @@ pub fn mixed_element(
             }
         }
         for s in 0..nu {
-            let dj: f64 = dtheta * (0..nc).map(|c| dfi[(active[c] / 3, active[c] % 3)] * b[s][c]).sum::<f64>();
+            let dj: f64 = (0..nc).map(|c| dfi[(active[c] / 3, active[c] % 3)] * b[s][c]).sum::<f64>();
             for a in 0..nn {
                 k[(nu + a) * nd + s] += w0 * g.shape[a] * dj;
             }

@@ -24,10 +24,10 @@
 //! is von Mises): at the given pressure `p` (mean Kirchhoff stress) the trial deviator
 //! `s_tr = 2μ dev ε_tr` returns radially, `f_tr = √J₂,tr + η p − ξ c`, `G Δγ = f_tr`,
 //! `s = (1 − f_tr/√J₂,tr) s_tr`, `τ = s + p 1`, while `ξ c − η p ≥ 0`; beyond the apex
-//! `τ = p 1` and the volumetric law is capped at `θ ≤ p_apex/K`, `p_apex = ξ c/η`, as for
-//! Mohr–Coulomb; the excess of `tr ε_tr` over the cap is committed as plastic dilation only
-//! where the point's pressure is at the apex ([`elastic_strain_up`]). Tangents by dual
-//! numbers seeded on `(ε_tr, p)`.
+//! `τ = p 1`, and at the end of the step the volume beyond `θ_apex = p_apex/K`,
+//! `p_apex = ξ c/η`, is released as plastic dilation where the point's pressure is at the
+//! apex, as for Mohr–Coulomb ([`elastic_strain_up`]). Tangents by dual numbers seeded on
+//! `(ε_tr, p)`.
 
 use nalgebra::Matrix3;
 use serde::Deserialize;
@@ -249,8 +249,8 @@ impl MixedLaw for DruckerPrager {
         self.mu
     }
 
-    fn volumetric_strain(&self, ln_j: f64, committed: &[f64]) -> (f64, f64) {
-        crate::mixed::principal_volumetric_strain(ln_j, committed, self.apex_strain())
+    fn volumetric_strain(&self, ln_j: f64, committed: &[f64]) -> f64 {
+        crate::mixed::principal_volumetric_strain(ln_j, committed)
     }
 
     fn update_mixed(

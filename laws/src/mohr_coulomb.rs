@@ -34,12 +34,12 @@
 //! mean, `τ_B,a = 2μ (ε_tr,a − tr ε_tr/3) + p`. The plane and edge returns above move along
 //! the flow directions `D b`, which are deviatoric for ψ = 0 (and free of λ), so they are the
 //! same algorithm at the fixed mean stress `p`. Beyond the apex (`p ≥ σ_c/(k − 1) = c cot φ`)
-//! no deviatoric stress is admissible: `τ = p 1`, and the volumetric law is capped there,
-//! `θ = min(ln J_e, p_apex/K)` (the grains separate: the flow beyond the apex is a volume
-//! increase, as in the displacement form's apex return). The elastic strains are
-//! `ε_e = tr ε_tr/3 + dev τ/(2μ)` (`J_e = J`), with `tr ε_tr` capped at `p_apex/K` (the
-//! plastic dilation) only where the point's pressure is at the apex
-//! ([`crate::mixed::elastic_strain_up`] says why the pressure, not `ln J`, decides), and
+//! no deviatoric stress is admissible: `τ = p 1`, and at the end of the step the point's
+//! volume beyond `θ_apex = p_apex/K` is released as a plastic dilation (the grains separate,
+//! as in the displacement form's apex return). The elastic strains are
+//! `ε_e = tr ε_tr/3 + dev τ/(2μ)` (`J_e = J`), with `tr ε_tr` capped at `θ_apex` only where
+//! the point's pressure is at the apex ([`crate::mixed::elastic_strain_up`]: why the
+//! pressure decides, and why the cap is not part of the step's volumetric law), and
 //! `∂τ_a/∂ε_tr,b`, `∂τ_a/∂p` come from the same dual numbers, seeded on `(ε_tr, p)`.
 
 use nalgebra::Matrix3;
@@ -390,8 +390,8 @@ impl<S: StrengthEvolution> MixedLaw for MohrCoulombLaw<S> {
         self.mu
     }
 
-    fn volumetric_strain(&self, ln_j: f64, committed: &[f64]) -> (f64, f64) {
-        crate::mixed::principal_volumetric_strain(ln_j, committed, self.apex_strain())
+    fn volumetric_strain(&self, ln_j: f64, committed: &[f64]) -> f64 {
+        crate::mixed::principal_volumetric_strain(ln_j, committed)
     }
 
     fn update_mixed(
@@ -484,7 +484,7 @@ mod tests {
     /// Under a compressive pressure the stretch is the weak volumetric law's pointwise scatter
     /// and stays elastic: committed plastic volume change 0 and `det Cp⁻¹ = 1`, so that the
     /// next step sees `θ = ln J` again; at p ≥ 0 the whole 0.01 is plastic dilation
-    /// (`det Cp⁻¹ = e^{−0.02}`). Both points cap θ at 0 in the residual.
+    /// (`det Cp⁻¹ = e^{−0.02}`) and the next step starts at the apex, `θ = 0`.
     #[test]
     fn mixed_apex_dilation_only_where_the_pressure_is_at_the_apex() {
         use crate::mixed::MixedLaw;
@@ -502,15 +502,15 @@ mod tests {
             let mut values = vec![0.0; names.len()];
             law.state_output(&trial, &mut values);
             let det = crate::multiplicative::read_sym(&trial[..CP_INV_LEN]).determinant();
-            let (theta, _) = law.volumetric_strain(ln_j, &committed);
+            let theta = law.volumetric_strain(ln_j, &trial);
             println!(
                 "u–p apex, ln J = {ln_j}, p = {pressure} Pa: plastic dilation {:.3e} (expected {expected:.3e}), \
-                 det Cp⁻¹ {det:.6}, residual θ {theta:.1e}",
+                 det Cp⁻¹ {det:.6}, next step's θ {theta:.1e}",
                 values[volumetric]
             );
             assert!((values[volumetric] - expected).abs() < 1e-12);
             assert!((det - (-2.0 * expected).exp()).abs() < 1e-12);
-            assert_eq!(theta, 0.0);
+            assert!((theta - (ln_j - expected)).abs() < 1e-12);
         }
     }
 }
