@@ -31,7 +31,9 @@
 //! compared with one small-step run, and a perturbation at round-off level (e.g. gravity
 //! −9.81 (1 + 1e-12)) in repeat mode measures how far the final surface moves under it.
 //!
-//! Choose cases with `LOAM_BENCH_CASES=collapse_bui2008_quad,collapse_bui2008_tri_h2`.
+//! Choose cases with `LOAM_BENCH_CASES=collapse_bui2008_quad,collapse_bui2008_tri_h2`, and
+//! the element of every domain with `LOAM_BENCH_FORMULATION=mixed_up` (the u–p refinement
+//! study: `LOAM_BENCH_COLLAPSE=full LOAM_BENCH_FORMULATION=mixed_up`, about 10 minutes).
 //! Run: `cargo bench --bench mpm_collapse`. Nothing is asserted about times.
 
 mod common;
@@ -69,6 +71,11 @@ fn load(name: &str, steps: Steps) -> Case {
     let mut json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).expect("case file")).expect("case JSON");
     json["output"] = serde_json::json!({ "interval": 0, "vtk": false });
+    if let Ok(formulation) = std::env::var("LOAM_BENCH_FORMULATION") {
+        for domain in json["domains"].as_array_mut().expect("domains") {
+            domain["element_formulation"] = formulation.clone().into();
+        }
+    }
     if matches!(steps, Steps::Patched) {
         if let Ok(text) = std::env::var("LOAM_BENCH_OVERRIDE") {
             let patch: serde_json::Value = serde_json::from_str(&text).expect("LOAM_BENCH_OVERRIDE is JSON");

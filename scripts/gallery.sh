@@ -97,4 +97,16 @@ done
 monitors coupled_wave_bar coupled_wave_bar monitors_energy.png
 monitors coupled_wave_bar_impedance coupled_wave_bar_impedance monitors_energy.png
 frames coupled_slip_block coupled_slip_block --field velocity:x --last
+# mixed u–p formulation (issue 15)
+frames cooks_membrane_up cooks_membrane_up --field pressure --last
+frames thick_cylinder_up thick_cylinder_up --field pressure --last
+frames hydrostatic_column_mpm_up hydrostatic_column_mpm_up --field pressure --last --grid
+for c in footing_undrained_mpm_up footing_undrained_mpm_u coupled_footing_rough_up; do
+  frames "$c" "$c" --field von_mises_stress --last
+  monitors "${c}_curve" "$c" monitors_q_over_su_vs_settlement.png --x settlement --monitors q_over_su
+done
+frames footing_undrained_fem_up footing_undrained_fem_up --field von_mises_stress --last
+monitors footing_undrained_fem_up_curve footing_undrained_fem_up monitors_q_over_su_vs_settlement.png --x settlement --monitors q_over_su
+frames collapse_bui2008_quad_up collapse_bui2008_quad_up --field $KAPPA --last --range 0,2 --max-stretch 2 \
+  --overlay "$BUI/surface.csv:experiment, surface" --overlay "$BUI/failure.csv:experiment, failure line"
 echo "gallery: $(ls "$IMG" | wc -l) pictures in $IMG ($(du -sh "$IMG" | cut -f1))"

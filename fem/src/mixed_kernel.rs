@@ -209,20 +209,20 @@ pub fn mixed_element(
     }
     // the projection term −(1/μ) (M p − m Π₀p), Π₀p = mᵀp / V, on the points (FEM) or on the
     // cell's rule scaled by the fill fraction (MPM)
-    let rule: Vec<(f64, &[f64; MAX_NODES])> = match projection_rule {
-        None => geometry.iter().zip(f0).map(|(g, f)| (g.weight / f.determinant(), &g.shape)).collect(),
-        Some(cell) => {
-            let fill = volume / cell.iter().map(|g| g.weight).sum::<f64>();
-            cell.iter().map(|g| (g.weight * fill, &g.shape)).collect()
-        }
-    };
     let mut mass = [[0.0; MAX_NODES]; MAX_NODES];
-    for (w, n) in &rule {
+    let mut integrate = |w: f64, n: &[f64; MAX_NODES]| {
         for a in 0..nn {
             moments[a] += w * n[a];
             for c in 0..nn {
                 mass[a][c] += w * n[a] * n[c];
             }
+        }
+    };
+    match projection_rule {
+        None => geometry.iter().zip(f0).for_each(|(g, f)| integrate(g.weight / f.determinant(), &g.shape)),
+        Some(cell) => {
+            let fill = volume / cell.iter().map(|g| g.weight).sum::<f64>();
+            cell.iter().for_each(|g| integrate(g.weight * fill, &g.shape));
         }
     }
     let mean: f64 = (0..nn).map(|b| moments[b] * pressure[b]).sum::<f64>() / volume;

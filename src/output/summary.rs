@@ -191,7 +191,8 @@ pub struct RunSummary {
     /// Monitor values at the last converged state, by name in case order (`null` where not
     /// finite).
     pub monitors: NamedValues<Option<f64>>,
-    /// SI unit of each monitor (`m`, `N`, `Pa`, `J`, `1`, …).
+    /// SI unit of each monitor (`m`, `N`, `Pa`, `J`, `1`, …); absent for a monitor whose
+    /// `scale` is not ±1 (its unit is the case author's, e.g. `q/(B s_u)`).
     pub monitor_units: NamedValues<String>,
 }
 
@@ -272,8 +273,13 @@ impl RunSummary {
                 .map(|(m, v)| (m.name.clone(), v.is_finite().then_some(v)))
                 .collect(),
         );
-        let monitor_units =
-            NamedValues(sim.monitors.iter().map(|m| (m.name.clone(), monitor_unit(&m.kind).to_string())).collect());
+        let monitor_units = NamedValues(
+            sim.monitors
+                .iter()
+                .filter(|m| m.scale.abs() == 1.0)
+                .map(|m| (m.name.clone(), monitor_unit(&m.kind).to_string()))
+                .collect(),
+        );
         Self {
             case: sim.case.name.clone(),
             case_file: std::fs::canonicalize(sim.case.directory.join(format!("{}.json", sim.case.name))).ok(),

@@ -115,7 +115,7 @@ pub fn unit(name: &str) -> Option<&'static str> {
         "mass" => "kg",
         "volume" => "m³",
         "force" => "N",
-        "cauchy_stress" | "von_mises_stress" | "preconsolidation_pressure" => "Pa",
+        "cauchy_stress" | "von_mises_stress" | "preconsolidation_pressure" | "pressure" => "Pa",
         "deformation_gradient" | "green_lagrange_strain" | "normal" => "1",
         "id" | "active" | "yield_flag" => "",
         n if n.ends_with("_stress") || n.ends_with("_pressure") => "Pa",
@@ -208,6 +208,7 @@ mod tests {
     #[test]
     fn units_prefixes_and_ticks() {
         assert_eq!(unit("cauchy_stress"), Some("Pa"));
+        assert_eq!(unit("pressure"), Some("Pa"));
         assert_eq!(unit("accumulated_plastic_deviatoric_strain"), Some("1"));
         assert_eq!(unit("whatever"), None);
         let d = DisplayUnit::for_range("Pa", 2.5e4);
