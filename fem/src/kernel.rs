@@ -553,13 +553,13 @@ fn element_general(
     Ok(())
 }
 
+/// Fixtures of the element-kernel tests (displacement and u–p).
 #[cfg(test)]
-mod tests {
+pub(crate) mod test_fixtures {
     use super::*;
-    use loam_laws::mohr_coulomb::MohrCoulomb;
-    use loam_laws::neo_hookean::NeoHookean;
 
-    fn element_coords(element: ElementType) -> Vec<[f64; 3]> {
+    /// Node coordinates of one distorted element of each type.
+    pub fn element_coords(element: ElementType) -> Vec<[f64; 3]> {
         match element {
             ElementType::Tri3 => vec![[0.1, 0.2, 0.0], [1.3, 0.1, 0.0], [0.5, 1.1, 0.0]],
             ElementType::Quad4 => vec![[0.2, 0.1, 0.0], [1.4, 0.0, 0.0], [1.5, 1.2, 0.0], [0.1, 0.9, 0.0]],
@@ -575,6 +575,38 @@ mod tests {
             }
         }
     }
+
+    /// A deformation `F0 ≠ I` of the step reference configuration (the MPM pull-back),
+    /// with the hoop stretch in axisymmetry and out-of-plane terms in 3D.
+    pub fn pre_deformation(dim: usize, formulation: Formulation) -> Matrix3<f64> {
+        let mut f0 = Matrix3::new(1.05, 0.03, 0.0, -0.02, 0.97, 0.0, 0.0, 0.0, 1.0);
+        if dim == 3 {
+            f0[(0, 2)] = 0.02;
+            f0[(2, 1)] = -0.01;
+            f0[(2, 2)] = 1.03;
+        } else if formulation == Formulation::Axisymmetric {
+            f0[(2, 2)] = 1.02;
+        }
+        f0
+    }
+
+    /// The initial history of `law` at `points` points.
+    pub fn initial_states(law: &dyn ConstitutiveLaw, points: usize) -> Vec<f64> {
+        let stride = law.state_len();
+        let mut committed = vec![0.0; points * stride];
+        for p in 0..points {
+            law.initialise_state(&mut committed[p * stride..(p + 1) * stride]);
+        }
+        committed
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_fixtures::{element_coords, initial_states, pre_deformation};
+    use super::*;
+    use loam_laws::mohr_coulomb::MohrCoulomb;
+    use loam_laws::neo_hookean::NeoHookean;
 
     /// Element tangent vs central differences of the internal force, for every element and
     /// formulation, with `F0 ≠ I` (the MPM pull-back) and plane-stress condensation.
@@ -612,21 +644,10 @@ mod tests {
                 .map(|g| point_geometry(element, formulation, 1.0, &coords, &g.xi, g.weight, None).unwrap())
                 .collect();
             let np = geometry.len();
-            let mut f0 = Matrix3::new(1.05, 0.03, 0.0, -0.02, 0.97, 0.0, 0.0, 0.0, 1.0);
-            if dim == 3 {
-                f0[(0, 2)] = 0.02;
-                f0[(2, 1)] = -0.01;
-                f0[(2, 2)] = 1.03;
-            } else if formulation == Formulation::Axisymmetric {
-                f0[(2, 2)] = 1.02;
-            }
-            let f0s = vec![f0; np];
+            let f0s = vec![pre_deformation(dim, formulation); np];
             let ctx = KernelContext { element, formulation, law, time_step: 0.0 };
             let stride = law.state_len();
-            let mut committed = vec![0.0; np * stride];
-            for p in 0..np {
-                law.initialise_state(&mut committed[p * stride..(p + 1) * stride]);
-            }
+            let committed = initial_states(law, np);
             let mut disp = vec![[0.0; 3]; nn];
             for a in 0..nn {
                 for i in 0..dim {

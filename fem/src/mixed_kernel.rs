@@ -245,26 +245,10 @@ mod tests {
     use super::*;
     use crate::element::ElementType;
     use crate::kernel::point_geometry;
+    use crate::kernel::test_fixtures::{element_coords, initial_states, pre_deformation};
     use loam_laws::mohr_coulomb::MohrCoulomb;
     use loam_laws::neo_hookean::NeoHookean;
     use loam_laws::ConstitutiveLaw;
-
-    fn element_coords(element: ElementType) -> Vec<[f64; 3]> {
-        match element {
-            ElementType::Tri3 => vec![[0.1, 0.2, 0.0], [1.3, 0.1, 0.0], [0.5, 1.1, 0.0]],
-            ElementType::Quad4 => vec![[0.2, 0.1, 0.0], [1.4, 0.0, 0.0], [1.5, 1.2, 0.0], [0.1, 0.9, 0.0]],
-            ElementType::Tet4 => vec![[0.0, 0.0, 0.0], [1.1, 0.1, 0.0], [0.1, 0.9, 0.1], [0.2, 0.1, 1.2]],
-            ElementType::Hex8 => {
-                let mut c = Vec::new();
-                for z in [0.0, 1.0] {
-                    for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
-                        c.push([x + 0.1 * y * z, y + 0.05 * x, z + 0.1 * x * y]);
-                    }
-                }
-                c
-            }
-        }
-    }
 
     /// The coupled u–p element tangent against central differences of its residual in every
     /// displacement and pressure, for every element and formulation, with `F0 ≠ I` (the MPM
@@ -332,21 +316,10 @@ mod tests {
                 .map(|g| point_geometry(element, formulation, 1.0, &coords, &g.xi, g.weight, None).unwrap())
                 .collect()
         });
-        let mut f0 = Matrix3::new(1.05, 0.03, 0.0, -0.02, 0.97, 0.0, 0.0, 0.0, 1.0);
-        if dim == 3 {
-            f0[(0, 2)] = 0.02;
-            f0[(2, 1)] = -0.01;
-            f0[(2, 2)] = 1.03;
-        } else if formulation == Formulation::Axisymmetric {
-            f0[(2, 2)] = 1.02;
-        }
-        let f0s = vec![f0; np];
+        let f0s = vec![pre_deformation(dim, formulation); np];
         let ctx = KernelContext { element, formulation, law, time_step: 0.0 };
         let stride = law.state_len();
-        let mut committed = vec![0.0; np * stride];
-        for p in 0..np {
-            law.initialise_state(&mut committed[p * stride..(p + 1) * stride]);
-        }
+        let committed = initial_states(law, np);
         // displacements of a few per cent (plastic for the weak soils), pressures of the
         // order of the shear modulus
         let scale = if plastic { 0.05 } else { 0.03 };

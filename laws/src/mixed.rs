@@ -184,8 +184,12 @@ pub fn mixed_tangent_relative_error(
 }
 
 /// A principal-space elasto-plastic model (history `[Cp⁻¹ | internal]` as in
-/// [`crate::multiplicative`]) with a return in u–p form.
+/// [`crate::multiplicative`]) with a return in u–p form; it is a [`MixedLaw`] with Hencky
+/// elasticity (`K = λ + 2μ/3`).
 pub trait MixedPrincipalModel: Send + Sync {
+    /// Lamé's constants `(λ, μ)` of the Hencky elasticity (Pa).
+    fn lame(&self) -> (f64, f64);
+
     /// The return at trial principal elastic log strains `eps_tr` and pressure `pressure`,
     /// from the committed internal variables, writing the trial ones.
     fn mixed_principal_update(
@@ -195,6 +199,33 @@ pub trait MixedPrincipalModel: Send + Sync {
         committed: &[f64],
         trial: &mut [f64],
     ) -> Result<MixedPrincipalResponse, LawError>;
+}
+
+impl<M: MixedPrincipalModel> MixedLaw for M {
+    fn bulk_modulus(&self) -> f64 {
+        let (lambda, mu) = self.lame();
+        lambda + 2.0 * mu / 3.0
+    }
+
+    fn shear_modulus(&self) -> f64 {
+        self.lame().1
+    }
+
+    fn volumetric_strain(&self, ln_j: f64, committed: &[f64]) -> f64 {
+        principal_volumetric_strain(ln_j, committed)
+    }
+
+    fn update_mixed(
+        &self,
+        kinematics: &Kinematics,
+        pressure: f64,
+        committed: &[f64],
+        trial: &mut [f64],
+        response: &mut StressResponse,
+        pressure_tangent: &mut Matrix3<f64>,
+    ) -> Result<(), LawError> {
+        update_principal_mixed(self, kinematics, pressure, committed, trial, response, pressure_tangent)
+    }
 }
 
 /// [`MixedLaw::volumetric_strain`] of a history `[Cp⁻¹ | internal]`:

@@ -45,7 +45,7 @@
 use nalgebra::Matrix3;
 
 use crate::dual::{Dual, Real};
-use crate::mixed::{elastic_strain_up, update_principal_mixed, MixedLaw, MixedPrincipalModel, MixedPrincipalResponse};
+use crate::mixed::{elastic_strain_up, MixedPrincipalModel, MixedPrincipalResponse};
 use crate::multiplicative::{
     self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel, PrincipalResponse,
     PLASTIC_OUTPUT,
@@ -364,6 +364,10 @@ impl<S: StrengthEvolution> MohrCoulombLaw<S> {
 }
 
 impl<S: StrengthEvolution> MixedPrincipalModel for MohrCoulombLaw<S> {
+    fn lame(&self) -> (f64, f64) {
+        (self.lambda, self.mu)
+    }
+
     fn mixed_principal_update(
         &self,
         eps_tr: [f64; 3],
@@ -378,32 +382,6 @@ impl<S: StrengthEvolution> MixedPrincipalModel for MohrCoulombLaw<S> {
         accumulate_plastic_strain(committed, trial, eps_tr, eps_e, region != Region::Elastic);
         let dtau_deps = Matrix3::from_fn(|a, b| t[a].d[b]);
         Ok((PrincipalResponse { tau, eps_e, dtau_deps }, t.map(|x| x.d[3])))
-    }
-}
-
-impl<S: StrengthEvolution> MixedLaw for MohrCoulombLaw<S> {
-    fn bulk_modulus(&self) -> f64 {
-        self.lambda + 2.0 * self.mu / 3.0
-    }
-
-    fn shear_modulus(&self) -> f64 {
-        self.mu
-    }
-
-    fn volumetric_strain(&self, ln_j: f64, committed: &[f64]) -> f64 {
-        crate::mixed::principal_volumetric_strain(ln_j, committed)
-    }
-
-    fn update_mixed(
-        &self,
-        kinematics: &crate::Kinematics,
-        pressure: f64,
-        committed: &[f64],
-        trial: &mut [f64],
-        response: &mut crate::StressResponse,
-        pressure_tangent: &mut Matrix3<f64>,
-    ) -> Result<(), LawError> {
-        update_principal_mixed(self, kinematics, pressure, committed, trial, response, pressure_tangent)
     }
 }
 

@@ -287,12 +287,14 @@ CHECKS = [
 ]
 
 
-def main():
+def run_checks(checks):
+    """Runs each check (a function returning a detail line or raising), prints PASS/FAIL
+    lines and the count; exit status 0 only if all passed."""
     if not LOAM.exists():
         print(f"error: {LOAM} not found: run `cargo build --release --workspace` first")
         return 1
     passed = failed = 0
-    for check in CHECKS:
+    for check in checks:
         try:
             detail = check()
             passed += 1
@@ -303,6 +305,10 @@ def main():
             traceback.print_exc()
     print(f"{passed} passed, {failed} failed")
     return 0 if failed == 0 and passed > 0 else 1
+
+
+def main():
+    return run_checks(CHECKS)
 
 
 if __name__ == "__main__":

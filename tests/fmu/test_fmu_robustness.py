@@ -31,7 +31,6 @@ import json
 import math
 import shutil
 import sys
-import traceback
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -40,7 +39,7 @@ from fmpy import extract, read_model_description  # noqa: E402
 from fmpy.fmi1 import FMICallException  # noqa: E402
 from fmpy.fmi3 import FMU3Slave  # noqa: E402
 
-from test_fmu import LOAM, ROOT, WORK, expect_status, package, write_case  # noqa: E402
+from test_fmu import ROOT, WORK, expect_status, package, run_checks, write_case  # noqa: E402
 
 CASE = ROOT / "cases" / "cantilever_fmu.json"
 DT = 0.01
@@ -348,21 +347,7 @@ CHECKS = [
 
 
 def main():
-    if not LOAM.exists():
-        print(f"error: {LOAM} not found: run `cargo build --release --workspace` first")
-        return 1
-    passed = failed = 0
-    for check in CHECKS:
-        try:
-            detail = check()
-            passed += 1
-            print(f"PASS {check.__name__}: {detail}", flush=True)
-        except Exception as e:  # noqa: BLE001 - every failure is reported, then counted
-            failed += 1
-            print(f"FAIL {check.__name__}: {e}", flush=True)
-            traceback.print_exc()
-    print(f"{passed} passed, {failed} failed")
-    return 0 if failed == 0 and passed > 0 else 1
+    return run_checks(CHECKS)
 
 
 if __name__ == "__main__":
