@@ -31,12 +31,13 @@ pub(super) fn attach(case: &Case, model: &mut Model, parts: &mut [Part]) -> Resu
         let prescribed: Vec<[bool; 3]> =
             node_ids.iter().map(|&g| std::array::from_fn(|i| i < dim && held(g, i))).collect();
         let anchored: Vec<bool> = coupling.on_interface.iter().map(Option::is_some).collect();
+        // the narrowest band asked for by the grid's interfaces, 20 cells where none asks
         let band = coupling
             .interfaces
             .iter()
             .filter_map(|&k| case.interfaces[k].band)
-            .fold(f64::INFINITY, f64::min)
-            .min(DEFAULT_BAND_CELLS * mean_cell_size(grid));
+            .reduce(f64::min)
+            .unwrap_or(DEFAULT_BAND_CELLS * mean_cell_size(grid));
         let motion =
             HarmonicExtension::new(grid, &MotionConstraints { anchored: &anchored, prescribed: &prescribed, band });
         let mut kind = vec![GridNodeKind::Free; node_ids.len()];
