@@ -43,6 +43,7 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, NumericLu, SymbolicLu};
 use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::SparseColMatRef;
 use faer::{Conj, MatMut, Side};
 use serde::Deserialize;
 
@@ -421,10 +422,7 @@ impl LinearSolver {
         let par = faer::get_global_parallelism();
         if self.ldlt.is_none() {
             let t = Instant::now();
-            let params =
-                CholeskySymbolicParams { supernodal_flop_ratio_threshold: cholesky_threshold(), ..Default::default() };
-            let symbolic = factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), params)
-                .map_err(factorisation_error)?;
+            let symbolic = symbolic_cholesky(&a)?;
             let scratch = buffer(StackReq::any_of(&[
                 symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
                 symbolic.factorize_numeric_intranode_lblt_scratch::<f64>(par, Default::default()),
@@ -542,10 +540,7 @@ impl LinearSolver {
         let par = faer::get_global_parallelism();
         if self.llt.is_none() {
             let t = Instant::now();
-            let params =
-                CholeskySymbolicParams { supernodal_flop_ratio_threshold: cholesky_threshold(), ..Default::default() };
-            let symbolic = factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), params)
-                .map_err(factorisation_error)?;
+            let symbolic = symbolic_cholesky(&a)?;
             let scratch = buffer(StackReq::any_of(&[
                 symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
                 symbolic.solve_in_place_scratch::<f64>(1, par),
@@ -600,6 +595,13 @@ impl std::fmt::Debug for CholeskyFactor {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("CholeskyFactor").finish_non_exhaustive()
     }
+}
+
+/// The symbolic Cholesky analysis (AMD ordering, elimination tree, supernodes) of the
+/// lower triangle of `a`, shared by the `L Lᵀ`, `L D Lᵀ` and Bunch–Kaufman factorisations.
+fn symbolic_cholesky(a: &SparseColMatRef<'_, usize, f64>) -> Result<SymbolicCholesky<usize>, LinearSolverError> {
+    let params = CholeskySymbolicParams { supernodal_flop_ratio_threshold: cholesky_threshold(), ..Default::default() };
+    factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), params).map_err(factorisation_error)
 }
 
 /// Supernodal Cholesky unless `LOAM_CHOLESKY=simplicial` (or `auto`: faer's flop-ratio
