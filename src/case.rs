@@ -189,6 +189,24 @@ pub struct DomainSpec {
     /// All bodies on one background grid share it.
     #[serde(default)]
     pub element_formulation: ElementFormulation,
+    /// How a grid cell integrates over its material points (MPM domains): `material_points`
+    /// (default: the points' volumes as weights, standard MPM) or `filled_cells` (in every
+    /// cell the material fills, the weights scaled to add up to the cell's volume: no soft
+    /// or stiff cells where points have crossed, for quasi-static plastic flow such as a
+    /// footing; `loam_mpm::quadrature`). All bodies on one background grid share it.
+    #[serde(default)]
+    pub quadrature: Quadrature,
+}
+
+/// How a grid cell integrates over its material points (`domains[k].quadrature`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Quadrature {
+    /// The points' volumes as the weights.
+    #[default]
+    MaterialPoints,
+    /// The weights scaled to the cell's volume in cells the material fills.
+    FilledCells,
 }
 
 /// The unknowns of a domain's elements (`domains[k].element_formulation`).

@@ -232,6 +232,17 @@ impl Body {
         self.cell_start[c + 1] > self.cell_start[c]
     }
 
+    /// Sum of the quadrature weights of the body's points in cell `c`.
+    pub fn cell_weight(&self, c: usize) -> f64 {
+        self.geometry[self.points_in_cell(c)].iter().map(|g| g.weight).sum()
+    }
+
+    /// Scales the quadrature weights of the body's points in cell `c`.
+    pub fn scale_cell_weights(&mut self, c: usize, factor: f64) {
+        let range = self.points_in_cell(c);
+        self.geometry[range].iter_mut().for_each(|g| g.weight *= factor);
+    }
+
     /// Attaches a force to some of the body's points.
     pub fn add_point_load(&mut self, load: PointLoad) {
         self.point_loads.push(load);

@@ -30,4 +30,5 @@ pub mod grid;
 pub mod material_points;
 pub mod mpm_domain;
 pub mod penalty_boundary;
+pub mod quadrature;
 pub mod surface;

@@ -42,6 +42,7 @@ use crate::attachment::{GridAttachment, GridNodeKind};
 use crate::body::{Body, GridSums};
 use crate::grid::Grid;
 use crate::penalty_boundary::{GridNodes, PenaltyBoundary};
+use crate::quadrature::{normalise_filled_cells, PointQuadrature};
 
 /// Marker of a block without an occupying body.
 const NONE: u8 = u8::MAX;
@@ -103,6 +104,8 @@ pub struct MpmDomain {
     blocks: CellBlocks,
     /// Global pressure DOF of every grid node (u–p grids).
     pressure_dofs: Option<Vec<usize>>,
+    /// How a cell integrates over its points ([`crate::quadrature`]).
+    quadrature: PointQuadrature,
 }
 
 impl MpmDomain {
@@ -123,7 +126,13 @@ impl MpmDomain {
             sums: GridSums::default(),
             blocks: CellBlocks { rings: pattern_rings(), ..Default::default() },
             pressure_dofs: None,
+            quadrature: PointQuadrature::MaterialPoints,
         }
+    }
+
+    /// How the grid's cells integrate over their points ([`crate::quadrature`]).
+    pub fn set_quadrature(&mut self, quadrature: PointQuadrature) {
+        self.quadrature = quadrature;
     }
 
     /// Makes the grid a mixed u–p one: grid node `a` carries the global pressure DOF
@@ -238,10 +247,15 @@ impl MpmDomain {
         Ok(())
     }
 
-    /// Phase 1b: every body locates its points in the grid's configuration of the step.
+    /// Phase 1b: every body locates its points in the grid's configuration of the step;
+    /// with [`PointQuadrature::FilledCells`] the points' weights in filled cells are scaled
+    /// to the cell's volume.
     pub fn locate_points(&mut self) {
         for body in &mut self.bodies {
             body.locate(&self.grid, self.formulation, self.thickness);
+        }
+        if self.quadrature == PointQuadrature::FilledCells {
+            normalise_filled_cells(&self.grid, self.formulation, self.thickness, &mut self.bodies);
         }
     }
 

@@ -23,13 +23,14 @@ use loam_mpm::body::{Body, VelocityBlend};
 use loam_mpm::grid::Grid;
 use loam_mpm::material_points::{self, MaterialPoints};
 use loam_mpm::mpm_domain::MpmDomain;
+use loam_mpm::quadrature::PointQuadrature;
 use nalgebra::Matrix3;
 
 use super::regions::{line_tolerance, select_region};
 use super::{check_len, check_positive};
 use crate::case::{
     BodySpec, Case, CaseError, DomainKind, ElementFormulation, GridSpec, InitialStressSpec, InitialVelocity,
-    MassMatrix, MeshSpec,
+    MassMatrix, MeshSpec, Quadrature,
 };
 
 /// A part of the model: an FEM domain, or a grid with its bodies.
@@ -246,6 +247,9 @@ fn check_keys(case: &Case, k: usize) -> Result<(), CaseError> {
             }
             if d.pic_relaxation_time.is_some() {
                 return Err(misplaced("pic_relaxation_time"));
+            }
+            if d.quadrature != Quadrature::MaterialPoints {
+                return Err(misplaced("quadrature"));
             }
             if d.mesh.is_none() {
                 return Err(CaseError::new(format!("{loc}.mesh"), "an fem domain needs a mesh"));
@@ -890,6 +894,15 @@ fn grid_domain(
                 ),
             ));
         }
+        if d.quadrature != case.domains[first].quadrature {
+            return Err(CaseError::new(
+                format!("domains[{k}].quadrature"),
+                format!(
+                    "the bodies on one grid share their quadrature: '{}' on the same grid has {:?}",
+                    case.domains[first].name, case.domains[first].quadrature
+                ),
+            ));
+        }
         let law = laws[d.material.as_str()].clone();
         if let Some(v0) = &d.initial_velocity {
             for (x, v) in points.position.iter().zip(points.velocity.iter_mut()) {
@@ -929,13 +942,18 @@ fn grid_domain(
         match domain.as_mut() {
             Some(domain) => domain.add_body(body),
             None => {
-                domain = Some(MpmDomain::new(
+                let mut first_domain = MpmDomain::new(
                     grid.take().expect("once"),
                     node_ids.take().expect("once"),
                     case.formulation,
                     case.thickness,
                     body,
-                ))
+                );
+                first_domain.set_quadrature(match d.quadrature {
+                    Quadrature::MaterialPoints => PointQuadrature::MaterialPoints,
+                    Quadrature::FilledCells => PointQuadrature::FilledCells,
+                });
+                domain = Some(first_domain);
             }
         }
         indices.push(k);
