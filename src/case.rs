@@ -209,6 +209,16 @@ pub enum Quadrature {
     FilledCells,
 }
 
+impl Quadrature {
+    /// The name in the case file.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Quadrature::MaterialPoints => "material_points",
+            Quadrature::FilledCells => "filled_cells",
+        }
+    }
+}
+
 /// The unknowns of a domain's elements (`domains[k].element_formulation`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -219,6 +229,16 @@ pub enum ElementFormulation {
     /// Nodal displacements and pressures (mean Kirchhoff stress), equal order, stabilised by
     /// the polynomial pressure projection (Dohrmann & Bochev 2004).
     MixedUp,
+}
+
+impl ElementFormulation {
+    /// The name in the case file.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ElementFormulation::Displacement => "displacement",
+            ElementFormulation::MixedUp => "mixed_up",
+        }
+    }
 }
 
 fn fem() -> DomainKind {

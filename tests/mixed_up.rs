@@ -425,6 +425,23 @@ fn element_formulation_errors_name_the_json_path() {
             "domains[2].element_formulation",
             "share their element formulation",
         ),
+        // the quadrature of a grid's cells: MPM only, one per grid
+        (
+            base(nh, "plane_strain", "").replace("\"mixed_up\",", "\"mixed_up\", \"quadrature\": \"filled_cells\","),
+            "domains[0].quadrature",
+            "does not apply to an fem domain",
+        ),
+        (
+            base(
+                nh,
+                "plane_strain",
+                &(mpm_body(4, "mixed_up")
+                    + &mpm_body(9, "mixed_up")
+                        .replace("\"mixed_up\",", "\"mixed_up\", \"quadrature\": \"filled_cells\",")),
+            ),
+            "domains[2].quadrature",
+            "share their quadrature",
+        ),
     ];
     for (text, path, words) in cases {
         let err = match Case::parse(&text) {

@@ -889,8 +889,9 @@ fn grid_domain(
             return Err(CaseError::new(
                 format!("domains[{k}].element_formulation"),
                 format!(
-                    "the bodies on one grid share their element formulation: '{}' on the same grid has {:?}",
-                    case.domains[first].name, case.domains[first].element_formulation
+                    "the bodies on one grid share their element formulation: '{}' on the same grid has {}",
+                    case.domains[first].name,
+                    case.domains[first].element_formulation.as_str()
                 ),
             ));
         }
@@ -898,8 +899,9 @@ fn grid_domain(
             return Err(CaseError::new(
                 format!("domains[{k}].quadrature"),
                 format!(
-                    "the bodies on one grid share their quadrature: '{}' on the same grid has {:?}",
-                    case.domains[first].name, case.domains[first].quadrature
+                    "the bodies on one grid share their quadrature: '{}' on the same grid has {}",
+                    case.domains[first].name,
+                    case.domains[first].quadrature.as_str()
                 ),
             ));
         }
