@@ -885,25 +885,26 @@ fn grid_domain(
     let first = bodies[0].0;
     for (k, mut points) in bodies {
         let d = &case.domains[k];
-        if d.element_formulation != case.domains[first].element_formulation {
-            return Err(CaseError::new(
-                format!("domains[{k}].element_formulation"),
-                format!(
-                    "the bodies on one grid share their element formulation: '{}' on the same grid has {}",
-                    case.domains[first].name,
-                    case.domains[first].element_formulation.as_str()
-                ),
-            ));
-        }
-        if d.quadrature != case.domains[first].quadrature {
-            return Err(CaseError::new(
-                format!("domains[{k}].quadrature"),
-                format!(
-                    "the bodies on one grid share their quadrature: '{}' on the same grid has {}",
-                    case.domains[first].name,
-                    case.domains[first].quadrature.as_str()
-                ),
-            ));
+        // what the bodies on one grid share (its cells integrate them together)
+        let first_domain = &case.domains[first];
+        for (key, what, here, there) in [
+            (
+                "element_formulation",
+                "element formulation",
+                d.element_formulation.as_str(),
+                first_domain.element_formulation.as_str(),
+            ),
+            ("quadrature", "quadrature", d.quadrature.as_str(), first_domain.quadrature.as_str()),
+        ] {
+            if here != there {
+                return Err(CaseError::new(
+                    format!("domains[{k}].{key}"),
+                    format!(
+                        "the bodies on one grid share their {what}: '{}' on the same grid has {there}",
+                        first_domain.name
+                    ),
+                ));
+            }
         }
         let law = laws[d.material.as_str()].clone();
         if let Some(v0) = &d.initial_velocity {
