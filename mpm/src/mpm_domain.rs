@@ -50,6 +50,10 @@ const NONE: u8 = u8::MAX;
 /// Largest element block (hex8 in 3D, u–p): 32 DOFs.
 const MAX_BLOCK: usize = loam_fem::mixed_kernel::MAX_MIXED_DOFS;
 
+/// An empty integration point (storage for the cell rule of the u–p projection).
+const NO_GEOMETRY: PointGeometry =
+    PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
+
 /// Rings of inactive cells kept in the sparsity pattern around the active ones (default 1;
 /// `LOAM_MPM_PATTERN_RINGS=0` rebuilds the pattern at every change of the active set).
 fn pattern_rings() -> usize {
@@ -445,6 +449,9 @@ impl MpmDomain {
                     }
                 }
             });
+        // the element's Gauss rule for the u–p projection (at most one point per node)
+        let mixed_rule = element.gauss_points_mixed();
+        debug_assert!(mixed_rule.len() <= MAX_NODES);
         for (k, body) in self.bodies.iter_mut().enumerate() {
             let mut trial = body.take_trial();
             let views = trial.views(body.cell_start(), body.law().state_len(), &blocks.pattern);
@@ -481,32 +488,27 @@ impl MpmDomain {
                         }
                     }
                     // the cell's Gauss rule in the step's configuration, for the projection
-                    let cell_rule: Vec<PointGeometry> = if pressure_dofs.is_some() {
-                        let coords = grid.cell_coords(cell);
-                        element
-                            .gauss_points_mixed()
-                            .iter()
-                            .map(|gp| {
-                                point_geometry(
-                                    element,
-                                    formulation,
-                                    thickness,
-                                    &coords[..nn],
-                                    &gp.xi,
-                                    gp.weight,
-                                    grid.cell_map(cell),
-                                )
-                            })
-                            .collect::<Result<_, _>>()
-                            .map_err(|err| DomainError {
-                                domain: name.clone(),
-                                element: cell,
-                                message: err.to_string(),
-                            })?
-                    } else {
-                        Vec::new()
-                    };
-                    let pressure = pressure_dofs.map(|_| (&pressure[..nn], cell_rule.as_slice()));
+                    let mut cell_rule = [NO_GEOMETRY; MAX_NODES];
+                    let rule_len = if pressure_dofs.is_some() { mixed_rule.len() } else { 0 };
+                    let coords = grid.cell_coords(cell);
+                    for (g, gp) in cell_rule.iter_mut().zip(&mixed_rule[..rule_len]) {
+                        *g = point_geometry(
+                            element,
+                            formulation,
+                            thickness,
+                            &coords[..nn],
+                            &gp.xi,
+                            gp.weight,
+                            grid.cell_map(cell),
+                        )
+                        .map_err(|err| DomainError {
+                            domain: name.clone(),
+                            element: cell,
+                            message: err.to_string(),
+                        })?;
+                    }
+                    let cell_rule = &cell_rule[..rule_len];
+                    let pressure = pressure_dofs.map(|_| (&pressure[..nn], cell_rule));
                     let fail = |err: loam_fem::kernel::KernelError| DomainError {
                         domain: name.clone(),
                         element: cell,
