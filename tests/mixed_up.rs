@@ -14,6 +14,7 @@ use common::{case, monitor, report, run, History};
 use loam::case::Case;
 use loam::simulation::Simulation;
 use nalgebra::DMatrix;
+use serde_json::json;
 
 /// Prandtl's bearing capacity factor of a strip footing on weightless Tresca soil, `2 + π`.
 const PRANDTL: f64 = 2.0 + std::f64::consts::PI;
@@ -524,6 +525,51 @@ fn coupled_footing_rough_contact() {
     let (plateau, end) = plateau(&sim, &h);
     println!("footing MPM rough: plateau over the last 20 % of {end:.3} m: {plateau:.3}");
     report("footing MPM u–p rough: q/s_u plateau vs Prandtl 2 + π", plateau, PRANDTL, 0.05);
+}
+
+/// Benchmark 11's MPM footing refined, h = B/10, B/20, B/40, with a stiffer clay (E_u/s_u =
+/// 1000 instead of 100) pushed 0.02 m: the plastic mechanism forms within a small settlement,
+/// so the limit load is measured before the geometry changes (at E_u/s_u = 100 the load needs
+/// 0.1–0.15 B of settlement and keeps drifting under refinement: README, "What is not
+/// validated"). The plateau (mean over the last 20 % of the settlement) falls monotonically
+/// with h, at an observed order above 0.5; its Richardson extrapolation and the B/40 plateau
+/// are each within 5 % of Prandtl's 2 + π.
+#[test]
+#[ignore = "about 6 min in release (320 000 points at B/40); run with --ignored"]
+fn footing_limit_load_converges_under_refinement() {
+    let plateaus: Vec<f64> = [10usize, 20, 40]
+        .iter()
+        .map(|&n| {
+            let h = 1.0 / n as f64;
+            let case = variant(
+                "footing_undrained_mpm_up.json",
+                &[
+                    ("/materials/clay/young_modulus", json!(1.0e6)),
+                    ("/domains/0/mesh/rectangle/cells", json!([n, n / 2])),
+                    ("/domains/1/grid/cells", json!([10 * n, (5.4 * n as f64).round() as usize])),
+                    ("/domains/1/material_points/cells/mesh/rectangle/cells", json!([10 * n, 5 * n])),
+                    // the side interface starts half a cell above the base's corner
+                    ("/regions/footing_sides/box/min", json!([-0.5, 5.0 + 0.5 * h])),
+                    ("/boundary_conditions/3/displacement", json!([0.0, -0.02])),
+                    ("/analysis/time_step", json!(0.05)),
+                ],
+            );
+            let (sim, history) = run(case);
+            print_curve(&format!("footing E_u/s_u = 1000, h = B/{n}"), &sim, &history, 4);
+            let (plateau, _) = plateau(&sim, &history);
+            println!("h = B/{n}: plateau {plateau:.4}");
+            plateau
+        })
+        .collect();
+    let (coarse, medium, fine) = (plateaus[0], plateaus[1], plateaus[2]);
+    assert!(coarse > medium && medium > fine, "the plateau falls monotonically under refinement: {plateaus:?}");
+    let ratio = (coarse - medium) / (medium - fine);
+    let order = ratio.ln() / 2f64.ln();
+    let extrapolated = fine - (medium - fine) / (ratio - 1.0);
+    println!("observed order {order:.2}, Richardson extrapolation {extrapolated:.4}");
+    assert!(order > 0.5, "observed order {order}");
+    report("footing limit load, Richardson extrapolation vs Prandtl 2 + π", extrapolated, PRANDTL, 0.05);
+    report("footing limit load at h = B/40 vs Prandtl 2 + π", fine, PRANDTL, 0.05);
 }
 
 /// Benchmark 11 in FEM (half model, h = B/20): the u–p plateau (mean over the last 20 % of
