@@ -481,14 +481,14 @@ fn second_half_rate(sim: &Simulation, h: &History) -> f64 {
 /// Prints a footing's load–settlement curve every `every` steps.
 fn print_curve(label: &str, sim: &Simulation, h: &History, every: usize) {
     let (q, s) = (monitor(sim, "q_over_su"), monitor(sim, "settlement"));
-    let points: Vec<String> = h.iter().step_by(every).map(|r| format!("{:.3}: {:.3}", r.1[s], r.1[q])).collect();
+    let points: Vec<String> = h.iter().step_by(every).map(|r| format!("{:.4}: {:.3}", r.1[s], r.1[q])).collect();
     println!("{label}: settlement (m): q/s_u  {}", points.join(", "));
 }
 
 /// Benchmark 11 in MPM (the acceptance of issue 15), which is also benchmark 15 with a smooth
 /// contact: the concrete footing (rigid for the soil) on undrained Tresca soil, u–p
-/// (ν = 0.4999) and displacement (ν = 0.495) on the same grid (h = B/20, filled-cell
-/// quadrature). The mixed plateau (mean over the last 20 % of the settlement) is within 5 %
+/// (ν = 0.4999) and displacement (ν = 0.495) on the same grid (h = B/20, 3 × 3 points per
+/// cell, filled-cell quadrature). The mixed plateau (mean over the last 20 % of the settlement) is within 5 %
 /// of 2 + π; the displacement element's is higher (by more than 15 %) and rises faster over
 /// the second half of the settlement: it locks. The footing's reaction equals the soil's
 /// force on its base.
@@ -527,15 +527,19 @@ fn coupled_footing_rough_contact() {
     report("footing MPM u–p rough: q/s_u plateau vs Prandtl 2 + π", plateau, PRANDTL, 0.05);
 }
 
-/// Benchmark 11's MPM footing refined, h = B/10, B/20, B/40, with a stiffer clay (E_u/s_u =
-/// 1000 instead of 100) pushed 0.02 m: the plastic mechanism forms within a small settlement,
-/// so the limit load is measured before the geometry changes (at E_u/s_u = 100 the load needs
-/// 0.1–0.15 B of settlement and keeps drifting under refinement: README, "What is not
-/// validated"). The plateau (mean over the last 20 % of the settlement) falls monotonically
-/// with h, at an observed order above 0.5; its Richardson extrapolation and the B/40 plateau
-/// are each within 5 % of Prandtl's 2 + π.
+/// Benchmark 11's MPM footing refined, h = B/10, B/20, B/40, with a clay a hundred times
+/// stiffer (E_u/s_u = 10 000 instead of 100) pushed 0.002 m: the plastic mechanism forms
+/// while the soil has moved a few hundredths of a cell, so the limit load is measured without
+/// the change of geometry (at E_u/s_u = 100 the load at 0.12–0.15 B is still rising in the
+/// converged solution and the benchmark's plateau falls under refinement; at E_u/s_u = 1000
+/// the corner's soil already deforms enough for the B/20 run to rise over its last 30 % and
+/// the plateau to depend on the points per cell by 1.5 %: README, "What is not validated").
+/// Here the result does not depend on the points per cell (2 × 2 and 3 × 3 within 0.05 %,
+/// measured by editing the case). The plateau (mean over the last 20 % of the settlement)
+/// falls monotonically with h, at an observed order above 0.5; its Richardson extrapolation
+/// and the B/40 plateau are each within 5 % of Prandtl's 2 + π.
 #[test]
-#[ignore = "about 6 min in release (320 000 points at B/40); run with --ignored"]
+#[ignore = "about 5 min in release (720 000 points at B/40); run with --ignored"]
 fn footing_limit_load_converges_under_refinement() {
     let plateaus: Vec<f64> = [10usize, 20, 40]
         .iter()
@@ -544,18 +548,18 @@ fn footing_limit_load_converges_under_refinement() {
             let case = variant(
                 "footing_undrained_mpm_up.json",
                 &[
-                    ("/materials/clay/young_modulus", json!(1.0e6)),
+                    ("/materials/clay/young_modulus", json!(1.0e7)),
                     ("/domains/0/mesh/rectangle/cells", json!([n, n / 2])),
                     ("/domains/1/grid/cells", json!([10 * n, (5.4 * n as f64).round() as usize])),
                     ("/domains/1/material_points/cells/mesh/rectangle/cells", json!([10 * n, 5 * n])),
                     // the side interface starts half a cell above the base's corner
                     ("/regions/footing_sides/box/min", json!([-0.5, 5.0 + 0.5 * h])),
-                    ("/boundary_conditions/3/displacement", json!([0.0, -0.02])),
+                    ("/boundary_conditions/3/displacement", json!([0.0, -0.002])),
                     ("/analysis/time_step", json!(0.05)),
                 ],
             );
             let (sim, history) = run(case);
-            print_curve(&format!("footing E_u/s_u = 1000, h = B/{n}"), &sim, &history, 4);
+            print_curve(&format!("footing E_u/s_u = 10 000, h = B/{n}"), &sim, &history, 4);
             let (plateau, _) = plateau(&sim, &history);
             println!("h = B/{n}: plateau {plateau:.4}");
             plateau
@@ -570,6 +574,44 @@ fn footing_limit_load_converges_under_refinement() {
     assert!(order > 0.5, "observed order {order}");
     report("footing limit load, Richardson extrapolation vs Prandtl 2 + π", extrapolated, PRANDTL, 0.05);
     report("footing limit load at h = B/40 vs Prandtl 2 + π", fine, PRANDTL, 0.05);
+}
+
+/// Consistency check of MPM under large deformation (MPM against itself, not a validation).
+/// In small-strain theory the footing's load depends on the settlement only through
+/// `E_u s / (s_u B)`, so the bundled u–p footing (E_u/s_u = 100, pushed 0.15 m) must carry
+/// what the same footing at E_u/s_u = 1000 carries a tenth as far (0.015 m, where the geometry
+/// has not changed), up to the change of geometry over 0.15 B, which for a smooth footing on
+/// weightless clay adds no overburden. Compared: the plateaus (mean over the last 20 % of
+/// each settlement), tolerance 3 %. What it catches is MPM's quadrature error as the soil
+/// flows through the grid round the footing's corner: with 2 × 2 points per cell the large
+/// settlement carries 4.4 % less (at h = B/20; 6.7 % at B/40), with the bundled 3 × 3 1.0 %
+/// less, with 4 × 4 1.0 % more (measured by editing the case).
+#[test]
+#[ignore = "about 2 min in release; run with --ignored"]
+fn footing_large_settlement_follows_the_rigidity_scaled_curve() {
+    let (large, h_large) = run(case("footing_undrained_mpm_up.json"));
+    let (small, h_small) = run(variant(
+        "footing_undrained_mpm_up.json",
+        &[
+            ("/materials/clay/young_modulus", json!(1.0e6)),
+            ("/boundary_conditions/3/displacement", json!([0.0, -0.015])),
+            ("/analysis/time_step", json!(0.04)),
+        ],
+    ));
+    print_curve("footing E_u/s_u = 100", &large, &h_large, 5);
+    print_curve("footing E_u/s_u = 1000", &small, &h_small, 5);
+    let (large_plateau, large_end) = plateau(&large, &h_large);
+    let (small_plateau, small_end) = plateau(&small, &h_small);
+    println!(
+        "footing plateaus: E_u/s_u = 100 over the last 20 % of {large_end:.3} m: {large_plateau:.4}; \
+         E_u/s_u = 1000 over the last 20 % of {small_end:.4} m: {small_plateau:.4}"
+    );
+    report(
+        "footing plateau at 0.15 B vs the tenfold rigidity at 0.015 B (consistency)",
+        large_plateau,
+        small_plateau,
+        0.03,
+    );
 }
 
 /// Benchmark 11 in FEM (half model, h = B/20): the u–p plateau (mean over the last 20 % of
