@@ -179,6 +179,7 @@ impl MonitorPlot<'_> {
                 .axis_desc_style((FONT, 14))
                 .draw()
                 .map_err(draw_err)?;
+            let mut drawn = Vec::new();
             for (i, &k) in self.ys.iter().enumerate() {
                 let color = LINE_COLORS[i % LINE_COLORS.len()];
                 let points: Vec<(f64, f64)> = t
@@ -187,6 +188,7 @@ impl MonitorPlot<'_> {
                     .map(|r| (r[self.x] / x_unit.factor, r[k] / y_unit.factor))
                     .filter(|(a, b)| a.is_finite() && b.is_finite())
                     .collect();
+                drawn.extend_from_slice(&points);
                 chart
                     .draw_series(LineSeries::new(points, color.stroke_width(2)))
                     .map_err(draw_err)?
@@ -198,13 +200,46 @@ impl MonitorPlot<'_> {
                 .label_font((FONT, 13))
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK)
-                .position(SeriesLabelPosition::UpperRight)
+                .position(legend_corner(&drawn, (x0, x1), (y0, y1)))
                 .draw()
                 .map_err(draw_err)?;
             root.present().map_err(draw_err)?;
         }
         super::write_png(path, &buffer, size)
     }
+}
+
+/// Share of the axes' width and height that the legend's corner box spans (a legend of one
+/// to three monitors takes about that).
+const LEGEND_BOX: (f64, f64) = (0.35, 0.3);
+
+/// The corner of the axes `x × y` for the legend: the one whose box ([`LEGEND_BOX`]) holds
+/// the fewest of the curves' `points` (ties in the order upper right, upper left, lower
+/// right, lower left), so that the legend hides as little of the curves as it can (a
+/// load–settlement curve ends in the upper right and leaves the lower right empty).
+fn legend_corner(points: &[(f64, f64)], x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+    let (w, h) = (x.1 - x.0, y.1 - y.0);
+    let count = |right: bool, upper: bool| {
+        points
+            .iter()
+            .filter(|(px, py)| {
+                let (u, v) = ((px - x.0) / w, (py - y.0) / h);
+                let in_x = if right { u >= 1.0 - LEGEND_BOX.0 } else { u <= LEGEND_BOX.0 };
+                let in_y = if upper { v >= 1.0 - LEGEND_BOX.1 } else { v <= LEGEND_BOX.1 };
+                in_x && in_y
+            })
+            .count()
+    };
+    [
+        (SeriesLabelPosition::UpperRight, count(true, true)),
+        (SeriesLabelPosition::UpperLeft, count(false, true)),
+        (SeriesLabelPosition::LowerRight, count(true, false)),
+        (SeriesLabelPosition::LowerLeft, count(false, false)),
+    ]
+    .into_iter()
+    .min_by_key(|&(_, n)| n)
+    .map(|(corner, _)| corner)
+    .unwrap_or(SeriesLabelPosition::UpperRight)
 }
 
 /// A file name for a group: `monitors_<quantity>.png`, or `monitors_<name>.png` for a
@@ -225,6 +260,17 @@ pub fn file_name(dir: &Path, table: &MonitorTable, unit: &Option<String>, ys: &[
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The legend goes to the emptiest corner: lower right for a curve that rises to a plateau
+    /// (a footing's load), upper right for one that decays, upper right when all are empty.
+    #[test]
+    fn legend_takes_the_emptiest_corner() {
+        let rising: Vec<(f64, f64)> = (0..=50).map(|i| (i as f64 / 50.0, 1.0 - (-(i as f64) / 8.0).exp())).collect();
+        assert!(matches!(legend_corner(&rising, (0.0, 1.0), (0.0, 1.0)), SeriesLabelPosition::LowerRight));
+        let decaying: Vec<(f64, f64)> = rising.iter().map(|&(x, y)| (x, 1.0 - y)).collect();
+        assert!(matches!(legend_corner(&decaying, (0.0, 1.0), (0.0, 1.0)), SeriesLabelPosition::UpperRight));
+        assert!(matches!(legend_corner(&[], (0.0, 1.0), (0.0, 1.0)), SeriesLabelPosition::UpperRight));
+    }
 
     #[test]
     fn table_and_groups_by_unit() {
