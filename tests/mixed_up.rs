@@ -534,7 +534,7 @@ fn coupled_footing_rough_contact() {
 /// converged solution and the benchmark's plateau falls under refinement; at E_u/s_u = 1000
 /// the corner's soil already deforms enough for the B/20 run to rise over its last 30 % and
 /// the plateau to depend on the points per cell by 1.5 %: README, "What is not validated").
-/// Here the result does not depend on the points per cell (2 × 2 and 3 × 3 within 0.05 %,
+/// Here the result does not depend on the points per cell (2 × 2 and 3 × 3 within 0.1 %,
 /// measured by editing the case). The plateau (mean over the last 20 % of the settlement)
 /// falls monotonically with h, at an observed order above 0.5; its Richardson extrapolation
 /// and the B/40 plateau are each within 5 % of Prandtl's 2 + π.
