@@ -490,22 +490,24 @@ impl MpmDomain {
                     // the cell's Gauss rule in the step's configuration, for the projection
                     let mut cell_rule = [NO_GEOMETRY; MAX_NODES];
                     let rule_len = if pressure_dofs.is_some() { mixed_rule.len() } else { 0 };
-                    let coords = grid.cell_coords(cell);
-                    for (g, gp) in cell_rule.iter_mut().zip(&mixed_rule[..rule_len]) {
-                        *g = point_geometry(
-                            element,
-                            formulation,
-                            thickness,
-                            &coords[..nn],
-                            &gp.xi,
-                            gp.weight,
-                            grid.cell_map(cell),
-                        )
-                        .map_err(|err| DomainError {
-                            domain: name.clone(),
-                            element: cell,
-                            message: err.to_string(),
-                        })?;
+                    if rule_len > 0 {
+                        let coords = grid.cell_coords(cell);
+                        for (g, gp) in cell_rule.iter_mut().zip(&mixed_rule) {
+                            *g = point_geometry(
+                                element,
+                                formulation,
+                                thickness,
+                                &coords[..nn],
+                                &gp.xi,
+                                gp.weight,
+                                grid.cell_map(cell),
+                            )
+                            .map_err(|err| DomainError {
+                                domain: name.clone(),
+                                element: cell,
+                                message: err.to_string(),
+                            })?;
+                        }
                     }
                     let cell_rule = &cell_rule[..rule_len];
                     let pressure = pressure_dofs.map(|_| (&pressure[..nn], cell_rule));
