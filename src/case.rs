@@ -196,7 +196,18 @@ pub struct DomainSpec {
     /// footing; `loam_mpm::quadrature`). All bodies on one background grid share it.
     #[serde(default)]
     pub quadrature: Quadrature,
+    /// Factor α ≥ 0 of the ghost penalty on the faces of the material's edge cells (MPM
+    /// domains; `γ = α E` on the jump of the normal derivative of the step's displacement
+    /// across a face, Burman 2010, Coombs 2023; `loam_mpm::ghost_penalty`): keeps the nodes
+    /// that the material only grazes in the system (default [`DEFAULT_GHOST_PENALTY`] in
+    /// static and quasi-static analyses, 0 in dynamic ones, whose inertia holds those nodes;
+    /// 0 switches it off). All bodies on one background grid share it.
+    #[serde(default)]
+    pub ghost_penalty: Option<f64>,
 }
+
+/// Default factor of `domains[k].ghost_penalty`.
+pub const DEFAULT_GHOST_PENALTY: f64 = 0.1;
 
 /// How a grid cell integrates over its material points (`domains[k].quadrature`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]

@@ -182,7 +182,7 @@ fn run_loop(
     let keep = spec.map_or(2, |s| s.keep);
     let mut clock = CheckpointClock { spec, last_step: sim.step, last_time: Instant::now() };
     let interrupted = || options.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst));
-    // fixed steps: progress in steps; adaptive steps: in per mille of the end time
+    // fixed steps: progress in planned steps; adaptive steps: in per mille of the end time
     let adaptive = sim.case.analysis.adaptive.is_some();
     let length = if adaptive { 1000 } else { sim.total_steps() as u64 };
     let bar = if options.progress { ProgressBar::new(length) } else { ProgressBar::hidden() };
@@ -200,13 +200,21 @@ fn run_loop(
             let path = write_checkpoint(sim, &mut writer, out_dir, fingerprint, keep)?;
             break RunEnd::Interrupted(path);
         }
-        match sim.step() {
+        // converged sub-steps of a cut step are written as they come (nothing converged is
+        // lost if a later sub-step fails)
+        let mut substep_error = None;
+        let result = sim.step_observed(&mut |sim| {
+            if substep_error.is_none() {
+                substep_error = writer.write_step(sim, true).err();
+            }
+        });
+        if let Some(e) = substep_error {
+            bar.finish_and_clear();
+            return Err(rescue(sim, writer.last_complete_state(), fingerprint, e));
+        }
+        match result {
             Ok(s) => {
-                bar.set_position(if adaptive {
-                    (1000.0 * sim.time() / sim.end_time()) as u64
-                } else {
-                    sim.step as u64
-                });
+                bar.set_position((length as f64 * sim.time() / sim.end_time()).round() as u64);
                 let blocks = if sim.is_coupled() {
                     let b = s.block_residual;
                     format!(" (soil {:.1e}, interface {:.1e}, structure {:.1e})", b.soil, b.interface, b.structure)

@@ -323,12 +323,19 @@ impl Simulation {
     /// One step of length [`Simulation::time_step`] (shortened to land on the end time);
     /// then adaptive step control chooses the next length and the rest criterion is checked.
     pub fn step(&mut self) -> Result<StepSummary, RunError> {
+        self.step_observed(&mut |_| {})
+    }
+
+    /// [`Simulation::step`], calling `on_substep` after every converged sub-step of a cut
+    /// step that is not its last (each is a step of its own: [`Simulation::step`] counts
+    /// it), so that a caller can write its results before the next sub-step is tried.
+    pub fn step_observed(&mut self, on_substep: &mut (dyn FnMut(&Simulation) + Send)) -> Result<StepSummary, RunError> {
         let mut target = (self.time() + self.time_step).min(self.end_time());
         if let Some(t) = self.next_output_time() {
             target = target.min(t);
         }
         let shortened = target < self.time() + self.time_step;
-        let summary = self.advance_step_to(target)?;
+        let summary = in_pool(|| self.advance_step_to_here(target, on_substep))?;
         if let Some(adaptive) = self.case.analysis.adaptive {
             if !(shortened && summary.substeps == 1) {
                 let k = summary.last_iterations.max(1) as f64;
@@ -368,13 +375,17 @@ impl Simulation {
         }
     }
 
-    /// Advances to `target` (> current time) in one step, cutting it on failure. Runs on
-    /// Loam's thread pool ([`in_pool`]).
+    /// Advances to `target` (> current time) in one step, cutting it on failure (every
+    /// converged sub-step counts as a step). Runs on Loam's thread pool ([`in_pool`]).
     pub fn advance_step_to(&mut self, target: f64) -> Result<StepSummary, RunError> {
-        in_pool(|| self.advance_step_to_here(target))
+        in_pool(|| self.advance_step_to_here(target, &mut |_| {}))
     }
 
-    fn advance_step_to_here(&mut self, target: f64) -> Result<StepSummary, RunError> {
+    fn advance_step_to_here(
+        &mut self,
+        target: f64,
+        on_substep: &mut (dyn FnMut(&Simulation) + Send),
+    ) -> Result<StepSummary, RunError> {
         if !self.initialised {
             self.model.initialise_acceleration().map_err(|source| RunError {
                 step: self.step + 1,
@@ -404,6 +415,11 @@ impl Simulation {
                     self.stats.steps += 1;
                     self.stats.iterations += report.iterations;
                     self.stats.timings += report.timings;
+                    if self.time() < target - eps {
+                        // a converged sub-step of a cut step: a step of its own
+                        self.step += 1;
+                        on_substep(self);
+                    }
                 }
                 Err(source) => {
                     // fixed steps: at most `max_step_cuts` halvings; adaptive: down to

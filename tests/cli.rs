@@ -193,3 +193,38 @@ fn failing_step_keeps_converged_results() {
     let tip = last_monitor(&dir.join("out/monitors.csv"), "tip_uy");
     assert!((tip + 0.39256).abs() / 0.39256 < 0.03, "the converged state at t = 1 is the benchmark's");
 }
+
+/// Issue 31: every converged sub-step of a cut step is written as it converges — a row of
+/// `monitors.csv`, a `.vtu` and its entry in the `.pvd` series — so that a later sub-step
+/// that fails loses nothing. The static MPM cantilever under a load that turns steep after
+/// t = 0.25 (gravity × 10 to 0.25, then × 400 at 0.5) in one step of 0.5 with at most 4 cuts and 4
+/// Newton iterations: the step converges only in sub-steps of 0.125 and 0.0625 (t = 0.125,
+/// 0.1875, 0.25), then fails; all three are in the results, and the message says so.
+#[test]
+fn cut_step_writes_every_converged_substep() {
+    let text = std::fs::read_to_string(root().join("cases/cantilever_mpm.json")).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    json["gravity"] =
+        serde_json::json!({"acceleration": [0.0, -100.0], "amplitude": [[0.0, 0.0], [0.25, 0.25], [0.5, 100.0]]});
+    json["analysis"] = serde_json::json!({"type": "static", "time_step": 0.5, "end_time": 0.5, "max_step_cuts": 4});
+    json["solver"]["max_iterations"] = serde_json::json!(4);
+    let dir = temp_dir("substeps");
+    let path = dir.join("case.json");
+    std::fs::write(&path, json.to_string()).unwrap();
+    let out = loam().arg("run").arg(&path).arg("--quiet").arg("--out").arg(dir.join("out")).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    println!("exit {:?}: {stderr}", out.status.code());
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr.contains("results up to t = 2.500000e-1 s") && stderr.contains("(3 steps"), "{stderr}");
+    let csv = std::fs::read_to_string(dir.join("out/monitors.csv")).unwrap();
+    let times: Vec<f64> = csv.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
+    println!("monitors.csv times {times:?}");
+    assert_eq!(times, vec![0.0, 0.125, 0.1875, 0.25], "a row per converged sub-step");
+    for k in 0..4 {
+        assert!(dir.join(format!("out/beam_{k:06}.vtu")).exists(), "beam_{k:06}.vtu");
+    }
+    let pvd = std::fs::read_to_string(dir.join("out/beam.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 4, "the series lists every sub-step");
+    let summary = std::fs::read_to_string(dir.join("out/summary.json")).unwrap();
+    assert!(summary.contains("\"status\": \"failed\"") && summary.contains("\"steps\": 3"));
+}

@@ -556,3 +556,127 @@ fn degenerate_grid_cells_are_refused_at_check() {
         assert!(stderr.contains(path) && stderr.contains("degenerate"), "{stderr}");
     }
 }
+
+/// Benchmark 12 at Kratos' own grid size h = 0.1 m (`cases/coupled_beam_split_h01.json`,
+/// issue 31): its last step diverged before the static MPM grid had its ghost penalty
+/// (`loam_mpm::ghost_penalty`). Now it converges; the tip point within 1.5 % of Timoshenko
+/// at its own x and of −0.67806 m at the free end; reactions exact.
+#[test]
+fn beam_split_at_kratos_grid_size() {
+    let (sim, h) = run(case("coupled_beam_split_h01.json"));
+    let tip = last(&sim, &h, "tip_uy");
+    let (k, id) = tip_point(&sim);
+    let x0 = sim.model.domains[k].point_quantity(id, loam_fem::domain::PointQuantity::Position).unwrap();
+    let u = sim.model.domains[k].point_quantity(id, loam_fem::domain::PointQuantity::Displacement).unwrap();
+    let x = x0[0] - u[0];
+    println!("tip point at its initial x = {x:.4}");
+    report("h = 0.1: tip deflection vs Timoshenko at the point [m]", tip, timoshenko(x), 0.015);
+    report("h = 0.1: tip deflection vs Timoshenko at the free end [m]", tip, -0.67806, 0.015);
+    report_split_reactions(&sim, &h, -39240.0);
+}
+
+/// One run of the placement and refinement study: benchmark 12's beam split at `split`
+/// (`None`: one domain, `mpm` says which) on grid and mesh size `h`, FEM clamped
+/// (`mpm_clamped` false) or material points clamped, gravity in `steps` static steps.
+/// Returns the tip monitor and the x where it measures (the node (8, 0.5), or the material
+/// point nearest it: x₀ = 8 − h/2 + h/(2√3)).
+fn split_beam_run(h: f64, steps: usize, split: Option<f64>, mpm: bool, mpm_clamped: bool) -> (f64, f64) {
+    let rect = |x0: f64, x1: f64| {
+        serde_json::json!({ "rectangle": { "origin": [x0, 0.0], "size": [x1 - x0, 1.0],
+            "cells": [((x1 - x0) / h).round() as usize, (1.0 / h).round() as usize], "element": "quad4" } })
+    };
+    let (mpm_range, fem_range) = match (split, mpm, mpm_clamped) {
+        (None, true, _) => (Some((0.0, 8.0)), None),
+        (None, false, _) => (None, Some((0.0, 8.0))),
+        (Some(s), _, false) => (Some((s, 8.0)), Some((0.0, s))),
+        (Some(s), _, true) => (Some((0.0, s)), Some((s, 8.0))),
+    };
+    let mut domains = Vec::new();
+    if let Some((a, b)) = fem_range {
+        domains.push(serde_json::json!({ "name": "beam_fem", "type": "fem", "material": "beam", "mesh": rect(a, b) }));
+    }
+    if let Some((a, b)) = mpm_range {
+        let (y0, y1) = (-1.2, 1.6);
+        let x1 = if split.is_some() && mpm_clamped { b } else { 8.6 };
+        domains.push(serde_json::json!({ "name": "beam_mpm", "type": "mpm", "material": "beam",
+            "grid": { "origin": [a, y0], "size": [x1 - a, y1 - y0],
+                "cells": [((x1 - a) / h).round() as usize, ((y1 - y0) / h).round() as usize], "element": "quad4" },
+            "material_points": { "cells": { "mesh": rect(a, b), "points_per_cell": 4 } } }));
+    }
+    let tip_on_points = mpm_range.is_some_and(|(_, b)| b == 8.0);
+    let mut json = serde_json::json!({
+        "description": format!("benchmark 12 study: h = {h}, {steps} steps, split {split:?}, material points clamped: {mpm_clamped}"),
+        "formulation": "plane_strain",
+        "materials": { "beam": { "law": "neo_hookean", "density": 1000.0, "young_modulus": 9.0e7, "poisson_ratio": 0.0 } },
+        "domains": domains,
+        "regions": { "clamp": { "x": 0.0 } },
+        "boundary_conditions": [{ "name": "clamp", "region": "clamp", "displacement": [0.0, 0.0] }],
+        "gravity": { "acceleration": [0.0, -9.81], "amplitude": [[0.0, 0.0], [1.0, 1.0]] },
+        "analysis": { "type": "static", "time_step": 1.0 / steps as f64, "end_time": 1.0 },
+        "solver": { "residual_relative_tolerance": 1e-8, "residual_absolute_tolerance": 1e-6 },
+        "monitors": [{ "name": "tip_uy", "type": if tip_on_points { "material_point_displacement" } else { "displacement" },
+            "point": [8.0, 0.5], "component": "y" }]
+    });
+    if let Some(s) = split {
+        json["regions"]["cut"] = serde_json::json!({ "segment": { "from": [s, 0.0], "to": [s, 1.0] } });
+        json["interfaces"] =
+            serde_json::json!([{ "name": "cut", "soil": "beam_mpm", "structure": "beam_fem", "region": "cut" }]);
+    }
+    let (sim, history) = run(common::parse(json));
+    let x_tip = if tip_on_points { 8.0 - h / 2.0 + h / (2.0 * 3f64.sqrt()) } else { 8.0 };
+    (last(&sim, &history, "tip_uy"), x_tip)
+}
+
+/// Issue 31, item 4: benchmark 12 split at x = 2, 4, 6, FEM | MPM and MPM | FEM, beside the
+/// MPM-only beam, on grids h = 0.2, 0.1, 0.05, 0.025 m (FEM mesh of the same size), the load
+/// in 4 and in 20 static steps (56 runs, about 15 minutes). Asserted: every run converges
+/// with the default settings (no band, no ghost penalty set: the mesh motion widens itself);
+/// at h ≤ 0.1 the tip within 1.5 % of Timoshenko where it measures and, in 4 steps, within
+/// 0.5 % of the one-FEM-domain beam of the same h (compared at the same place: the tip scaled
+/// by Timoshenko's w(8)/w(x)). Printed, not asserted: h = 0.2 (5 cells through the depth: the
+/// FEM beam itself is 2.6 % stiff, the MPM-only beam 0.51 % from it) and the 20-step runs
+/// against FEM, which the runs whose free end is material points miss by up to 1.5 % at
+/// h = 0.025 (the linear MPM's quadrature error growing with the points' travel through the
+/// cells; README).
+#[test]
+#[ignore = "long: 56 static beams (about 15 minutes); LOAM_LONG=1 scripts/test.sh runs it"]
+fn beam_split_placement_and_refinement_study() {
+    for &h in &[0.2, 0.1, 0.05, 0.025] {
+        for &steps in &[4usize, 20] {
+            let (fem, _) = split_beam_run(h, steps, None, false, false);
+            let mut runs = vec![("MPM only".to_string(), None, true, false)];
+            for &s in &[2.0, 4.0, 6.0] {
+                runs.push((format!("FEM | MPM at x = {s}"), Some(s), true, false));
+                runs.push((format!("MPM | FEM at x = {s}"), Some(s), true, true));
+            }
+            println!("h = {h}, {steps} steps: FEM only {fem:.5} m");
+            for (label, split, mpm, clamped) in runs {
+                let (tip, x) = split_beam_run(h, steps, split, mpm, clamped);
+                let reference = timoshenko(x);
+                let vs_fem = tip * timoshenko(8.0) / reference / fem - 1.0;
+                println!(
+                    "  {label:20} tip {tip:.5} m at x = {x:.4}: {:+.2} % from Timoshenko, {:+.2} % from FEM",
+                    100.0 * (tip - reference) / reference.abs(),
+                    100.0 * vs_fem
+                );
+                if h <= 0.1 + 1e-12 {
+                    report(&format!("h = {h}, {steps} steps, {label}: tip vs Timoshenko [m]"), tip, reference, 0.015);
+                }
+                if steps == 4 && h <= 0.1 + 1e-12 {
+                    assert!(vs_fem.abs() <= 0.005, "h = {h}, {label}: {vs_fem} from the FEM beam");
+                }
+            }
+        }
+    }
+}
+
+/// Issue 31, item 1: the MPM-only cantilever of benchmark 12 at grid h = 0.1 m (85 × 28
+/// cells, 4 points per cell, gravity in 4 static steps) diverged in its last step: a residual
+/// of 0.14 N followed by a correction of 176 m at the grid node diagonally beyond the tip's
+/// corner point, which the material only grazed. With the ghost penalty of static MPM grids
+/// it converges; the tip within 1.5 % of Timoshenko at the monitored point's x.
+#[test]
+fn mpm_beam_at_kratos_grid_size_converges() {
+    let (tip, x) = split_beam_run(0.1, 4, None, true, false);
+    report("MPM-only beam, h = 0.1: tip vs Timoshenko at the point [m]", tip, timoshenko(x), 0.015);
+}

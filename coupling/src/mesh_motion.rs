@@ -49,6 +49,16 @@ pub struct HarmonicExtension {
     edges: Vec<(usize, usize)>,
     components: Vec<ComponentProblem>,
     rhs: Vec<f64>,
+    /// Reference coordinates of the grid nodes.
+    coords: Vec<[f64; 3]>,
+    /// The constraints, kept to widen the band.
+    anchored: Vec<bool>,
+    prescribed: Vec<[bool; 3]>,
+    /// Width of the band (m).
+    band: f64,
+    /// Largest distance of a grid node from the anchored nodes (m): a wider band moves the
+    /// same nodes.
+    reach: f64,
 }
 
 /// Which components of which grid nodes the motion must not change, and the band.
@@ -67,7 +77,7 @@ impl HarmonicExtension {
         let mesh = &grid.mesh;
         let element = mesh.element;
         let dim = element.dim();
-        let coords = grid.reference_coords();
+        let coords = grid.reference_coords().to_vec();
         let n = coords.len();
         // edges of the cells (from the facets: each facet's consecutive nodes)
         let mut edges = Vec::new();
@@ -83,26 +93,61 @@ impl HarmonicExtension {
         }
         edges.sort_unstable();
         edges.dedup();
-        // the band: distance to the nearest anchored node
         let anchors: Vec<[f64; 3]> = (0..n).filter(|&a| constraints.anchored[a]).map(|a| coords[a]).collect();
-        let far: Vec<bool> = coords
+        let distance: Vec<f64> = coords
+            .iter()
+            .map(|x| {
+                anchors
+                    .iter()
+                    .map(|y| (0..dim).map(|i| (x[i] - y[i]).powi(2)).sum::<f64>())
+                    .fold(f64::INFINITY, f64::min)
+                    .sqrt()
+            })
+            .collect();
+        let reach = distance.iter().copied().filter(|d| d.is_finite()).fold(0.0, f64::max);
+        let mut extension = Self {
+            dim,
+            edges,
+            components: Vec::new(),
+            rhs: Vec::new(),
+            coords,
+            anchored: constraints.anchored.to_vec(),
+            prescribed: constraints.prescribed.to_vec(),
+            band: constraints.band,
+            reach,
+        };
+        extension.factorise();
+        extension
+    }
+
+    /// Width of the band (m).
+    pub fn band(&self) -> f64 {
+        self.band
+    }
+
+    /// The Laplace problem of every component for the present band.
+    fn factorise(&mut self) {
+        let n = self.coords.len();
+        let dim = self.dim;
+        let anchors: Vec<[f64; 3]> = (0..n).filter(|&a| self.anchored[a]).map(|a| self.coords[a]).collect();
+        // the band: distance to the nearest anchored node
+        let far: Vec<bool> = self
+            .coords
             .iter()
             .map(|x| {
                 let d2 = anchors
                     .iter()
                     .map(|y| (0..dim).map(|i| (x[i] - y[i]).powi(2)).sum::<f64>())
                     .fold(f64::INFINITY, f64::min);
-                d2 > constraints.band * constraints.band
+                d2 > self.band * self.band
             })
             .collect();
-        let mut components = Vec::with_capacity(dim);
+        self.components.clear();
         for i in 0..dim {
-            let fixed: Vec<bool> =
-                (0..n).map(|a| constraints.anchored[a] || far[a] || constraints.prescribed[a][i]).collect();
-            let fixed = hold_unanchored_islands(n, &edges, fixed);
-            components.push(ComponentProblem::new(&edges, fixed));
+            let fixed: Vec<bool> = (0..n).map(|a| self.anchored[a] || far[a] || self.prescribed[a][i]).collect();
+            let fixed = hold_unanchored_islands(n, &self.edges, fixed);
+            self.components.push(ComponentProblem::new(&self.edges, fixed));
         }
-        Self { dim, edges, components, rhs: Vec::new() }
     }
 
     /// Number of grid nodes the motion may move in at least one component.
@@ -172,6 +217,17 @@ fn hold_unanchored_islands(n: usize, edges: &[(usize, usize)], mut fixed: Vec<bo
 }
 
 impl GridMotion for HarmonicExtension {
+    /// Doubles the band (up to the farthest grid node) and factorises the Laplace problems
+    /// anew.
+    fn widen(&mut self) -> Option<String> {
+        if self.band >= self.reach {
+            return None;
+        }
+        self.band = (2.0 * self.band).min(self.reach * (1.0 + 1e-9));
+        self.factorise();
+        Some(format!("band {:.3} m", self.band))
+    }
+
     fn extend(&mut self, w: &mut [[f64; 3]]) {
         for i in 0..self.dim {
             let c = &mut self.components[i];

@@ -245,6 +245,13 @@ pub trait Domain: Send + Sync {
         false
     }
 
+    /// For a background grid attached to a structure: the worst quality of its cells over
+    /// the steps so far (smallest corner `det J` over its reference value) and the mesh
+    /// motion's reach after each time it was widened; `None` otherwise.
+    fn grid_motion(&self) -> Option<(f64, Vec<String>)> {
+        None
+    }
+
     /// Sum of the forces (N) that the wall (a penalty boundary) named `wall` exerted on the
     /// bodies in the last converged step; `None` if this domain has no such wall.
     fn wall_force(&self, _wall: &str) -> Option<[f64; 3]> {

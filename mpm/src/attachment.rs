@@ -16,7 +16,18 @@ pub trait GridMotion: Send + Sync {
     /// Fills the displacement `w` (reference → start of step) of every grid node from the
     /// entries of the anchored nodes, which the caller has set.
     fn extend(&mut self, w: &mut [[f64; 3]]);
+
+    /// Spreads the motion over more of the grid (a structure that moved farther than the
+    /// rule can follow within its present reach), returning a description of the new reach
+    /// for messages (e.g. `"band 2.0 m"`), or `None` if it already covers the whole grid.
+    fn widen(&mut self) -> Option<String> {
+        None
+    }
 }
+
+/// Worst cell quality (corner `det J` over its reference value) that the placement of an
+/// attached grid accepts before it widens the mesh motion ([`GridMotion::widen`]).
+pub const MIN_CELL_QUALITY: f64 = 0.2;
 
 /// What a grid node is with respect to the structures attached to the grid.
 #[derive(Debug, Clone, Copy, PartialEq)]

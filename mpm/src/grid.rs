@@ -278,10 +278,12 @@ impl Grid {
 
     /// Places every node at its reference position plus `displacement` (one entry per
     /// node; zero for a grid at rest) for the coming step: the cells that move get their
-    /// maps and bins anew, the others return to the reference configuration. Fails with the
-    /// first cell that the motion inverts (`det J ≤ 0` at a corner); the grid is then left
-    /// in the inverted configuration and must be moved again before use.
-    pub fn move_nodes(&mut self, displacement: &[[f64; 3]]) -> Result<(), InvertedCell> {
+    /// maps and bins anew, the others return to the reference configuration. Returns the
+    /// worst quality of the moved cells (1 where none moved): the smallest corner `det J`
+    /// of a cell over its reference value. Fails with the first cell that the motion inverts
+    /// (`det J ≤ 0` at a corner); the grid is then left in the inverted configuration and must
+    /// be moved again before use.
+    pub fn move_nodes(&mut self, displacement: &[[f64; 3]]) -> Result<f64, InvertedCell> {
         let was_moved = self.has_moved();
         let mut node_moved = vec![false; self.reference.len()];
         let mut any = false;
@@ -293,17 +295,25 @@ impl Grid {
             *x = [x0[0] + w[0], x0[1] + w[1], x0[2] + w[2]];
         }
         if !any && !was_moved {
-            return Ok(());
+            return Ok(1.0);
         }
         let element = self.mesh.element;
+        let nn = element.num_nodes();
         let mut moved_cells = Vec::new();
+        let mut quality = 1.0f64;
         for c in 0..self.mesh.num_cells() {
             let now = self.mesh.cell(c).iter().any(|&a| node_moved[a]);
             if now {
                 let coords = self.cell_coords(c);
-                if element.min_corner_det_j(&coords[..element.num_nodes()]) <= 0.0 {
+                let det_j = element.min_corner_det_j(&coords[..nn]);
+                if det_j <= 0.0 {
                     return Err(InvertedCell { cell: c, centre: self.reference_centre(c) });
                 }
+                let mut reference = [[0.0; 3]; MAX_NODES];
+                for (x, &a) in reference.iter_mut().zip(self.mesh.cell(c)) {
+                    *x = self.reference[a];
+                }
+                quality = quality.min(det_j / element.min_corner_det_j(&reference[..nn]));
                 moved_cells.push(c);
             }
             if now || self.moved[c] {
@@ -312,7 +322,7 @@ impl Grid {
             self.moved[c] = now;
         }
         self.moved_bins = (!moved_cells.is_empty()).then(|| Bins::new(&self.mesh, &moved_cells));
-        Ok(())
+        Ok(quality)
     }
 
     /// Centre of `cell` in the reference configuration (mean of its nodes).

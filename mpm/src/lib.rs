@@ -26,6 +26,7 @@
 
 pub mod attachment;
 pub mod body;
+pub mod ghost_penalty;
 pub mod grid;
 pub mod material_points;
 pub mod mpm_domain;

@@ -38,11 +38,12 @@ use loam_fem::kernel::{point_geometry, KernelContext, PointGeometry};
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 
-use crate::attachment::{GridAttachment, GridNodeKind};
+use crate::attachment::{GridAttachment, GridNodeKind, MIN_CELL_QUALITY};
 use crate::body::{Body, GridSums};
+use crate::ghost_penalty::{GhostPenalty, CUT_FRACTION};
 use crate::grid::Grid;
 use crate::penalty_boundary::{GridNodes, PenaltyBoundary};
-use crate::quadrature::{normalise_filled_cells, PointQuadrature};
+use crate::quadrature::{cell_volume, normalise_filled_cells, PointQuadrature};
 
 /// Marker of a block without an occupying body.
 const NONE: u8 = u8::MAX;
@@ -58,6 +59,16 @@ const NO_GEOMETRY: PointGeometry =
 /// `LOAM_MPM_PATTERN_RINGS=0` rebuilds the pattern at every change of the active set).
 fn pattern_rings() -> usize {
     std::env::var("LOAM_MPM_PATTERN_RINGS").ok().and_then(|v| v.parse().ok()).unwrap_or(1)
+}
+
+/// Young's modulus `E = μ (3λ + 2μ)/(λ + μ)` of small-strain constants `(λ, μ)` (`3μ` for
+/// an incompressible material, `λ = ∞`).
+fn young_modulus((lambda, mu): (f64, f64)) -> f64 {
+    if lambda.is_finite() {
+        mu * (3.0 * lambda + 2.0 * mu) / (lambda + mu)
+    } else {
+        3.0 * mu
+    }
 }
 
 /// The grid's cells in the system: the active cells and the blocks of the pattern.
@@ -90,6 +101,10 @@ struct MpmState {
     bodies: Vec<crate::body::BodyState>,
     walls: Vec<crate::penalty_boundary::WallState>,
     pattern: Vec<usize>,
+    /// Worst cell quality of an attached grid so far and the mesh motion's widenings (a
+    /// resumed run widens it as often, so that it places the grid as the first run did).
+    worst_cell_quality: f64,
+    widenings: Vec<String>,
 }
 
 /// Material points on a background grid (see the module doc).
@@ -110,6 +125,12 @@ pub struct MpmDomain {
     pressure_dofs: Option<Vec<usize>>,
     /// How a cell integrates over its points ([`crate::quadrature`]).
     quadrature: PointQuadrature,
+    /// Ghost penalty on the faces of the material's edge cells ([`crate::ghost_penalty`]).
+    ghost: Option<GhostPenalty>,
+    /// Worst quality of the attached grid's cells over the steps so far (1: undistorted).
+    worst_cell_quality: f64,
+    /// The mesh motion's reach after each time it was widened.
+    widenings: Vec<String>,
 }
 
 impl MpmDomain {
@@ -131,7 +152,28 @@ impl MpmDomain {
             blocks: CellBlocks { rings: pattern_rings(), ..Default::default() },
             pressure_dofs: None,
             quadrature: PointQuadrature::MaterialPoints,
+            ghost: None,
+            worst_cell_quality: 1.0,
+            widenings: Vec::new(),
         }
+    }
+
+    /// Worst quality (smallest corner `det J` over its reference value) of the grid's cells
+    /// over the steps so far, and the mesh motion's reach after each time it was widened;
+    /// `None` for a grid not attached to a structure.
+    pub fn grid_motion_report(&self) -> Option<(f64, &[String])> {
+        self.attachment.as_ref().map(|_| (self.worst_cell_quality, self.widenings.as_slice()))
+    }
+
+    /// Stabilises the material's edge cells by the ghost penalty of factor `alpha`
+    /// ([`crate::ghost_penalty`]; 0 switches it off).
+    pub fn set_ghost_penalty(&mut self, alpha: f64) {
+        self.ghost = (alpha > 0.0).then(|| GhostPenalty::new(alpha));
+    }
+
+    /// The factor of the ghost penalty (0 if off).
+    pub fn ghost_penalty(&self) -> f64 {
+        self.ghost.as_ref().map_or(0.0, GhostPenalty::alpha)
     }
 
     /// How the grid's cells integrate over their points ([`crate::quadrature`]).
@@ -225,22 +267,41 @@ impl MpmDomain {
     pub fn move_grid(&mut self, committed: &mut NodalState) -> Result<(), DomainError> {
         let dim = self.dim();
         if let Some(att) = &mut self.attachment {
-            for (a, w) in self.start.iter_mut().enumerate() {
-                *w = [0.0; 3];
-                if let Some(g) = att.anchor[a] {
-                    w[..dim].copy_from_slice(&committed.u[g * dim..(g + 1) * dim]);
+            loop {
+                for (a, w) in self.start.iter_mut().enumerate() {
+                    *w = [0.0; 3];
+                    if let Some(g) = att.anchor[a] {
+                        w[..dim].copy_from_slice(&committed.u[g * dim..(g + 1) * dim]);
+                    }
+                }
+                att.motion.extend(&mut self.start);
+                let placed = self.grid.move_nodes(&self.start);
+                // a cell distorted past MIN_CELL_QUALITY, or inverted: the motion spreads wider
+                let poor = placed.as_ref().map_or(true, |&q| q < MIN_CELL_QUALITY);
+                if poor {
+                    if let Some(reach) = att.motion.widen() {
+                        self.widenings.push(reach);
+                        continue;
+                    }
+                }
+                match placed {
+                    Ok(quality) => {
+                        self.worst_cell_quality = self.worst_cell_quality.min(quality);
+                        break;
+                    }
+                    Err(inverted) => {
+                        return Err(DomainError {
+                            domain: self.name.clone(),
+                            element: inverted.cell,
+                            message: format!(
+                                "the grid attached to the structure by interface {} would invert its cell at ({}) at the start of the step, although the mesh motion already spreads over the whole grid: the structure has moved too far against the grid's fixed boundaries (enlarge the grid, or refine it there)",
+                                att.interfaces,
+                                inverted.centre[..dim].iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(", ")
+                            ),
+                        })
+                    }
                 }
             }
-            att.motion.extend(&mut self.start);
-            self.grid.move_nodes(&self.start).map_err(|inverted| DomainError {
-                domain: self.name.clone(),
-                element: inverted.cell,
-                message: format!(
-                    "the grid attached to the structure by interface {} would invert its cell at ({}) at the start of the step: the structure has moved more than the mesh-motion band can follow (widen interfaces[].band, or refine the grid there)",
-                    att.interfaces,
-                    inverted.centre[..dim].iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(", ")
-                ),
-            })?;
         }
         for (a, &g) in self.node_ids.iter().enumerate() {
             if self.kind(a) == GridNodeKind::Tied {
@@ -318,6 +379,40 @@ impl MpmDomain {
             }
             cb.orphans.push(mask);
             cb.pressure_orphans.push(pressure_mask);
+        }
+        let mut changed = changed;
+        if let Some(ghost) = &mut self.ghost {
+            let mut active = vec![false; num_cells];
+            let mut modulus = vec![0.0f64; num_cells];
+            let moduli: Vec<f64> = self.bodies.iter().map(|b| young_modulus(b.law().elastic_lame())).collect();
+            for &c in &cb.active {
+                active[c] = true;
+                for (body, &e) in self.bodies.iter().zip(&moduli) {
+                    if body.occupies(c) {
+                        modulus[c] = modulus[c].max(e);
+                    }
+                }
+            }
+            let cut: Vec<bool> = (0..num_cells)
+                .map(|c| {
+                    active[c] && {
+                        let filled: f64 = self.bodies.iter().map(|b| b.cell_weight(c)).sum();
+                        filled < CUT_FRACTION * cell_volume(&self.grid, self.formulation, self.thickness, c)
+                    }
+                })
+                .collect();
+            let edge = ghost.edge_cells(&self.grid, &active);
+            if changed || !ghost.covers(&cut) {
+                // faces declared around the material's edge and its cut cells
+                let edge_cells: Vec<usize> = (0..num_cells).filter(|&c| edge[c] || cut[c]).collect();
+                let mut zone = vec![false; num_cells];
+                for c in self.grid.dilate(&edge_cells) {
+                    zone[c] = true;
+                }
+                ghost.rebuild(&self.grid, &cb.pattern, zone);
+                changed = true;
+            }
+            ghost.mark(&active, &cut, &modulus);
         }
         changed
     }
@@ -708,6 +803,9 @@ impl Domain for MpmDomain {
             let pressures = self.pressure_dofs.iter().flat_map(|p| cell.iter().map(move |&a| p[a]));
             layout.push(cell.iter().flat_map(|&a| (0..dim).map(move |i| self.node_ids[a] * dim + i)).chain(pressures));
         }
+        if let Some(ghost) = &self.ghost {
+            ghost.blocks(&self.grid, &self.node_ids, layout);
+        }
         for wall in &self.walls {
             wall.blocks(self.at(), layout);
         }
@@ -725,6 +823,16 @@ impl Domain for MpmDomain {
         let (cell_matrices, mut wall_matrices) = matrices.split_at_mut(cells * nd * nd);
         let (cell_vectors, mut wall_vectors) = vectors.split_at_mut(cells * nd);
         self.compute_internal_forces(input, cell_matrices, cell_vectors)?;
+        if let Some(ghost) = &self.ghost {
+            let (lm, lv) = ghost.buffer_lengths(&self.grid);
+            let (m, rest_m) = std::mem::take(&mut wall_matrices).split_at_mut(lm);
+            let (v, rest_v) = std::mem::take(&mut wall_vectors).split_at_mut(lv);
+            ghost
+                .assemble(&self.grid, &self.node_ids, self.formulation, self.thickness, input, m, v)
+                .map_err(|e| DomainError { domain: self.name.clone(), ..e })?;
+            wall_matrices = rest_m;
+            wall_vectors = rest_v;
+        }
         for wall in &self.walls {
             let (lm, lv) = wall.buffer_lengths(&self.grid);
             let (m, rest_m) = std::mem::take(&mut wall_matrices).split_at_mut(lm);
@@ -844,6 +952,10 @@ impl Domain for MpmDomain {
         })
     }
 
+    fn grid_motion(&self) -> Option<(f64, Vec<String>)> {
+        self.grid_motion_report().map(|(q, w)| (q, w.to_vec()))
+    }
+
     fn wall_force(&self, wall: &str) -> Option<[f64; 3]> {
         self.walls.iter().find(|w| w.name() == wall).map(PenaltyBoundary::total_force)
     }
@@ -855,6 +967,8 @@ impl Domain for MpmDomain {
             bodies: self.bodies.iter().map(Body::state).collect(),
             walls: self.walls.iter().map(PenaltyBoundary::state).collect(),
             pattern: self.blocks.pattern.clone(),
+            worst_cell_quality: self.worst_cell_quality,
+            widenings: self.widenings.clone(),
         };
         bincode::serialize(&state).expect("an MPM domain's state encodes")
     }
@@ -879,6 +993,13 @@ impl Domain for MpmDomain {
             self.blocks.in_pattern[c] = true;
         }
         self.blocks.pattern = state.pattern;
+        self.worst_cell_quality = state.worst_cell_quality;
+        if let Some(att) = &mut self.attachment {
+            for _ in 0..state.widenings.len().saturating_sub(self.widenings.len()) {
+                att.motion.widen();
+            }
+        }
+        self.widenings = state.widenings;
         Ok(())
     }
 

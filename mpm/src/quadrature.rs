@@ -64,8 +64,6 @@ pub enum PointQuadrature {
 pub fn normalise_filled_cells(grid: &Grid, formulation: Formulation, thickness: f64, bodies: &mut [Body]) -> usize {
     let mesh = &grid.mesh;
     let num_cells = mesh.num_cells();
-    let element = mesh.element;
-    let nn = element.num_nodes();
     // a node is inside the material if no cell around it is empty
     let mut inside = vec![true; mesh.coords.len()];
     for c in 0..num_cells {
@@ -75,7 +73,6 @@ pub fn normalise_filled_cells(grid: &Grid, formulation: Formulation, thickness: 
             }
         }
     }
-    let rule = element.gauss_points_mixed();
     let mut scaled = 0;
     for c in 0..num_cells {
         if !mesh.cell(c).iter().all(|&a| inside[a]) {
@@ -85,20 +82,37 @@ pub fn normalise_filled_cells(grid: &Grid, formulation: Formulation, thickness: 
         if weights <= 0.0 {
             continue;
         }
-        let coords = grid.cell_coords(c);
-        let cell_volume: f64 = rule
-            .iter()
-            .filter_map(|gp| {
-                point_geometry(element, formulation, thickness, &coords[..nn], &gp.xi, gp.weight, grid.cell_map(c)).ok()
-            })
-            .map(|g| g.weight)
-            .sum();
+        let volume = cell_volume(grid, formulation, thickness, c);
         for body in bodies.iter_mut() {
-            body.scale_cell_weights(c, cell_volume / weights);
+            body.scale_cell_weights(c, volume / weights);
         }
         scaled += 1;
     }
     scaled
+}
+
+/// Volume of grid cell `c` in its current position, as the points' weights count it
+/// (thickness, or `2πR` of an axisymmetric model): the element's Gauss rule.
+pub fn cell_volume(grid: &Grid, formulation: Formulation, thickness: f64, c: usize) -> f64 {
+    let element = grid.mesh.element;
+    let coords = grid.cell_coords(c);
+    element
+        .gauss_points_mixed()
+        .iter()
+        .filter_map(|gp| {
+            point_geometry(
+                element,
+                formulation,
+                thickness,
+                &coords[..element.num_nodes()],
+                &gp.xi,
+                gp.weight,
+                grid.cell_map(c),
+            )
+            .ok()
+        })
+        .map(|g| g.weight)
+        .sum()
 }
 
 #[cfg(test)]

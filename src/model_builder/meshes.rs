@@ -29,8 +29,8 @@ use nalgebra::Matrix3;
 use super::regions::{line_tolerance, select_region};
 use super::{check_len, check_positive};
 use crate::case::{
-    BodySpec, Case, CaseError, DomainKind, ElementFormulation, GridSpec, InitialStressSpec, InitialVelocity,
-    MassMatrix, MeshSpec, Quadrature,
+    AnalysisType, BodySpec, Case, CaseError, DomainKind, ElementFormulation, GridSpec, InitialStressSpec,
+    InitialVelocity, MassMatrix, MeshSpec, Quadrature, DEFAULT_GHOST_PENALTY,
 };
 
 /// A part of the model: an FEM domain, or a grid with its bodies.
@@ -250,6 +250,9 @@ fn check_keys(case: &Case, k: usize) -> Result<(), CaseError> {
             }
             if d.quadrature != Quadrature::MaterialPoints {
                 return Err(misplaced("quadrature"));
+            }
+            if d.ghost_penalty.is_some() {
+                return Err(misplaced("ghost_penalty"));
             }
             if d.mesh.is_none() {
                 return Err(CaseError::new(format!("{loc}.mesh"), "an fem domain needs a mesh"));
@@ -906,6 +909,24 @@ fn grid_domain(
                 ));
             }
         }
+        let default_alpha = default_ghost_penalty(case);
+        let alpha = d.ghost_penalty.unwrap_or(default_alpha);
+        if !(alpha.is_finite() && (0.0..=1e3).contains(&alpha)) {
+            return Err(CaseError::new(
+                format!("domains[{k}].ghost_penalty"),
+                format!("must be a number in [0, 1000] (e.g. 0.1; 0 switches it off), got {alpha}"),
+            ));
+        }
+        if alpha != first_domain.ghost_penalty.unwrap_or(default_alpha) {
+            return Err(CaseError::new(
+                format!("domains[{k}].ghost_penalty"),
+                format!(
+                    "the bodies on one grid share their ghost penalty: '{}' on the same grid has {}",
+                    first_domain.name,
+                    first_domain.ghost_penalty.unwrap_or(default_alpha)
+                ),
+            ));
+        }
         let law = laws[d.material.as_str()].clone();
         if let Some(v0) = &d.initial_velocity {
             for (x, v) in points.position.iter().zip(points.velocity.iter_mut()) {
@@ -956,12 +977,25 @@ fn grid_domain(
                     Quadrature::MaterialPoints => PointQuadrature::MaterialPoints,
                     Quadrature::FilledCells => PointQuadrature::FilledCells,
                 });
+                first_domain.set_ghost_penalty(alpha);
                 domain = Some(first_domain);
             }
         }
         indices.push(k);
     }
     Ok((domain.expect("a grid has a body"), indices))
+}
+
+/// The ghost penalty of an MPM grid whose domain does not set `ghost_penalty`:
+/// [`DEFAULT_GHOST_PENALTY`] where the analysis has no inertia (static and quasi-static: a
+/// node the material only grazes has nothing else to hold it), 0 in dynamic analyses, whose
+/// tangent holds every node with mass by `M/(βΔt²)` and whose granular flows keep their
+/// validated results without it (`loam_mpm::ghost_penalty`).
+fn default_ghost_penalty(case: &Case) -> f64 {
+    match case.analysis.kind {
+        AnalysisType::Dynamic => 0.0,
+        AnalysisType::Static | AnalysisType::QuasiStatic => DEFAULT_GHOST_PENALTY,
+    }
 }
 
 /// Every material point must be able to carry its initial stress: the law is evaluated at

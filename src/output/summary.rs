@@ -194,6 +194,22 @@ pub struct RunSummary {
     /// SI unit of each monitor (`m`, `N`, `Pa`, `J`, `1`, …); absent for a monitor whose
     /// `scale` is not ±1 (its unit is the case author's, e.g. `q/(B s_u)`).
     pub monitor_units: NamedValues<String>,
+    /// Per background grid attached to a structure (by domain name): the worst quality of
+    /// its cells over the run and how its mesh motion was widened.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub grid_motion: Vec<GridMotionReport>,
+}
+
+/// How an attached grid followed its structure (`grid_motion` of the summary).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GridMotionReport {
+    /// The MPM domain (grid).
+    pub domain: String,
+    /// Smallest corner `det J` of a moved cell over its reference value, over the run (1:
+    /// undistorted; the band widens below 0.2).
+    pub worst_cell_quality: f64,
+    /// The mesh motion's reach after each widening, in order.
+    pub widened: Vec<String>,
 }
 
 /// Values by name, written as a JSON object in their order (monitors in case order).
@@ -308,6 +324,18 @@ impl RunSummary {
             wall_time,
             monitors,
             monitor_units,
+            grid_motion: sim
+                .model
+                .domains
+                .iter()
+                .filter_map(|d| {
+                    d.grid_motion().map(|(worst_cell_quality, widened)| GridMotionReport {
+                        domain: d.name().to_string(),
+                        worst_cell_quality,
+                        widened,
+                    })
+                })
+                .collect(),
         }
     }
 

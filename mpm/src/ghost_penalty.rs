@@ -1,0 +1,390 @@
+//! Ghost-penalty stabilisation of the cells at the edge of the material.
+//!
+//! A cell that the material only grazes (a few points near one of its corners) joins its far
+//! nodes to the system through tiny shape-function values and gradients: their stiffness is
+//! a small fraction of the material's, and under the geometric stiffness of a stressed body
+//! it can vanish or turn negative. Newton's correction there is then unbounded, and the
+//! iteration that had nearly converged jumps away (measured on the static MPM cantilever of
+//! benchmark 12 at grid h = 0.1: a residual of 0.14 N followed by a correction of 176 m at
+//! the node diagonally beyond the tip's corner point). This is the small-cut-cell problem of
+//! unfitted finite elements, which implicit MPM shares.
+//!
+//! The cure of those methods is the face ghost penalty (Burman 2010, *Ghost penalty*, C. R.
+//! Acad. Sci. Paris, Ser. I 348, 1217–1220), brought to implicit MPM by Coombs 2023 (*Ghost
+//! stabilisation of the material point method for stable quasi-static and dynamic analysis
+//! of large deformation problems*, Int. J. Numer. Methods Eng. 124, 4841–4875): across every
+//! face `F` that an edge cell of the material shares with another cell holding material, the
+//! jump of the normal derivative of the step's displacement increment is penalised,
+//!
+//! $$ G(Δu, δu) = \sum_F γ\, h_F \int_F [\![∂_n Δu]\!] \cdot [\![∂_n δu]\!] \, dΓ, \qquad
+//!    γ = α E, $$
+//!
+//! with `E` the Young's modulus of the stiffest body in the two cells, `h_F` the face size and
+//! the dimensionless `α` of the case (`ghost_penalty` of an MPM domain). The term is linear
+//! in `Δu` (residual `G Δu`, tangent `G`, symmetric positive semi-definite) and vanishes for
+//! every displacement increment that is linear across the face, so it only acts on the
+//! kinks of the grid interpolation that carry the poorly supported nodes. The penalised
+//! faces are those of the *cut cells*: cells that hold points filling less than
+//! [`CUT_FRACTION`] of their volume (the sum of their points' volumes against the cell's).
+//! A material that fills its cells, as a body whose points sit at the Gauss positions of the
+//! grid's cells does, has none, and its results are those of the unstabilised method (the
+//! MPM cantilever of benchmark 1 keeps FEM's strain energy to 1e-9).
+//!
+//! Each face between two cells of the sparsity pattern is a block over the union of the two
+//! cells' nodes (6 for quads, 4 for triangles, 12 for hexahedra, 5 for tetrahedra), declared
+//! with the pattern; faces that are not ghost faces in a step write zeros.
+
+use std::collections::{HashMap, HashSet};
+
+use loam_fem::domain::{AssemblyInput, DomainError};
+use loam_fem::element::MAX_NODES;
+use loam_fem::formulation::Formulation;
+use loam_fem::kernel::point_geometry;
+
+use crate::grid::Grid;
+
+/// A cell holding points is a cut cell (its faces are penalised) while its points fill less
+/// than this share of it: one or two of a 2 × 2 set of points.
+pub const CUT_FRACTION: f64 = 0.5;
+
+/// Most nodes of a face block (two hexahedra sharing a face).
+const MAX_FACE_NODES: usize = 2 * MAX_NODES;
+
+/// A face shared by two cells of the pattern.
+#[derive(Debug, Clone)]
+struct Face {
+    /// The two cells.
+    cells: [usize; 2],
+    /// Local indices (in `cells[0]`) of the face's nodes, in the order of the element's facet.
+    facet: Vec<usize>,
+    /// The union of the two cells' nodes: `cells[0]`'s, then those of `cells[1]` not in it.
+    nodes: Vec<usize>,
+}
+
+/// The ghost penalty of one grid (see the module doc).
+#[derive(Debug, Clone)]
+pub struct GhostPenalty {
+    /// Dimensionless factor α of `γ = α E`.
+    alpha: f64,
+    /// Faces between two cells of the pattern.
+    faces: Vec<Face>,
+    /// Per face: `γ` if it is a ghost face in this step, else 0.
+    gamma: Vec<f64>,
+    /// Per grid cell: whether faces of it were declared at the last rebuild.
+    zone: Vec<bool>,
+    /// Facets of the grid that only one cell has (made at the first step).
+    grid_boundary: Option<HashSet<FacetKey>>,
+}
+
+/// A facet's global nodes, ascending, padded with `usize::MAX`.
+type FacetKey = [usize; 4];
+
+/// The key of facet `facet` (local node indices) of a cell with nodes `cell`.
+fn facet_key(cell: &[usize], facet: &[usize]) -> FacetKey {
+    let mut key = [usize::MAX; 4];
+    for (k, &a) in key.iter_mut().zip(facet) {
+        *k = cell[a];
+    }
+    key.sort_unstable();
+    key
+}
+
+impl GhostPenalty {
+    /// A ghost penalty of factor `alpha` (no faces until [`GhostPenalty::rebuild`]).
+    pub fn new(alpha: f64) -> Self {
+        Self { alpha, faces: Vec::new(), gamma: Vec::new(), zone: Vec::new(), grid_boundary: None }
+    }
+
+    /// The factor α.
+    pub fn alpha(&self) -> f64 {
+        self.alpha
+    }
+
+    /// Nodes per face block on `grid`.
+    fn face_nodes(grid: &Grid) -> usize {
+        let element = grid.mesh.element;
+        2 * element.num_nodes() - element.facets()[0].len()
+    }
+
+    /// Declares the face blocks: the faces shared by two cells of `pattern` (ascending cell
+    /// list) of which one lies in `zone` (per grid cell; the edge cells grown by a ring, so
+    /// that the blocks last while the edge of the material moves by less than a cell).
+    pub fn rebuild(&mut self, grid: &Grid, pattern: &[usize], zone: Vec<bool>) {
+        let mesh = &grid.mesh;
+        let element = mesh.element;
+        let mut open: HashMap<FacetKey, (usize, usize)> = HashMap::new();
+        self.faces.clear();
+        for &c in pattern {
+            let cell = mesh.cell(c);
+            for (f, facet) in element.facets().iter().enumerate() {
+                let key = facet_key(cell, facet);
+                match open.remove(&key) {
+                    Some((first, first_facet)) if zone[first] || zone[c] => {
+                        let first_cell = mesh.cell(first);
+                        let mut nodes = first_cell.to_vec();
+                        nodes.extend(cell.iter().filter(|a| !first_cell.contains(a)));
+                        self.faces.push(Face {
+                            cells: [first, c],
+                            facet: element.facets()[first_facet].to_vec(),
+                            nodes,
+                        });
+                    }
+                    Some(_) => {}
+                    None => {
+                        open.insert(key, (c, f));
+                    }
+                }
+            }
+        }
+        self.faces.sort_by_key(|f| f.cells);
+        self.gamma = vec![0.0; self.faces.len()];
+        self.zone = zone;
+    }
+
+    /// The edge cells of the material: active cells (`active[c]`: holding points) with a
+    /// face neighbour in the grid that holds none.
+    pub fn edge_cells(&mut self, grid: &Grid, active: &[bool]) -> Vec<bool> {
+        let mesh = &grid.mesh;
+        let element = mesh.element;
+        let grid_boundary = self.grid_boundary.get_or_insert_with(|| {
+            let mut count: HashMap<FacetKey, u8> = HashMap::new();
+            for c in 0..mesh.num_cells() {
+                for facet in element.facets() {
+                    *count.entry(facet_key(mesh.cell(c), facet)).or_insert(0) += 1;
+                }
+            }
+            count.into_iter().filter(|&(_, n)| n == 1).map(|(k, _)| k).collect()
+        });
+        // facets of active cells: shared by two of them, or on the edge of the material
+        let mut count: HashMap<FacetKey, u8> = HashMap::new();
+        for c in (0..mesh.num_cells()).filter(|&c| active[c]) {
+            for facet in element.facets() {
+                *count.entry(facet_key(mesh.cell(c), facet)).or_insert(0) += 1;
+            }
+        }
+        (0..mesh.num_cells())
+            .map(|c| {
+                active[c]
+                    && element.facets().iter().any(|facet| {
+                        let key = facet_key(mesh.cell(c), facet);
+                        count.get(&key) == Some(&1) && !grid_boundary.contains(&key)
+                    })
+            })
+            .collect()
+    }
+
+    /// Whether the face blocks declared at the last [`GhostPenalty::rebuild`] hold every
+    /// face of the cells `cut`.
+    pub fn covers(&self, cut: &[bool]) -> bool {
+        cut.iter().zip(&self.zone).all(|(&e, &z)| !e || z)
+    }
+
+    /// Marks the ghost faces of a step: faces between two cells holding points (`active`)
+    /// of which at least one is a cut cell (`cut`: less than [`CUT_FRACTION`] of it filled),
+    /// with `γ = α E` of the stiffer cell (`modulus[c]`: Young's modulus of the stiffest body
+    /// in cell `c`).
+    pub fn mark(&mut self, active: &[bool], cut: &[bool], modulus: &[f64]) {
+        for (face, gamma) in self.faces.iter().zip(self.gamma.iter_mut()) {
+            let [a, b] = face.cells;
+            *gamma = if active[a] && active[b] && (cut[a] || cut[b]) {
+                self.alpha * modulus[a].max(modulus[b])
+            } else {
+                0.0
+            };
+        }
+    }
+
+    /// Number of face blocks.
+    pub fn num_blocks(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// Global displacement DOFs of each face block, in block order.
+    pub fn blocks(&self, grid: &Grid, node_ids: &[usize], layout: &mut loam_fem::assembly::BlockLayout) {
+        let dim = grid.mesh.element.dim();
+        for face in &self.faces {
+            layout.push(face.nodes.iter().flat_map(|&a| (0..dim).map(move |i| node_ids[a] * dim + i)));
+        }
+    }
+
+    /// Lengths of the matrix and vector buffers of the face blocks.
+    pub fn buffer_lengths(&self, grid: &Grid) -> (usize, usize) {
+        let nd = Self::face_nodes(grid) * grid.mesh.element.dim();
+        (self.faces.len() * nd * nd, self.faces.len() * nd)
+    }
+
+    /// Residual `G Δu` and tangent `G` of every face block (see the module doc); `Δu` is the
+    /// grid nodes' displacement since the start of the step.
+    #[allow(clippy::too_many_arguments)]
+    pub fn assemble(
+        &self,
+        grid: &Grid,
+        node_ids: &[usize],
+        formulation: Formulation,
+        thickness: f64,
+        input: &AssemblyInput<'_>,
+        matrices: &mut [f64],
+        vectors: &mut [f64],
+    ) -> Result<(), DomainError> {
+        use rayon::prelude::*;
+        let dim = grid.mesh.element.dim();
+        let nf = Self::face_nodes(grid);
+        let nd = nf * dim;
+        matrices
+            .par_chunks_mut(nd * nd)
+            .zip(vectors.par_chunks_mut(nd))
+            .zip(self.faces.par_iter())
+            .zip(&self.gamma)
+            .try_for_each(|(((km, fv), face), &gamma)| {
+                fv.fill(0.0);
+                if input.with_tangent {
+                    km.fill(0.0);
+                }
+                if gamma == 0.0 {
+                    return Ok(());
+                }
+                let g = face_matrix(grid, formulation, thickness, face, gamma).map_err(|message| DomainError {
+                    domain: String::new(),
+                    element: face.cells[0],
+                    message,
+                })?;
+                let mut du = [[0.0; 3]; MAX_FACE_NODES];
+                for (d, &a) in du.iter_mut().zip(&face.nodes) {
+                    let dof = node_ids[a] * dim;
+                    for i in 0..dim {
+                        d[i] = input.state.u[dof + i] - input.committed.u[dof + i];
+                    }
+                }
+                for a in 0..nf {
+                    for b in 0..nf {
+                        let gab = g[a * nf + b];
+                        if gab == 0.0 {
+                            continue;
+                        }
+                        for i in 0..dim {
+                            fv[a * dim + i] += gab * du[b][i];
+                            if input.with_tangent {
+                                km[(a * dim + i) * nd + b * dim + i] += gab;
+                            }
+                        }
+                    }
+                }
+                Ok(())
+            })
+    }
+}
+
+/// `G_ab = γ h_F ∫_F j_a j_b dΓ` of one face, row-major over the face's nodes, with
+/// `j_a = n·∇N_a` of the first cell minus that of the second, at the grid's current position.
+fn face_matrix(
+    grid: &Grid,
+    formulation: Formulation,
+    thickness: f64,
+    face: &Face,
+    gamma: f64,
+) -> Result<[f64; MAX_FACE_NODES * MAX_FACE_NODES], String> {
+    let mesh = &grid.mesh;
+    let element = mesh.element;
+    let dim = element.dim();
+    let nn = element.num_nodes();
+    let nf = face.nodes.len();
+    let cells = [mesh.cell(face.cells[0]), mesh.cell(face.cells[1])];
+    let coords = [grid.cell_coords(face.cells[0]), grid.cell_coords(face.cells[1])];
+    // the face's corners: global nodes and physical positions
+    let corners: Vec<usize> = face.facet.iter().map(|&a| cells[0][a]).collect();
+    let position = |a: usize| mesh.coords[a];
+    // the face's Gauss rule in its own parameters, with the corner weights of each point
+    let rule = face_rule(corners.len(), dim);
+    let size = face_size(&corners.iter().map(|&a| position(a)).collect::<Vec<_>>(), dim);
+    let mut g = [0.0; MAX_FACE_NODES * MAX_FACE_NODES];
+    for (weights, w) in rule {
+        let (normal, measure) = face_normal(&corners.iter().map(|&a| position(a)).collect::<Vec<_>>(), dim);
+        let mut jump = [0.0; MAX_FACE_NODES];
+        let mut radius = 0.0;
+        for (side, sign) in [(0, 1.0), (1, -1.0)] {
+            // the point's local coordinates in this cell: the corners' local coordinates
+            // combined with the same weights
+            let mut xi = [0.0; 3];
+            for (k, &a) in corners.iter().enumerate() {
+                let local = cells[side].iter().position(|&b| b == a).ok_or("ghost face: corner not in its cell")?;
+                let node_xi = element.node_local(local);
+                for i in 0..3 {
+                    xi[i] += weights[k] * node_xi[i];
+                }
+            }
+            let geometry = point_geometry(element, formulation, thickness, &coords[side][..nn], &xi, 1.0, None)
+                .map_err(|e| e.to_string())?;
+            radius = geometry.radius;
+            for (a, &node) in cells[side].iter().enumerate() {
+                let k = face.nodes.iter().position(|&b| b == node).expect("a cell's node is in its face block");
+                let dn: f64 = (0..dim).map(|i| geometry.gradient[a][i] * normal[i]).sum();
+                jump[k] += sign * dn;
+            }
+        }
+        let out_of_plane = match formulation {
+            Formulation::Axisymmetric => 2.0 * std::f64::consts::PI * radius,
+            _ if dim == 2 => thickness,
+            _ => 1.0,
+        };
+        let scale = gamma * size * w * measure * out_of_plane;
+        for a in 0..nf {
+            for b in 0..nf {
+                g[a * nf + b] += scale * jump[a] * jump[b];
+            }
+        }
+    }
+    Ok(g)
+}
+
+/// Gauss rule over a face with `corners` corners: per point the corners' interpolation
+/// weights and the point's weight in the face's parameter space (which sums to 1).
+fn face_rule(corners: usize, dim: usize) -> Vec<([f64; 4], f64)> {
+    let s = 0.5 - 0.5 / 3f64.sqrt();
+    match (dim, corners) {
+        // an edge: two points
+        (2, 2) => vec![([1.0 - s, s, 0.0, 0.0], 0.5), ([s, 1.0 - s, 0.0, 0.0], 0.5)],
+        // a triangle: the jump of linear shape functions is constant, one point
+        (3, 3) => vec![([1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 0.0], 1.0)],
+        // a quadrilateral in cyclic order: 2 × 2 points of the bilinear face map
+        _ => {
+            let t = [s, 1.0 - s];
+            let mut rule = Vec::with_capacity(4);
+            for &u in &t {
+                for &v in &t {
+                    rule.push(([(1.0 - u) * (1.0 - v), u * (1.0 - v), u * v, (1.0 - u) * v], 0.25));
+                }
+            }
+            rule
+        }
+    }
+}
+
+/// Unit normal and measure (length or area) of a straight edge or a planar face.
+fn face_normal(corners: &[[f64; 3]], dim: usize) -> ([f64; 3], f64) {
+    if dim == 2 {
+        let t = [corners[1][0] - corners[0][0], corners[1][1] - corners[0][1]];
+        let length = (t[0] * t[0] + t[1] * t[1]).sqrt();
+        return ([t[1] / length, -t[0] / length, 0.0], length);
+    }
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross =
+        |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    let n = if corners.len() == 3 {
+        cross(sub(corners[1], corners[0]), sub(corners[2], corners[0]))
+    } else {
+        cross(sub(corners[2], corners[0]), sub(corners[3], corners[1]))
+    };
+    let norm = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    // a triangle's area, or a planar quadrilateral's from its diagonals: both ½ |n|
+    ([n[0] / norm, n[1] / norm, n[2] / norm], 0.5 * norm)
+}
+
+/// Size `h_F` of a face: its length in 2D, the square root of its area in 3D.
+fn face_size(corners: &[[f64; 3]], dim: usize) -> f64 {
+    let (_, measure) = face_normal(corners, dim);
+    if dim == 2 {
+        measure
+    } else {
+        measure.sqrt()
+    }
+}
