@@ -388,3 +388,65 @@ fn face_size(corners: &[[f64; 3]], dim: usize) -> f64 {
         measure.sqrt()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use loam_fem::element::ElementType;
+
+    /// `Δuᵀ G Δu` of the one face between two unit cells of `element` for the nodal field
+    /// `field(x)` (one component).
+    fn face_energy(element: ElementType, field: impl Fn(&[f64; 3]) -> f64) -> f64 {
+        let grid = Grid::new([0.0; 3], [2.0, 1.0, 1.0], [2, 1, 1], element);
+        let mut ghost = GhostPenalty::new(1.0);
+        let cells: Vec<usize> = (0..grid.mesh.num_cells()).collect();
+        ghost.rebuild(&grid, &cells, vec![true; cells.len()]);
+        let mut energy = 0.0;
+        for face in &ghost.faces {
+            let g = face_matrix(&grid, Formulation::PlaneStrain, 1.0, face, 1.0).unwrap();
+            let u: Vec<f64> = face.nodes.iter().map(|&a| field(&grid.mesh.coords[a])).collect();
+            let nf = face.nodes.len();
+            for a in 0..nf {
+                for b in 0..nf {
+                    energy += u[a] * g[a * nf + b] * u[b];
+                }
+            }
+        }
+        energy
+    }
+
+    /// A displacement linear across the faces has no jump: the penalty does not act on it
+    /// (consistency); a kink across the face x = 1, `u = (x − 1)⁺`, has the jump 1 of its
+    /// normal derivative along the unit face: `γ h ∫ 1 dΓ = γ` with γ = 1, h = 1.
+    #[test]
+    fn penalty_vanishes_on_linear_fields_and_measures_a_kink() {
+        let linear = face_energy(ElementType::Quad4, |x| 0.3 + 2.0 * x[0] - 1.5 * x[1]);
+        assert!(linear.abs() < 1e-12, "linear field: {linear}");
+        let kink = face_energy(ElementType::Quad4, |x| (x[0] - 1.0).max(0.0));
+        println!("quad4: kink energy {kink} (exact 1)");
+        assert!((kink - 1.0).abs() < 1e-12);
+        // triangles: the linear field again, through the faces inside and between the cells
+        let linear = face_energy(ElementType::Tri3, |x| 0.3 + 2.0 * x[0] - 1.5 * x[1]);
+        assert!(linear.abs() < 1e-12, "tri3 linear field: {linear}");
+    }
+
+    /// Hexahedra: the linear field gives nothing, the kink across x = 1 gives `γ h A = 1`
+    /// over the unit square face.
+    #[test]
+    fn hexahedral_faces() {
+        let grid = Grid::new([0.0; 3], [2.0, 1.0, 1.0], [2, 1, 1], ElementType::Hex8);
+        let mut ghost = GhostPenalty::new(1.0);
+        ghost.rebuild(&grid, &[0, 1], vec![true; 2]);
+        assert_eq!(ghost.faces.len(), 1);
+        let face = &ghost.faces[0];
+        let g = face_matrix(&grid, Formulation::ThreeD, 1.0, face, 1.0).unwrap();
+        let energy = |field: &dyn Fn(&[f64; 3]) -> f64| {
+            let u: Vec<f64> = face.nodes.iter().map(|&a| field(&grid.mesh.coords[a])).collect();
+            let nf = face.nodes.len();
+            (0..nf).flat_map(|a| (0..nf).map(move |b| (a, b))).map(|(a, b)| u[a] * g[a * nf + b] * u[b]).sum::<f64>()
+        };
+        assert!(energy(&|x| 1.0 + x[0] - 2.0 * x[1] + 0.5 * x[2]).abs() < 1e-12);
+        let kink = energy(&|x| (x[0] - 1.0).max(0.0));
+        assert!((kink - 1.0).abs() < 1e-12, "hex8 kink energy {kink}");
+    }
+}
