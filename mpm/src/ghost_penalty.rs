@@ -30,11 +30,13 @@
 //! grid's cells does, has none, and its results are those of the unstabilised method (the
 //! MPM cantilever of benchmark 1 keeps FEM's strain energy to 1e-9).
 //!
-//! Each face between two cells of the sparsity pattern is a block over the union of the two
-//! cells' nodes (6 for quads, 4 for triangles, 12 for hexahedra, 5 for tetrahedra), declared
-//! with the pattern; faces that are not ghost faces in a step write zeros.
+//! Each face between two cells of the sparsity pattern near a cut cell (the cut cells grown by
+//! one ring when the blocks were last declared) is a block over the union of the two cells'
+//! nodes (6 for quads, 4 for triangles, 12 for hexahedra, 5 for tetrahedra); faces that are
+//! not ghost faces in a step write zeros, and a cut cell outside that zone declares the
+//! blocks anew. A material that fills its cells declares none and keeps its sparsity.
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 
 use loam_fem::domain::{AssemblyInput, DomainError};
 use loam_fem::element::MAX_NODES;
@@ -72,8 +74,6 @@ pub struct GhostPenalty {
     gamma: Vec<f64>,
     /// Per grid cell: whether faces of it were declared at the last rebuild.
     zone: Vec<bool>,
-    /// Facets of the grid that only one cell has (made at the first step).
-    grid_boundary: Option<HashSet<FacetKey>>,
 }
 
 /// A facet's global nodes, ascending, padded with `usize::MAX`.
@@ -92,7 +92,7 @@ fn facet_key(cell: &[usize], facet: &[usize]) -> FacetKey {
 impl GhostPenalty {
     /// A ghost penalty of factor `alpha` (no faces until [`GhostPenalty::rebuild`]).
     pub fn new(alpha: f64) -> Self {
-        Self { alpha, faces: Vec::new(), gamma: Vec::new(), zone: Vec::new(), grid_boundary: None }
+        Self { alpha, faces: Vec::new(), gamma: Vec::new(), zone: Vec::new() }
     }
 
     /// The factor α.
@@ -107,8 +107,9 @@ impl GhostPenalty {
     }
 
     /// Declares the face blocks: the faces shared by two cells of `pattern` (ascending cell
-    /// list) of which one lies in `zone` (per grid cell; the edge cells grown by a ring, so
-    /// that the blocks last while the edge of the material moves by less than a cell).
+    /// list) of which one lies in `zone` (per grid cell: the cut cells grown by a ring, so
+    /// that the blocks last while the cut cells move by less than a cell; a cut cell outside
+    /// it makes the caller rebuild, [`GhostPenalty::covers`]).
     pub fn rebuild(&mut self, grid: &Grid, pattern: &[usize], zone: Vec<bool>) {
         let mesh = &grid.mesh;
         let element = mesh.element;
@@ -139,38 +140,6 @@ impl GhostPenalty {
         self.faces.sort_by_key(|f| f.cells);
         self.gamma = vec![0.0; self.faces.len()];
         self.zone = zone;
-    }
-
-    /// The edge cells of the material: active cells (`active[c]`: holding points) with a
-    /// face neighbour in the grid that holds none.
-    pub fn edge_cells(&mut self, grid: &Grid, active: &[bool]) -> Vec<bool> {
-        let mesh = &grid.mesh;
-        let element = mesh.element;
-        let grid_boundary = self.grid_boundary.get_or_insert_with(|| {
-            let mut count: HashMap<FacetKey, u8> = HashMap::new();
-            for c in 0..mesh.num_cells() {
-                for facet in element.facets() {
-                    *count.entry(facet_key(mesh.cell(c), facet)).or_insert(0) += 1;
-                }
-            }
-            count.into_iter().filter(|&(_, n)| n == 1).map(|(k, _)| k).collect()
-        });
-        // facets of active cells: shared by two of them, or on the edge of the material
-        let mut count: HashMap<FacetKey, u8> = HashMap::new();
-        for c in (0..mesh.num_cells()).filter(|&c| active[c]) {
-            for facet in element.facets() {
-                *count.entry(facet_key(mesh.cell(c), facet)).or_insert(0) += 1;
-            }
-        }
-        (0..mesh.num_cells())
-            .map(|c| {
-                active[c]
-                    && element.facets().iter().any(|facet| {
-                        let key = facet_key(mesh.cell(c), facet);
-                        count.get(&key) == Some(&1) && !grid_boundary.contains(&key)
-                    })
-            })
-            .collect()
     }
 
     /// Whether the face blocks declared at the last [`GhostPenalty::rebuild`] hold every

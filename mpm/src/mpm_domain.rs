@@ -401,12 +401,11 @@ impl MpmDomain {
                     }
                 })
                 .collect();
-            let edge = ghost.edge_cells(&self.grid, &active);
             if changed || !ghost.covers(&cut) {
-                // faces declared around the material's edge and its cut cells
-                let edge_cells: Vec<usize> = (0..num_cells).filter(|&c| edge[c] || cut[c]).collect();
+                // faces declared around the cut cells
+                let cut_cells: Vec<usize> = (0..num_cells).filter(|&c| cut[c]).collect();
                 let mut zone = vec![false; num_cells];
-                for c in self.grid.dilate(&edge_cells) {
+                for c in self.grid.dilate(&cut_cells) {
                     zone[c] = true;
                 }
                 ghost.rebuild(&self.grid, &cb.pattern, zone);
