@@ -17,8 +17,8 @@
 //! over the combinations `a` is the square of the least singular value of `K R W`, with
 //! `W = V Λ^{-1/2}` from the eigen-decomposition `RᵀR = V Λ Vᵀ` (3 × 3 or 6 × 6, directions
 //! that `R` does not span dropped) and the displacement rows of `K R` only. The singular
-//! value comes from the QR factorisation of the tall `K R W` and the SVD of its small `R`
-//! factor: the Gram matrix `WᵀRᵀKᵀKRW` would square the condition number (about `1e16`
+//! value comes from the QR factorisation of the tall `K R W` (by blocks of rows) and the SVD
+//! of its small `R` factor: the Gram matrix `WᵀRᵀKᵀKRW` would square the condition number (about `1e16`
 //! between a free and a held motion) and leave round-off of the size of the answer. A
 //! motion is free when
 //! `√μ ≤ RIGID_TOLERANCE · max_e |K_ee|` over the component: a free motion leaves round-off
@@ -219,10 +219,19 @@ fn free_combinations(comp: &Component, y: &[Vec<f64>], limit: f64) -> Option<(us
     let modes = comp.h.nrows();
     // W = V diag(1/√λ): ‖R W z‖ = ‖z‖
     let w = DMatrix::from_fn(modes, kept.len(), |i, j| h.eigenvectors[(i, kept[j])] / h.eigenvalues[kept[j]].sqrt());
-    let kw = DMatrix::from_fn(comp.equations.len(), kept.len(), |i, j| {
-        (0..modes).map(|m| y[m][comp.equations[i]] * w[(m, j)]).sum::<f64>()
-    });
-    let svd = kw.qr().r().svd(false, true);
+    // the R factor of K R W, by QR over blocks of rows (R of [R; next rows]): no tall matrix
+    let mut r = DMatrix::<f64>::zeros(0, kept.len());
+    for rows in comp.equations.chunks(4096) {
+        let stacked = DMatrix::from_fn(r.nrows() + rows.len(), kept.len(), |i, j| {
+            if i < r.nrows() {
+                r[(i, j)]
+            } else {
+                (0..modes).map(|m| y[m][rows[i - r.nrows()]] * w[(m, j)]).sum::<f64>()
+            }
+        });
+        r = stacked.qr().r();
+    }
+    let svd = r.svd(false, true);
     let v_t = svd.v_t.as_ref()?;
     let free = svd.singular_values.iter().filter(|&&s| s <= limit).count();
     let (k, &smallest) = svd.singular_values.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1))?;
