@@ -9,6 +9,7 @@ pub mod case;
 pub mod checkpoint;
 pub mod fmu_package;
 pub mod input;
+pub mod interrupt;
 pub mod model_builder;
 pub mod monitor;
 pub mod output;

@@ -2,12 +2,12 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use clap::{Parser, Subcommand};
 use loam::case::CaseError;
 use loam::checkpoint;
+use loam::interrupt::Interrupt;
 use loam::run::{default_out_dir, run, RunEnd, RunOptions};
 use loam::simulation::Simulation;
 
@@ -246,8 +246,8 @@ fn main() -> ExitCode {
             Err(e) => bad_input(&e),
         },
         Command::Run { case, out, threads, quiet, resume } => {
-            if threads == Some(0) {
-                eprintln!("error: --threads must be at least 1");
+            if let Err(problem) = check_threads(threads) {
+                eprintln!("error: --threads: {problem}");
                 return ExitCode::from(2);
             }
             // the whole run inside the pool: parallel loops called from one of its threads
@@ -338,22 +338,53 @@ fn read_path_file(path: &std::path::Path) -> Result<loam_laws::driver::PathFile,
     })
 }
 
+/// Most worker threads per core of the machine that `--threads` accepts: more only adds
+/// switching, and thousands took 22 s to create before the system refused (issue 31).
+const MAX_THREADS_PER_CORE: usize = 4;
+
+/// `--threads N` must lie in [1, [`MAX_THREADS_PER_CORE`] × the cores available to this
+/// process] (`std::thread::available_parallelism`, which follows CPU affinity and cgroup
+/// quotas; 1 if it cannot be told).
+fn check_threads(threads: Option<usize>) -> Result<(), String> {
+    let Some(n) = threads else { return Ok(()) };
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    let max = MAX_THREADS_PER_CORE * cores;
+    if n == 0 {
+        Err("must be at least 1, got 0".into())
+    } else if n > max {
+        Err(format!(
+            "must be at most {max} ({MAX_THREADS_PER_CORE} per core of the {cores} available to this process), got {n}"
+        ))
+    } else {
+        Ok(())
+    }
+}
+
 /// Exit code of a run stopped by SIGINT/SIGTERM after writing a checkpoint (128 + SIGINT).
 const INTERRUPTED: u8 = 130;
 
-/// A flag that SIGINT and SIGTERM set (the run finishes its step, checkpoints and stops); a
-/// second signal ends the process at once.
-fn interrupt_flag() -> Option<Arc<AtomicBool>> {
-    let flag = Arc::new(AtomicBool::new(false));
-    let set = flag.clone();
+/// What SIGINT and SIGTERM set (the run finishes its step, checkpoints and stops); a second
+/// signal ends the process at once, abandoning the step in progress, after writing the
+/// run's report as of the last converged step with the status `interrupted`
+/// ([`loam::interrupt`]).
+fn interrupt_handler() -> Option<Arc<Interrupt>> {
+    let interrupt = Arc::new(Interrupt::new());
+    let handler = interrupt.clone();
     let installed = ctrlc::set_handler(move || {
-        if set.swap(true, Ordering::SeqCst) {
-            eprintln!("\nloam: interrupted again: stopping now, without a checkpoint of the current step");
+        if handler.request() {
+            let report = match handler.abandon() {
+                Some(Ok(path)) => format!("; {} says so", path.display()),
+                Some(Err(e)) => format!("; writing the run's report failed: {e}"),
+                None => String::new(),
+            };
+            eprintln!(
+                "\nloam: interrupted again: stopping now, the step in progress abandoned without a checkpoint{report}"
+            );
             std::process::exit(i32::from(INTERRUPTED));
         }
         eprintln!("\nloam: interrupted: finishing the current step, then writing a checkpoint (again to stop now)");
     });
-    installed.ok().map(|()| flag)
+    installed.ok().map(|()| interrupt)
 }
 
 /// `loam run`: builds the case (and restores a checkpoint with `--resume`), runs it with
@@ -366,7 +397,7 @@ fn run_case(case: &std::path::Path, out: Option<PathBuf>, quiet: bool, resume: O
     let out = out.unwrap_or_else(|| default_out_dir(&sim.case.name));
     let fingerprint = std::fs::read_to_string(case).map(|t| checkpoint::fingerprint(&t)).unwrap_or(0);
     let mut options =
-        RunOptions { progress: !quiet, case_fingerprint: fingerprint, resume: None, interrupt: interrupt_flag() };
+        RunOptions { progress: !quiet, case_fingerprint: fingerprint, resume: None, interrupt: interrupt_handler() };
     if let Some(given) = resume {
         let path = match given.or_else(|| checkpoint::list(&out).pop()) {
             Some(p) => p,

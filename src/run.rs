@@ -10,7 +10,6 @@
 //! and the error says where.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -18,6 +17,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::case::CheckpointSpec;
 use crate::checkpoint::{self, Checkpoint};
+use crate::interrupt::Interrupt;
 use crate::output::results::{ResultWriter, WriterState};
 use crate::output::summary::{seconds, RunEndReport, RunStatus, RunSummary, WallTimeReport};
 use crate::simulation::{RunError, Simulation};
@@ -43,8 +43,9 @@ pub struct RunOptions {
     pub case_fingerprint: u32,
     /// Continue the results of a checkpoint (the simulation is restored already).
     pub resume: Option<WriterState>,
-    /// Set by a signal handler: finish the step, checkpoint and stop.
-    pub interrupt: Option<Arc<AtomicBool>>,
+    /// Set by a signal handler: finish the step, checkpoint and stop; it also keeps the
+    /// report of the last converged step for a second signal ([`Interrupt`]).
+    pub interrupt: Option<Arc<Interrupt>>,
 }
 
 /// Runs `sim` to its end time writing into `out_dir` (see the module doc). Returns how the
@@ -70,16 +71,19 @@ pub fn run(sim: &mut Simulation, out_dir: &Path, options: &RunOptions) -> std::i
     };
     summary.status = status;
     summary.end = Some(RunEndReport { reason, time: sim.time(), end_time: sim.end_time() });
+    // the final report, which a second signal must no longer overwrite
+    let write = || summary.write(out_dir);
+    let written = match &options.interrupt {
+        Some(interrupt) => interrupt.finish(write),
+        None => write(),
+    };
     match result {
         Ok(end) => {
-            summary.write(out_dir)?;
+            written?;
             Ok((end, wall))
         }
-        Err(e) => {
-            // best effort: the directory may be what failed
-            let _ = summary.write(out_dir);
-            Err(e)
-        }
+        // the report was written as best effort: the directory may be what failed
+        Err(e) => Err(e),
     }
 }
 
@@ -174,14 +178,22 @@ fn run_loop(
         Some(state) => ResultWriter::resume(out_dir, sim, state.clone())?,
         None => ResultWriter::create(out_dir, sim)?,
     };
+    let started = Instant::now();
+    let record = |sim: &Simulation, output_time: f64| {
+        if let Some(interrupt) = &options.interrupt {
+            let wall = WallTimeReport::new(started.elapsed().as_secs_f64(), &sim.stats.timings, output_time);
+            interrupt.record(out_dir, RunSummary::of(sim, RunStatus::Running, wall), sim.time(), sim.end_time());
+        }
+    };
     RunSummary::of(sim, RunStatus::Running, WallTimeReport::default()).write(out_dir)?;
+    record(sim, *output_time);
     if options.resume.is_none() {
         timed(output_time, &mut || writer.write_step(sim, true))?;
     }
     let spec = sim.case.analysis.checkpoint;
     let keep = spec.map_or(2, |s| s.keep);
     let mut clock = CheckpointClock { spec, last_step: sim.step, last_time: Instant::now() };
-    let interrupted = || options.interrupt.as_ref().is_some_and(|f| f.load(Ordering::SeqCst));
+    let interrupted = || options.interrupt.as_ref().is_some_and(|i| i.is_requested());
     // fixed steps: progress in planned steps; adaptive steps: in per mille of the end time
     let adaptive = sim.case.analysis.adaptive.is_some();
     let length = if adaptive { 1000 } else { sim.total_steps() as u64 };
@@ -203,9 +215,11 @@ fn run_loop(
         // converged sub-steps of a cut step are written as they come (nothing converged is
         // lost if a later sub-step fails)
         let mut substep_error = None;
+        let out_time = *output_time;
         let result = sim.step_observed(&mut |sim| {
             if substep_error.is_none() {
                 substep_error = writer.write_step(sim, true).err();
+                record(sim, out_time);
             }
         });
         if let Some(e) = substep_error {
@@ -238,6 +252,7 @@ fn run_loop(
                     write_checkpoint(sim, &mut writer, out_dir, fingerprint, keep)?;
                     clock.reset(sim.step);
                 }
+                record(sim, *output_time);
             }
             Err(e) => break RunEnd::Failed(e),
         }

@@ -246,6 +246,7 @@ fn named_inputs(dir: &Path, inputs: &mut Vec<Input>) {
     let (fem, mpm) = (read("cantilever_fem.json"), read("cantilever_mpm.json"));
     let penalty = read("cylinder_incline_slip_mpm.json");
     let collapse = read("collapse_bui2008_quad.json");
+    let coupled = read("coupled_beam_split.json");
     let mut n = 0;
     let mut case = |name: &str, command: &'static str, base: &Value, edit: &dyn Fn(&mut Value), expect: Expect| {
         let mut v = base.clone();
@@ -552,6 +553,48 @@ fn named_inputs(dir: &Path, inputs: &mut Vec<Input>) {
         &|v| v["materials"]["beam"]["young_modulus"] = json!(-1e300),
         Expect::Bad { path: "materials.beam.young_modulus".into(), exact: true, mention: Some("-1e300".into()) },
     );
+    // issue 31: values that failed later with a message hiding the cause
+    case(
+        "Young's modulus 1e308 in the Bui collapse",
+        "check",
+        &collapse,
+        &|v| v["materials"]["aluminium_bars"]["young_modulus"] = json!(1e308),
+        Expect::Bad {
+            path: "materials.aluminium_bars.young_modulus".into(),
+            exact: true,
+            mention: Some("at most 1e15 Pa".into()),
+        },
+    );
+    case(
+        "subnormal density",
+        "check",
+        &fem,
+        &|v| v["materials"]["beam"]["density"] = json!(1e-320),
+        Expect::Bad { path: "materials.beam.density".into(), exact: true, mention: Some("1e-320".into()) },
+    );
+    case(
+        "static analysis without supports",
+        "check",
+        &fem,
+        &|v| {
+            v.as_object_mut().unwrap().remove("boundary_conditions");
+        },
+        Expect::Bad { path: "boundary_conditions".into(), exact: true, mention: Some("supports".into()) },
+    );
+    case(
+        "interface band 1e300",
+        "check",
+        &coupled,
+        &|v| v["interfaces"][0]["band"] = json!(1e300),
+        Expect::Bad { path: "interfaces[0].band".into(), exact: true, mention: Some("diagonal of the grid".into()) },
+    );
+    case(
+        "interface band negative",
+        "check",
+        &coupled,
+        &|v| v["interfaces"][0]["band"] = json!(-1e300),
+        bad("interfaces[0].band"),
+    );
     // whole files
     let mut file = |name: &str, contents: &[u8], expect: Expect| {
         let f = dir.join(format!("file_{}.json", inputs.len()));
@@ -655,6 +698,13 @@ fn named_inputs(dir: &Path, inputs: &mut Vec<Input>) {
                "path": {"type": "triaxial", "drainage": "drained", "loading": "extension", "confining_pressure": 1e5,
                         "axial_strain": 0.9, "steps": 2}}),
         Expect::Fails,
+        inputs,
+    );
+    law(
+        "law: subnormal Young's modulus (det F = NaN before)",
+        json!({"description": "x", "material": {"law": "linear_elastic", "density": 1, "young_modulus": 1e-320, "poisson_ratio": 0.3},
+               "path": {"type": "oedometric", "axial_strain": 0.1, "steps": 10}}),
+        Expect::Bad { path: "material.young_modulus".into(), exact: true, mention: Some("1e-320".into()) },
         inputs,
     );
     let f = dir.join("law_dup.json");

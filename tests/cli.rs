@@ -228,3 +228,182 @@ fn cut_step_writes_every_converged_substep() {
     let summary = std::fs::read_to_string(dir.join("out/summary.json")).unwrap();
     assert!(summary.contains("\"status\": \"failed\"") && summary.contains("\"steps\": 3"));
 }
+
+/// Writes `case` (JSON) into a fresh directory `name` and returns the file.
+fn write_case(name: &str, case: &serde_json::Value) -> PathBuf {
+    let dir = temp_dir(name);
+    let path = dir.join("case.json");
+    std::fs::write(&path, serde_json::to_string_pretty(case).unwrap()).unwrap();
+    path
+}
+
+/// A bundled case as JSON with `edit` applied.
+fn bundled(name: &str, edit: impl FnOnce(&mut serde_json::Value)) -> serde_json::Value {
+    let text = std::fs::read_to_string(root().join("cases").join(format!("{name}.json"))).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    edit(&mut json);
+    json
+}
+
+/// `loam run` of `case` in its own output directory: exit code and stderr.
+fn run_file(case: &Path) -> (i32, String) {
+    let out = loam().arg("run").arg(case).arg("--quiet").arg("--out").arg(case.with_file_name("out")).output().unwrap();
+    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).trim().to_string())
+}
+
+/// Issue 31: a static model without supports is named as such, not by its symptom
+/// ("inverted deformation gradient (det F = 0)"). With no boundary condition at all `loam
+/// check` refuses it (exit 2, naming `boundary_conditions`); with too few supports (rollers
+/// that leave the vertical translation free, a single pinned node that leaves a rotation
+/// free) the run stops at the first step saying which rigid-body motion is free (exit 1).
+/// Without supports but dynamic, the mass holds it and the run finishes.
+#[test]
+fn static_model_without_supports_is_named() {
+    use serde_json::json;
+    let unsupported = bundled("cantilever_fem", |j| {
+        j.as_object_mut().unwrap().remove("boundary_conditions");
+    });
+    expect_bad(
+        "static, no boundary condition",
+        check_file(&write_case("unsupported", &unsupported)),
+        &["boundary_conditions", "static analysis needs supports", "singular"],
+    );
+    for (name, region, displacement, motion) in [
+        ("rollers", "clamp", json!([0.0, null]), "free to move as a rigid body: translation in y"),
+        ("pinned", "tip", json!([0.0, 0.0]), "free to move as a rigid body: rotation about (7, 0.5)"),
+    ] {
+        let mut case = unsupported.clone();
+        case["boundary_conditions"] = json!([{ "region": region, "displacement": displacement }]);
+        let (code, stderr) = run_file(&write_case(name, &case));
+        println!("{name}: exit {code}: {stderr}");
+        assert_eq!(code, 1);
+        assert_eq!(stderr.lines().count(), 1);
+        for expected in ["stopped at step 1", "the static model is not supported", "singular", "domain 'beam'", motion]
+        {
+            assert!(stderr.contains(expected), "{name}: should say '{expected}': {stderr}");
+        }
+    }
+    let mut dynamic = unsupported;
+    dynamic["analysis"] = json!({"type": "dynamic", "time_step": 0.01, "end_time": 0.05});
+    let (code, stderr) = run_file(&write_case("dynamic_unsupported", &dynamic));
+    println!("dynamic without supports: exit {code} {stderr}");
+    assert_eq!(code, 0, "a dynamic case without supports runs: {stderr}");
+}
+
+/// Issue 31: `--threads 5000` spent 22 s creating threads before "Resource temporarily
+/// unavailable"; more than 4 threads per available core (and 0) are refused at once, exit 2.
+#[test]
+fn thread_counts_beyond_the_machine_are_refused() {
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    for threads in ["5000".to_string(), (4 * cores + 1).to_string(), "0".to_string()] {
+        let started = std::time::Instant::now();
+        let out = loam()
+            .args(["run", "cases/cantilever_fem.json", "--quiet", "--threads", &threads, "--out"])
+            .arg(temp_dir("threads").join("out"))
+            .current_dir(root())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).trim().to_string();
+        let seconds = started.elapsed().as_secs_f64();
+        println!("--threads {threads}: exit {:?} in {seconds:.2} s: {stderr}", out.status.code());
+        assert_eq!(out.status.code(), Some(2));
+        assert_eq!(stderr.lines().count(), 1);
+        assert!(stderr.starts_with("error: --threads") && stderr.contains(&format!("got {threads}")), "{stderr}");
+        assert!(seconds < 5.0, "refused before anything is built");
+    }
+    let out = loam()
+        .args(["run", "cases/cantilever_fem.json", "--quiet", "--threads", &(4 * cores).to_string(), "--out"])
+        .arg(temp_dir("threads_ok").join("out"))
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "4 threads per core run: {}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// Issue 31 item 5: a step that does not converge names where its residual is largest: the
+/// domain (uncoupled) or the block of the monolithic system (coupled), the node and its
+/// coordinates. A static MPM cantilever under 10 g with 4 Newton iterations and no step cut,
+/// and the coupled split beam under 10 g with 3.
+#[test]
+fn newton_failure_names_the_node_with_the_largest_residual() {
+    use serde_json::json;
+    let mpm = bundled("cantilever_mpm", |j| {
+        j["gravity"]["acceleration"] = json!([0.0, -98.1]);
+        j["analysis"]["max_step_cuts"] = json!(0);
+        j["solver"]["max_iterations"] = json!(4);
+    });
+    let coupled = bundled("coupled_beam_split", |j| {
+        j["gravity"]["acceleration"] = json!([0.0, -98.1]);
+        j["analysis"]["max_step_cuts"] = json!(0);
+        j["solver"]["max_iterations"] = json!(3);
+    });
+    for (name, case, owner) in [("mpm", mpm, "largest in domain 'beam': node "), ("coupled", coupled, " block: node ")]
+    {
+        let (code, stderr) = run_file(&write_case(&format!("newton_{name}"), &case));
+        println!("{name}: exit {code}: {stderr}");
+        assert_eq!(code, 1);
+        assert!(stderr.contains("Newton did not converge in") && stderr.contains(owner), "{stderr}");
+        // "node 835 at (6.875, 0), 2.42e3 N": coordinates inside the grid and a force
+        let at = stderr.split(owner).nth(1).unwrap();
+        let coords: Vec<f64> = at
+            .split(" at (")
+            .nth(1)
+            .unwrap()
+            .split(')')
+            .next()
+            .unwrap()
+            .split(", ")
+            .map(|v| v.parse().unwrap())
+            .collect();
+        assert_eq!(coords.len(), 2, "{stderr}");
+        assert!(coords[0] >= 0.0 && coords[0] <= 8.5 && coords[1] >= -1.5 && coords[1] <= 1.5, "{coords:?}");
+        assert!(
+            at.split("), ").nth(1).unwrap().starts_with(|c: char| c.is_ascii_digit()) && at.contains(" N)"),
+            "{stderr}"
+        );
+    }
+}
+
+/// Issue 31: a second SIGINT, during a step that takes long, ends the run at once (exit 130)
+/// but no longer leaves `summary.json` at `"status": "running"`: it says `interrupted`, the
+/// step in progress abandoned. One static step of a fine FEM cantilever (about 90 000
+/// DOFs) takes seconds; both signals arrive during it.
+#[test]
+fn second_interrupt_still_writes_the_summary() {
+    use serde_json::json;
+    let case = bundled("cantilever_fem", |j| {
+        j["domains"][0]["mesh"]["rectangle"]["cells"] = json!([560, 80]);
+    });
+    let path = write_case("second_sigint", &case);
+    let out_dir = path.with_file_name("out");
+    let child = loam()
+        .arg("run")
+        .arg(&path)
+        .arg("--quiet")
+        .arg("--threads")
+        .arg("1")
+        .arg("--out")
+        .arg(&out_dir)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let summary = out_dir.join("summary.json");
+    let waited = std::time::Instant::now();
+    while !std::fs::read_to_string(&summary).is_ok_and(|t| t.contains("\"running\"")) {
+        assert!(waited.elapsed().as_secs() < 120, "the run did not start");
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    for _ in 0..2 {
+        assert!(Command::new("kill").arg("-INT").arg(child.id().to_string()).status().unwrap().success());
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let written: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    println!("exit {:?}: {stderr}\nsummary: status {} end {}", out.status.code(), written["status"], written["end"]);
+    assert_eq!(out.status.code(), Some(130));
+    assert!(stderr.contains("interrupted again"), "{stderr}");
+    assert_eq!(written["status"], "interrupted");
+    let reason = written["end"]["reason"].as_str().unwrap();
+    assert!(reason.contains("abandoned") && written["end"]["time"] == 0.0, "{reason}");
+}

@@ -29,7 +29,7 @@
 
 use crate::assembly::{AssemblyPattern, BlockLayout};
 use crate::convergence::BlockNorms;
-use crate::dofs::{DofMap, DofTie, NodeRole, CONSTRAINED};
+use crate::dofs::{Block, DofMap, DofTie, NodeRole, CONSTRAINED};
 use crate::domain::{AssemblyInput, Domain, DomainError};
 use crate::linear_solver::{LinearSolver, LinearSolverError, LinearSolverKind, SolverTimings};
 use crate::slip::{Slip, SlipRotations};
@@ -297,6 +297,68 @@ impl Assembler {
             self.dofs.equations().iter().map(|&e| if e != CONSTRAINED { delta[e] } else { 0.0 }).collect();
         self.rotations.to_global(&mut full);
         full
+    }
+
+    /// The node whose free displacement equations carry the largest residual of the last
+    /// [`Assembler::residual`]: the Euclidean norm over its equations (N; local frames at
+    /// slip nodes; an equation that tied DOFs share counts for each of their nodes), with the
+    /// block of its equations. A non-finite norm counts as the largest. `None` after a solve
+    /// (the right-hand side then holds the correction) or without free displacement
+    /// equations.
+    pub fn largest_nodal_residual(&self) -> Option<(usize, f64, Block)> {
+        if self.solved {
+            return None;
+        }
+        let dim = self.dofs.dim();
+        let mut largest: Option<(usize, f64, Block)> = None;
+        for node in 0..self.dofs.displacement_dofs() / dim {
+            let mut sq = 0.0;
+            let mut block = None;
+            for i in 0..dim {
+                let e = self.dofs.equation(node * dim + i);
+                if e != CONSTRAINED {
+                    sq += self.rhs[e] * self.rhs[e];
+                    block.get_or_insert(self.dofs.block(e));
+                }
+            }
+            let Some(block) = block else { continue };
+            let norm = sq.sqrt();
+            let larger = match largest {
+                None => true,
+                Some((_, l, _)) => l.is_finite() && (!norm.is_finite() || norm > l),
+            };
+            if larger {
+                largest = Some((node, norm, block));
+            }
+        }
+        largest
+    }
+
+    /// Indices of the domains whose element blocks touch a DOF for which `touches` holds.
+    pub fn domains_touching(&self, touches: impl Fn(usize) -> bool) -> Vec<usize> {
+        (0..self.domain_vector.len() - 1)
+            .filter(|&k| self.buffer_dofs[self.domain_vector[k]..self.domain_vector[k + 1]].iter().any(|&g| touches(g)))
+            .collect()
+    }
+
+    /// The pattern and the values of the matrix of the last [`Assembler::tangent`] (zeros
+    /// before the first).
+    pub fn tangent_matrix(&self) -> (&AssemblyPattern, &[f64]) {
+        (&self.pattern, &self.values)
+    }
+
+    /// A full DOF vector (global frame) as a vector per equation: rotated to the local frames
+    /// of slip nodes, each equation taking the value of (one of) its DOFs.
+    pub fn to_equations(&self, full: &[f64]) -> Vec<f64> {
+        let mut local = full.to_vec();
+        self.rotations.to_local(&mut local);
+        let mut out = vec![0.0; self.dofs.num_equations()];
+        for (g, &e) in self.dofs.equations().iter().enumerate() {
+            if e != CONSTRAINED {
+                out[e] = local[g];
+            }
+        }
+        out
     }
 
     /// The residual `R` per equation of the last [`Assembler::residual`].

@@ -51,6 +51,15 @@ pub enum Block {
 }
 
 impl Block {
+    /// The block's name in messages: `soil`, `interface` or `structure`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Block::Soil => "soil",
+            Block::Interface => "interface",
+            Block::Structure => "structure",
+        }
+    }
+
     /// The block of an equation whose DOFs belong to nodes of these roles.
     fn of(role: NodeRole) -> Self {
         match role {

@@ -28,6 +28,7 @@ pub mod mesh;
 pub mod mixed_kernel;
 pub mod model;
 pub mod newton;
+pub mod rigid_modes;
 pub mod scheme;
 pub mod slip;
 pub mod solid_domain;

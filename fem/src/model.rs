@@ -27,6 +27,7 @@ use crate::domain::{AssemblyInput, Domain, DomainError, NamedOutput, NodalState}
 use crate::linear_solver::{LinearSolverError, SolverMemory, SolverTimings};
 pub use crate::newton::NewtonSettings;
 use crate::newton::{assembly_input, NewtonStrategy, StepProblem};
+use crate::rigid_modes::{free_rigid_motion, FreeMotion};
 use crate::scheme::TimeScheme;
 use crate::slip::Slip;
 
@@ -70,13 +71,22 @@ impl StepError {
 #[derive(Debug, Clone, thiserror::Error, PartialEq)]
 pub enum StepError {
     /// Newton did not converge in the allowed iterations.
-    #[error("Newton did not converge in {iterations} iterations (residual {residual:.3e})")]
+    #[error("Newton did not converge in {iterations} iterations (residual {residual:.3e}{})", peak_note(.largest))]
     NoConvergence {
         /// Iterations spent.
         iterations: usize,
         /// Last residual norm.
         residual: f64,
+        /// Where the last residual is largest (filled in by [`Model::solve_step`]).
+        largest: Option<Box<ResidualPeak>>,
     },
+    /// A static model with a rigid-body motion that nothing holds: the stiffness matrix is
+    /// singular ([`crate::rigid_modes`]).
+    #[error(
+        "the static model is not supported: the stiffness matrix is singular ({0}); add supports \
+         (boundary_conditions that hold it) or make the analysis dynamic"
+    )]
+    Unsupported(Box<Unsupported>),
     /// An element failed (e.g. inverted).
     #[error(transparent)]
     Domain(#[from] DomainError),
@@ -87,6 +97,71 @@ pub enum StepError {
     /// The linear solve failed.
     #[error(transparent)]
     LinearSolver(#[from] LinearSolverError),
+}
+
+/// Where the residual of a step that did not converge is largest (issue 31): the node, where
+/// it is and who owns it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ResidualPeak {
+    /// Global node id.
+    pub node: usize,
+    /// Its position at the start of the step (m): reference coordinates plus the committed
+    /// displacement (for a grid node, where the grid was placed).
+    pub position: Vec<f64>,
+    /// Norm of the residual over its free components (N).
+    pub force: f64,
+    /// `the soil block` (coupled models: soil, interface or structure) or `domain 'beam'`.
+    pub owner: String,
+}
+
+impl std::fmt::Display for ResidualPeak {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let at: Vec<String> = self.position.iter().map(|&x| short(x)).collect();
+        write!(f, "largest in {}: node {} at ({}), {:.2e} N", self.owner, self.node, at.join(", "), self.force)
+    }
+}
+
+/// `; <peak>` or nothing.
+fn peak_note(peak: &Option<Box<ResidualPeak>>) -> String {
+    peak.as_ref().map_or(String::new(), |p| format!("; {p}"))
+}
+
+/// A coordinate with at most 4 decimals and no trailing zeros.
+fn short(x: f64) -> String {
+    let s = format!("{x:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.into()
+    }
+}
+
+/// The domains of a static model that can move as a rigid body, and how.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Unsupported {
+    /// Names of the domains of the free component.
+    pub domains: Vec<String>,
+    /// The motion ([`crate::rigid_modes::FreeMotion`]).
+    pub motion: FreeMotion,
+}
+
+impl std::fmt::Display for Unsupported {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let names: Vec<String> = self.domains.iter().map(|d| format!("'{d}'")).collect();
+        let who = match names.len() {
+            1 => format!("domain {}", names[0]),
+            _ => format!("domains {}", names.join(", ")),
+        };
+        let m = &self.motion;
+        if m.free >= m.all {
+            write!(f, "{who} is free in every rigid-body motion: nothing holds it")
+        } else if m.free > 1 {
+            write!(f, "{who} is free in {} rigid-body motions, e.g. {}", m.free, m.motion)
+        } else {
+            write!(f, "{who} is free to move as a rigid body: {}", m.motion)
+        }
+    }
 }
 
 /// Wall-clock seconds per phase.
@@ -551,8 +626,100 @@ impl Model {
         } else {
             self.state.clone_from(&self.committed);
         }
+        let result = result.map_err(|e| self.explain_failure(e, &mut assembler, dt, t_new, gravity));
         self.assembler = Some(assembler);
         result.map(|()| report)
+    }
+
+    /// What a user needs to know of a failed step (issue 31): a Newton iteration that did
+    /// not converge says where its last residual is largest; a static model whose tangent at
+    /// the step's predictor (assembled once more: the last iterate may be far from it, and
+    /// stressed) leaves a rigid-body motion free is [`StepError::Unsupported`], whatever the
+    /// symptom. The state is left at the committed one.
+    fn explain_failure(
+        &mut self,
+        error: StepError,
+        assembler: &mut Assembler,
+        dt: f64,
+        t: f64,
+        gravity: [f64; 3],
+    ) -> StepError {
+        let error = self.locate_residual(error, assembler);
+        if self.scheme.is_dynamic() || !error.is_retryable() {
+            return error;
+        }
+        self.predict(t, dt);
+        let input = assembly_input(self.scheme, &self.state, &self.committed, &[], dt, t, gravity, true);
+        let assembled = assembler.assemble(&mut self.domains, &input);
+        self.state.clone_from(&self.committed);
+        if assembled.is_err() {
+            return error;
+        }
+        assembler.tangent();
+        match free_rigid_motion(assembler, &self.positions(), self.dim) {
+            Some(motion) => {
+                let mut of_component = vec![false; self.num_dofs()];
+                for &g in &motion.dofs {
+                    of_component[g] = true;
+                }
+                let domains = assembler
+                    .domains_touching(|g| of_component[g])
+                    .into_iter()
+                    .map(|k| self.domains[k].name().to_string())
+                    .collect();
+                StepError::Unsupported(Box::new(Unsupported { domains, motion }))
+            }
+            None => error,
+        }
+    }
+
+    /// Node positions of the committed state: reference coordinates plus the committed
+    /// displacements (a grid node: where the grid was placed).
+    fn positions(&self) -> Vec<[f64; 3]> {
+        let dim = self.dim;
+        self.coords
+            .iter()
+            .enumerate()
+            .map(|(n, x)| {
+                let mut p = *x;
+                for i in 0..dim {
+                    p[i] += self.committed.u[n * dim + i];
+                }
+                p
+            })
+            .collect()
+    }
+
+    /// A [`StepError::NoConvergence`] with where the last residual of `assembler` is largest.
+    fn locate_residual(&self, error: StepError, assembler: &Assembler) -> StepError {
+        let names = |domains: Vec<usize>| -> Vec<String> {
+            domains.into_iter().map(|k| self.domains[k].name().to_string()).collect()
+        };
+        match error {
+            StepError::NoConvergence { iterations, residual, largest: None } => {
+                let largest = assembler.largest_nodal_residual().map(|(node, force, block)| {
+                    let coupled = self.roles.contains(&NodeRole::Interface) || !self.ties.is_empty();
+                    let owner = if coupled {
+                        format!("the {} block", block.name())
+                    } else {
+                        let dim = self.dim;
+                        let names: Vec<String> =
+                            names(assembler.domains_touching(|g| g < self.displacement_dofs() && g / dim == node))
+                                .into_iter()
+                                .map(|n| format!("'{n}'"))
+                                .collect();
+                        match names.len() {
+                            1 => format!("domain {}", names[0]),
+                            _ => format!("domains {}", names.join(", ")),
+                        }
+                    };
+                    let position = self.positions()[node][..self.dim].to_vec();
+                    Box::new(ResidualPeak { node, position, force, owner })
+                });
+                StepError::NoConvergence { iterations, residual, largest }
+            }
+            e => e,
+        }
     }
 
     /// Phase 3: records the reactions and the soil's forces on shared nodes from the last

@@ -197,7 +197,7 @@ impl NewtonStrategy {
                 );
             }
             if !r_norm.is_finite() {
-                return Err(StepError::NoConvergence { iterations: it, residual: r_norm });
+                return Err(StepError::NoConvergence { iterations: it, residual: r_norm, largest: None });
             }
             if convergence.converged(it, r_norm, displacement_met) {
                 report.iterations = it;
@@ -229,6 +229,7 @@ impl NewtonStrategy {
         Err(StepError::NoConvergence {
             iterations: settings.max_iterations,
             residual: report.residuals.last().copied().unwrap_or(f64::NAN),
+            largest: None,
         })
     }
 

@@ -5,6 +5,16 @@
 //! `{"law": "neo_hookean", "density": 1000, "young_modulus": 9e7, "poisson_ratio": 0.0}`.
 //! Unknown keys are rejected by serde; ranges are checked by [`MaterialSpec::build`].
 //! Angles are in degrees in the case file and radians inside the laws.
+//!
+//! **Physical bounds.** Besides its sign, every modulus-like parameter must lie in a range
+//! that any material on Earth fits with orders of magnitude to spare ([`Range`]): moduli,
+//! pressures and cohesions in [1e-3, 1e15] Pa ([`MODULUS`], [`PRESSURE`], [`COHESION`]),
+//! densities in [1e-3, 1e5] kg/m³ ([`DENSITY`]), viscosities up to 1e15 Pa·s
+//! ([`VISCOSITY`]), and the dimensionless ones of Cam Clay and of softening likewise. A
+//! value outside is a typing error or a hostile input, and it fails later with a message
+//! that hides the cause (issue 31: `E = 1e-320`, a subnormal, gave `det F = NaN`;
+//! `E = 1e308` an initial stress "outside the yield surface"): it is refused when the case
+//! is loaded, naming the key.
 
 use serde::Deserialize;
 
@@ -39,10 +49,10 @@ pub struct ElasticParameters {
 }
 
 impl ElasticParameters {
-    /// Range checks: ρ > 0, E > 0, −1 < ν < 0.5.
+    /// Range checks: ρ in [`DENSITY`], E in [`MODULUS`], −1 < ν < 0.5.
     pub fn check(&self) -> Result<(), ParameterError> {
-        positive("density", self.density)?;
-        positive("young_modulus", self.young_modulus)?;
+        in_range("density", self.density, DENSITY)?;
+        in_range("young_modulus", self.young_modulus, MODULUS)?;
         let nu = self.poisson_ratio;
         if !(nu > -1.0 && nu < 0.5) {
             return Err(ParameterError::new("poisson_ratio", format!("must lie in (-1, 0.5), got {nu}")));
@@ -84,6 +94,128 @@ pub fn non_negative(parameter: &'static str, value: f64) -> Result<(), Parameter
     }
 }
 
+/// The values a material parameter may take: `[min, max]` in `unit`, and 0 if `zero`
+/// (see the module doc).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Range {
+    /// Smallest nonzero value.
+    pub min: f64,
+    /// Largest value.
+    pub max: f64,
+    /// Whether 0 is allowed (then the parameter is ≥ 0, else > 0).
+    pub zero: bool,
+    /// Unit, for the message (empty when dimensionless).
+    pub unit: &'static str,
+    /// Why values below `min` are refused.
+    pub why_min: &'static str,
+    /// Why values above `max` are refused.
+    pub why_max: &'static str,
+}
+
+/// Young's, bulk and shear moduli (Pa): the softest gels have about 10 Pa, diamond 1.2e12 Pa.
+pub const MODULUS: Range = Range {
+    min: 1e-3,
+    max: 1e15,
+    zero: false,
+    unit: "Pa",
+    why_min: "softer than any solid by orders of magnitude: the stresses would underflow",
+    why_max: "a thousand times stiffer than diamond",
+};
+
+/// A shear modulus that may be 0 when another term gives the stiffness (Pa).
+pub const MODULUS_OR_ZERO: Range = Range { zero: true, ..MODULUS };
+
+/// Pressures of a law (Pa), e.g. the preconsolidation pressure.
+pub const PRESSURE: Range = Range {
+    why_min: "far below any stress of a soil: the stiffness, proportional to it, would underflow",
+    why_max: "a thousand times the pressure at the centre of the Earth",
+    ..MODULUS
+};
+
+/// Cohesions (Pa): 0 for a granular material; any normal positive value up to `max`.
+pub const COHESION: Range = Range {
+    min: f64::MIN_POSITIVE,
+    max: 1e15,
+    zero: true,
+    unit: "Pa",
+    why_min: "a subnormal number",
+    why_max: "a thousand times the strength of diamond",
+};
+
+/// Densities (kg/m³): air has 1.2, osmium 22 590.
+pub const DENSITY: Range = Range {
+    min: 1e-3,
+    max: 1e5,
+    zero: false,
+    unit: "kg/m³",
+    why_min: "a thousandth of the density of air",
+    why_max: "four times the densest element",
+};
+
+/// Dynamic viscosities (Pa·s): air has 1.8e-5, pitch about 1e8, glacier ice 1e13.
+pub const VISCOSITY: Range = Range {
+    min: 1e-9,
+    max: 1e15,
+    zero: true,
+    unit: "Pa·s",
+    why_min: "ten thousand times less viscous than any gas",
+    why_max: "a hundred times more viscous than glacier ice",
+};
+
+/// Dimensionless slopes and factors of Cam Clay and of softening.
+pub const FACTOR: Range = Range {
+    min: 1e-6,
+    max: 1e6,
+    zero: false,
+    unit: "",
+    why_min: "too small to compute with",
+    why_max: "too large to compute with",
+};
+
+/// Slopes `κ̂`, `λ̂` of Cam Clay in ln v – ln p′: clays have 0.005 to 0.5.
+pub const SLOPE: Range =
+    Range { max: 10.0, why_max: "a specific volume that would change e¹⁰-fold per e-fold of pressure", ..FACTOR };
+
+/// The critical state slope `M = 6 sin φ/(3 − sin φ)` of Cam Clay, below 3 for φ < 90°.
+pub const CRITICAL_STATE_SLOPE: Range =
+    Range { max: 3.0, why_max: "M = 6 sin φ/(3 − sin φ) < 3 for any friction angle", ..FACTOR };
+
+/// Checks that `value` lies in `range` (see [`Range`]); the message says which bound it
+/// breaks and why.
+pub fn in_range(parameter: &'static str, value: f64, range: Range) -> Result<(), ParameterError> {
+    if value == 0.0 && range.zero {
+        return Ok(());
+    }
+    let unit = if range.unit.is_empty() { String::new() } else { format!(" {}", range.unit) };
+    let got = number(value);
+    let problem = if !(value > 0.0 && value.is_finite()) {
+        format!("must be {} 0, got {got}", if range.zero { ">=" } else { ">" })
+    } else if value < range.min {
+        let zero = if range.zero { "0 or " } else { "" };
+        format!("must be {zero}at least {}{unit} ({}), got {got}", number(range.min), range.why_min)
+    } else if value > range.max {
+        format!("must be at most {}{unit} ({}), got {got}", number(range.max), range.why_max)
+    } else {
+        return Ok(());
+    };
+    Err(ParameterError::new(parameter, problem))
+}
+
+/// A number for a message: as written if short (`0.02`, `3`), in exponent form otherwise
+/// (`1e-320`, `1e308`, `2.2e-308`; Rust prints 1e308 with 308 zeros).
+fn number(v: f64) -> String {
+    let plain = format!("{v}");
+    if plain.len() <= 6 {
+        return plain;
+    }
+    let exp = format!("{v:e}");
+    if exp.len() <= 10 {
+        exp
+    } else {
+        format!("{v:.1e}")
+    }
+}
+
 /// Mohr–Coulomb strength parameters (angles in degrees) and their checks:
 /// `0 ≤ φ < 90°`, `c ≥ 0`, not both zero, `0 ≤ ψ ≤ φ`.
 fn check_strength(
@@ -94,7 +226,7 @@ fn check_strength(
     if !(0.0..90.0).contains(&friction_angle) {
         return Err(ParameterError::new(friction_key, format!("must lie in [0, 90) degrees, got {friction_angle}")));
     }
-    non_negative(cohesion_key, cohesion)?;
+    in_range(cohesion_key, cohesion, COHESION)?;
     if friction_angle == 0.0 && cohesion == 0.0 {
         return Err(ParameterError::new(
             friction_key,
@@ -299,7 +431,7 @@ impl MaterialSpec {
                         return Err(ParameterError::new(key, format!("must not exceed its peak value {pk}, got {r}")));
                     }
                 }
-                non_negative("shape_factor", p.shape_factor)?;
+                in_range("shape_factor", p.shape_factor, Range { zero: true, ..FACTOR })?;
                 Box::new(MohrCoulombSoftening::new(
                     p.density,
                     p.young_modulus,
@@ -308,21 +440,25 @@ impl MaterialSpec {
                 ))
             }
             MaterialSpec::ModifiedCamClay(p) => {
-                positive("density", p.density)?;
-                positive("preconsolidation_pressure", p.preconsolidation_pressure)?;
-                if !(p.ocr >= 1.0 && p.ocr.is_finite()) {
-                    return Err(ParameterError::new("ocr", format!("must be >= 1, got {}", p.ocr)));
+                in_range("density", p.density, DENSITY)?;
+                in_range("preconsolidation_pressure", p.preconsolidation_pressure, PRESSURE)?;
+                if !(p.ocr >= 1.0 && p.ocr <= FACTOR.max) {
+                    return Err(ParameterError::new(
+                        "ocr",
+                        format!("must lie in [1, {:e}], got {}", FACTOR.max, p.ocr),
+                    ));
                 }
-                positive("swelling_slope", p.swelling_slope)?;
+                in_range("swelling_slope", p.swelling_slope, SLOPE)?;
                 if !(p.compression_slope > p.swelling_slope && p.compression_slope.is_finite()) {
                     return Err(ParameterError::new(
                         "compression_slope",
                         format!("must exceed swelling_slope ({}), got {}", p.swelling_slope, p.compression_slope),
                     ));
                 }
-                positive("critical_state_slope", p.critical_state_slope)?;
-                non_negative("initial_shear_modulus", p.initial_shear_modulus)?;
-                non_negative("alpha_shear", p.alpha_shear)?;
+                in_range("compression_slope", p.compression_slope, SLOPE)?;
+                in_range("critical_state_slope", p.critical_state_slope, CRITICAL_STATE_SLOPE)?;
+                in_range("initial_shear_modulus", p.initial_shear_modulus, MODULUS_OR_ZERO)?;
+                in_range("alpha_shear", p.alpha_shear, Range { zero: true, ..FACTOR })?;
                 if p.initial_shear_modulus + p.alpha_shear * p.preconsolidation_pressure / p.ocr <= 0.0 {
                     return Err(ParameterError::new(
                         "initial_shear_modulus",
@@ -358,9 +494,9 @@ impl MaterialSpec {
                 ))
             }
             MaterialSpec::NewtonianFluid(p) => {
-                positive("density", p.density)?;
-                non_negative("viscosity", p.viscosity)?;
-                positive("bulk_modulus", p.bulk_modulus)?;
+                in_range("density", p.density, DENSITY)?;
+                in_range("viscosity", p.viscosity, VISCOSITY)?;
+                in_range("bulk_modulus", p.bulk_modulus, MODULUS)?;
                 Box::new(NewtonianFluid { density: p.density, viscosity: p.viscosity, bulk_modulus: p.bulk_modulus })
             }
         })

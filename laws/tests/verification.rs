@@ -303,6 +303,46 @@ fn benchmark_10_mohr_coulomb_drained_triaxial_peak() {
     }
 }
 
+/// Issue 31: the drained triaxial of a cohesive Mohr–Coulomb material at a confining
+/// pressure of 100 Pa or less, unconfined compression (0 Pa) included, failed ("mixed
+/// stress/strain control did not converge (residual 7.7e-9 Pa)": the tolerance was relative
+/// to the confining stress). The law's yield surface is in the Kirchhoff stress `τ = J σ`:
+/// at the peak `J q = (k − 1) J σ₃ + 2 c cos φ/(1 − sin φ)`, `k = (1 + sin φ)/(1 − sin φ)`,
+/// and unconfined `J q` is the unconfined compressive strength `2 c cos φ/(1 − sin φ)`
+/// (15.6969 kPa for c = 5 kPa, φ = 25°); the Cauchy `q` is larger by `1/J` (1.3e-4 here).
+#[test]
+fn mohr_coulomb_drained_triaxial_at_low_and_zero_confinement() {
+    let (phi, c) = (25f64.to_radians(), 5e3);
+    let k = (1.0 + phi.sin()) / (1.0 - phi.sin());
+    let ucs = 2.0 * c * phi.cos() / (1.0 - phi.sin());
+    for confining in [0.0, 1.0, 100.0] {
+        let file = driver::parse_path_file(
+            &json!({"description": "t", "material": mc_json(),
+                "path": {"type": "triaxial", "drainage": "drained", "loading": "compression",
+                         "confining_pressure": confining, "axial_strain": 0.05, "steps": 200}})
+            .to_string(),
+        )
+        .unwrap();
+        let law = file.material.build().unwrap();
+        let t =
+            driver::run_path(law.as_ref(), &file).unwrap_or_else(|e| panic!("confining pressure {confining} Pa: {e}"));
+        let (q, j, sxx) = (t.column("q").unwrap(), t.column("J").unwrap(), t.column("sigma_xx").unwrap());
+        let peak = (0..q.len()).max_by(|&a, &b| (j[a] * q[a]).total_cmp(&(j[b] * q[b]))).unwrap();
+        let measured = j[peak] * q[peak];
+        let reference = (k - 1.0) * j[peak] * confining + ucs;
+        let lateral = sxx.iter().fold(0.0f64, |m, s| m.max((s + confining).abs()));
+        println!(
+            "MC drained triaxial at σ₃ = {confining} Pa: peak J q {measured:.6} Pa vs (k − 1) J σ₃ + 2c cos φ/(1 − sin φ) \
+             {reference:.6} Pa (relative error {:.1e}, tolerance 1e-6); Cauchy q {:.6} Pa; largest lateral stress \
+             error {lateral:.1e} Pa",
+            (measured - reference).abs() / reference,
+            q[peak]
+        );
+        assert!((measured - reference).abs() <= 1e-6 * reference);
+        assert!(lateral <= 1e-6, "lateral stress held at −σ₃");
+    }
+}
+
 /// Drucker–Prager with the outer fit coincides with Mohr–Coulomb in triaxial compression.
 #[test]
 fn drucker_prager_outer_fit_matches_mohr_coulomb_in_compression() {
@@ -577,6 +617,48 @@ fn parameter_checks_name_the_key() {
         println!("rejected: {e} (expected key {key})");
         assert_eq!(e.parameter, key);
     }
+    // issue 31: physical bounds, a subnormal or absurdly large value named with its cause
+    let fluid = |k: &str, v: f64| {
+        let mut m = json!({"law": "newtonian_fluid", "density": 1000.0, "viscosity": 1.0, "bulk_modulus": 2e6});
+        m[k] = json!(v);
+        m
+    };
+    let extremes = [
+        (mc("young_modulus", 1e-320), "young_modulus", "at least 0.001 Pa (softer than any solid"),
+        (
+            mc("young_modulus", 1e308),
+            "young_modulus",
+            "at most 1e15 Pa (a thousand times stiffer than diamond), got 1e308",
+        ),
+        (mc("density", 1e-320), "density", "at least 0.001 kg/m³"),
+        (mc("density", 1e300), "density", "at most 100000 kg/m³"),
+        (mc("cohesion", 1e-320), "cohesion", "0 or at least 2.2e-308 Pa (a subnormal number), got 1e-320"),
+        (mc("cohesion", 1e300), "cohesion", "at most 1e15 Pa"),
+        (soft("shape_factor", 1e300), "shape_factor", "at most 1e6"),
+        (soft("peak_cohesion", 1e300), "peak_cohesion", "at most 1e15 Pa"),
+        (clay("preconsolidation_pressure", 1e308), "preconsolidation_pressure", "at most 1e15 Pa"),
+        (clay("preconsolidation_pressure", 1e-320), "preconsolidation_pressure", "at least 0.001 Pa"),
+        (clay("swelling_slope", 1e-320), "swelling_slope", "at least 1e-6"),
+        (clay("compression_slope", 1e300), "compression_slope", "at most 10 "),
+        (clay("critical_state_slope", 4.0), "critical_state_slope", "at most 3 "),
+        (clay("ocr", 1e300), "ocr", "[1, 1e6]"),
+        (clay("initial_shear_modulus", 1e-320), "initial_shear_modulus", "0 or at least 0.001 Pa"),
+        (clay("alpha_shear", 1e300), "alpha_shear", "at most 1e6"),
+        (fluid("bulk_modulus", 1e-320), "bulk_modulus", "at least 0.001 Pa"),
+        (fluid("viscosity", 1e300), "viscosity", "at most 1e15 Pa·s"),
+        (fluid("viscosity", 1e-320), "viscosity", "0 or at least 1e-9 Pa·s"),
+    ];
+    for (m, key, says) in extremes {
+        let e = serde_json::from_value::<MaterialSpec>(m).unwrap().build().unwrap_err();
+        println!("rejected: {e}");
+        assert_eq!(e.parameter, key);
+        assert!(e.problem.contains(says), "{e}: should say '{says}'");
+    }
+    // and the bounds themselves are accepted, as are 0 where it is allowed
+    for m in [mc("young_modulus", 1e-3), mc("young_modulus", 1e15), mc("density", 1e5), mc("cohesion", 1e15)] {
+        serde_json::from_value::<MaterialSpec>(m).unwrap().build().unwrap();
+    }
+    serde_json::from_value::<MaterialSpec>(fluid("viscosity", 0.0)).unwrap().build().unwrap();
 }
 
 /// Input errors of the driver are one line and name the JSON path.

@@ -86,6 +86,29 @@ pub(super) fn boundary_conditions(
     Ok(constraint_of_bc)
 }
 
+/// A static analysis needs supports (issue 31): refused if no boundary condition holds any
+/// node (no prescribed component, slip or penalty wall) and no interface ties a grid to a
+/// structure. Then every rigid-body motion is free and the stiffness matrix singular; a
+/// dynamic analysis is regularised by the mass and runs. (Supports that hold some bodies
+/// but not others, or too few components, are found at the first solve:
+/// `loam_fem::rigid_modes`.)
+pub(super) fn check_supported(case: &Case, model: &Model) -> Result<(), CaseError> {
+    let holds = model.constraints.iter().any(|c| !c.dofs.is_empty())
+        || !model.slips.is_empty()
+        || !model.ties.is_empty()
+        || case.boundary_conditions.iter().any(|bc| bc.penalty.is_some())
+        || !case.interfaces.is_empty();
+    if model.scheme.is_dynamic() || holds {
+        return Ok(());
+    }
+    Err(CaseError::new(
+        "boundary_conditions",
+        "a static analysis needs supports, and no boundary condition holds any node: the stiffness matrix \
+         would be singular (the bodies are free to move as rigid bodies); prescribe displacements, or make \
+         the analysis dynamic",
+    ))
+}
+
 /// The loads of the case (nodal forces, pressures, tractions on the model; forces on
 /// material points in their domains). Returns, per load, its index in `model.loads`
 /// (`usize::MAX` for forces on material points, which no input can drive).

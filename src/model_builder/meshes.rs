@@ -671,6 +671,37 @@ pub(super) fn discretise(
     number(case, laws, fem_meshes, groups)
 }
 
+/// Largest `interfaces[].band` as a multiple of the diagonal of the grid's bounding box: a
+/// band this wide already moves every node of the grid with the structure.
+const MAX_BAND_PER_GRID_DIAGONAL: f64 = 1e3;
+
+/// An interface's band (m) must be finite, positive and at most
+/// [`MAX_BAND_PER_GRID_DIAGONAL`] times the diagonal of its grid (issue 31: 1e300 was
+/// accepted).
+fn check_band(location: &str, band: f64, grid: &Grid) -> Result<(), CaseError> {
+    check_positive(location, band)?;
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for x in &grid.mesh.coords {
+        for i in 0..3 {
+            lo[i] = lo[i].min(x[i]);
+            hi[i] = hi[i].max(x[i]);
+        }
+    }
+    let diagonal = (0..3).map(|i| (hi[i] - lo[i]).powi(2)).sum::<f64>().sqrt();
+    let max = MAX_BAND_PER_GRID_DIAGONAL * diagonal;
+    if band <= max {
+        Ok(())
+    } else {
+        Err(CaseError::new(
+            location,
+            format!(
+                "must be at most {max:.6e} m ({MAX_BAND_PER_GRID_DIAGONAL:e} times the diagonal of the grid, {diagonal:.6} m: \
+                 a band of the whole grid moves every node), got {band}"
+            ),
+        ))
+    }
+}
+
 /// Resolves the case's interfaces and attaches each grid to its structures; checks that
 /// no FEM mesh touches a grid without an interface.
 fn couple_grids(
@@ -718,7 +749,7 @@ fn couple_grids(
                 CaseError::new(format!("{loc}.region"), message)
             })?;
         if let Some(band) = spec.band {
-            check_positive(&format!("{loc}.band"), band)?;
+            check_band(&format!("{loc}.band"), band, &groups[g].grid)?;
         }
         requests[g].push((k, structure, nodes));
     }

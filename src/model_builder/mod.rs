@@ -101,6 +101,7 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     let mut parts = discretisation.parts;
     meshes::assign_pressure_dofs(case, &mut model, &mut parts);
     let bcs = conditions::boundary_conditions(case, &mut model, &regions, &mut parts)?;
+    conditions::check_supported(case, &model)?;
     interfaces::attach(case, &mut model, &mut parts)?;
     meshes::place_domains(case, &mut model, parts)?;
     let load_of_load = conditions::loads(case, &mut model, &regions)?;

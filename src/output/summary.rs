@@ -3,7 +3,9 @@
 //!
 //! Written when the run starts (`"status": "running"`, so that an interrupted run still says
 //! what it was: case, formulation, thickness) and rewritten when it ends, whether it
-//! finished, came to rest or stopped on a step that failed (results so far are kept):
+//! finished, came to rest or stopped on a step that failed (results so far are kept), or was
+//! interrupted, also by a second signal that abandons the step in progress
+//! ([`crate::interrupt`]: the report of the last converged step, marked interrupted):
 //!
 //! ```json
 //! {

@@ -211,6 +211,15 @@ const CONSOLIDATION_STEPS: usize = 20;
 /// Maximum Newton iterations of the mixed control per step.
 const MAX_CONTROL_ITERATIONS: usize = 50;
 
+/// The mixed control has converged when its largest stress residual is below this fraction
+/// of the step's stress scale ([`Point::stress_scale`]).
+const CONTROL_TOLERANCE: f64 = 1e-10;
+
+/// Strain whose elastic stress `M ε` bounds the stress scale of the mixed control from
+/// below: with [`CONTROL_TOLERANCE`] the residual must reach `1e-14 M`, a strain error of
+/// `1e-14`, two orders above the round-off of the stress update (`≈ 1e-16 M`).
+const CONTROL_STRAIN_SCALE: f64 = 1e-4;
+
 /// One material point with its committed and trial history.
 struct Point<'a> {
     law: &'a dyn ConstitutiveLaw,
@@ -269,6 +278,19 @@ impl Point<'_> {
         Ok(Evaluation { response, sigma, residual, norm })
     }
 
+    /// The stress (Pa) against which the residual of the mixed control is measured: the
+    /// largest of the committed stress, the stress targets of `control`, and the law's
+    /// constrained modulus `M = λ + 2μ` times [`CONTROL_STRAIN_SCALE`] (the converged
+    /// trial stress is added at each check). The last term keeps it from vanishing where
+    /// the stresses do (an unconfined test starts at σ = 0: relative to 1 Pa, the round-off
+    /// of `M ε`, about `1e-16 M`, could never converge; issue 31).
+    fn stress_scale(&self, control: &Control) -> f64 {
+        let (lambda, mu) = self.law.elastic_lame();
+        let stiffness = (lambda + 2.0 * mu) * CONTROL_STRAIN_SCALE;
+        let stiffness = if stiffness.is_finite() { stiffness } else { 0.0 };
+        control.stress.iter().flatten().fold(self.sigma.amax(), |m, s| m.max(s.abs())).max(stiffness).max(1.0)
+    }
+
     /// One step under `control`: Newton with backtracking on the unknown diagonal entries of
     /// `F`. Components with equal targets and equal current stretches are tied (they stay
     /// equal, as the lateral stretches of an axisymmetric triaxial specimen): this keeps the
@@ -290,10 +312,10 @@ impl Point<'_> {
                 None => groups.push((vec![a], target)),
             }
         }
-        let scale = control.stress.iter().flatten().fold(self.sigma.amax(), |m, s| m.max(s.abs())).max(1.0);
+        let scale = self.stress_scale(control);
         let mut cur = self.evaluate(&F, &groups, step)?;
         for _ in 0..MAX_CONTROL_ITERATIONS {
-            if cur.norm <= 1e-10 * scale {
+            if cur.norm <= CONTROL_TOLERANCE * scale.max(cur.sigma.amax()) {
                 self.F = F;
                 self.sigma = cur.sigma;
                 self.committed.copy_from_slice(&self.trial);
