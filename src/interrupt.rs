@@ -108,6 +108,7 @@ mod tests {
             wall_time: WallTimeReport::default(),
             monitors: Default::default(),
             monitor_units: Default::default(),
+            grid_motion: Vec::new(),
         }
     }
 

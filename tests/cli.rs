@@ -172,18 +172,19 @@ fn bad_input_exits_2_naming_the_json_path() {
 /// step, time and cause, and everything converged so far written (monitors and VTK).
 #[test]
 fn failing_step_keeps_converged_results() {
-    let text = std::fs::read_to_string(root().join("cases/cantilever_fem.json")).unwrap();
-    let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
-    json["gravity"]["amplitude"] = serde_json::json!([[0, 0], [1, 1], [2, 2000]]);
-    json["analysis"] = serde_json::json!({"type": "static", "time_step": 0.5, "end_time": 2.0, "max_step_cuts": 2});
-    json["solver"]["max_iterations"] = serde_json::json!(8);
-    let dir = temp_dir("failing");
-    let path = dir.join("case.json");
-    std::fs::write(&path, json.to_string()).unwrap();
-    let out = loam().arg("run").arg(&path).arg("--quiet").arg("--out").arg(dir.join("out")).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    println!("exit {:?}: {stderr}", out.status.code());
-    assert_eq!(out.status.code(), Some(1));
+    let path = write_case(
+        "failing",
+        &bundled("cantilever_fem", |json| {
+            json["gravity"]["amplitude"] = serde_json::json!([[0, 0], [1, 1], [2, 2000]]);
+            json["analysis"] =
+                serde_json::json!({"type": "static", "time_step": 0.5, "end_time": 2.0, "max_step_cuts": 2});
+            json["solver"]["max_iterations"] = serde_json::json!(8);
+        }),
+    );
+    let dir = path.parent().unwrap();
+    let (code, stderr) = run_file(&path);
+    println!("exit {code}: {stderr}");
+    assert_eq!(code, 1);
     assert!(
         stderr.contains("stopped at step 3") && stderr.contains("after 2 cuts") && stderr.contains("t = 1.000000e0")
     );
@@ -202,19 +203,20 @@ fn failing_step_keeps_converged_results() {
 /// 0.1875, 0.25), then fails; all three are in the results, and the message says so.
 #[test]
 fn cut_step_writes_every_converged_substep() {
-    let text = std::fs::read_to_string(root().join("cases/cantilever_mpm.json")).unwrap();
-    let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
-    json["gravity"] =
-        serde_json::json!({"acceleration": [0.0, -100.0], "amplitude": [[0.0, 0.0], [0.25, 0.25], [0.5, 100.0]]});
-    json["analysis"] = serde_json::json!({"type": "static", "time_step": 0.5, "end_time": 0.5, "max_step_cuts": 4});
-    json["solver"]["max_iterations"] = serde_json::json!(4);
-    let dir = temp_dir("substeps");
-    let path = dir.join("case.json");
-    std::fs::write(&path, json.to_string()).unwrap();
-    let out = loam().arg("run").arg(&path).arg("--quiet").arg("--out").arg(dir.join("out")).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    println!("exit {:?}: {stderr}", out.status.code());
-    assert_eq!(out.status.code(), Some(1));
+    let path = write_case(
+        "substeps",
+        &bundled("cantilever_mpm", |json| {
+            json["gravity"] = serde_json::json!({"acceleration": [0.0, -100.0],
+                "amplitude": [[0.0, 0.0], [0.25, 0.25], [0.5, 100.0]]});
+            json["analysis"] =
+                serde_json::json!({"type": "static", "time_step": 0.5, "end_time": 0.5, "max_step_cuts": 4});
+            json["solver"]["max_iterations"] = serde_json::json!(4);
+        }),
+    );
+    let dir = path.parent().unwrap();
+    let (code, stderr) = run_file(&path);
+    println!("exit {code}: {stderr}");
+    assert_eq!(code, 1);
     assert!(stderr.contains("results up to t = 2.500000e-1 s") && stderr.contains("(3 steps"), "{stderr}");
     let csv = std::fs::read_to_string(dir.join("out/monitors.csv")).unwrap();
     let times: Vec<f64> = csv.lines().skip(1).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();

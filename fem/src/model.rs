@@ -27,7 +27,7 @@ use crate::domain::{AssemblyInput, Domain, DomainError, NamedOutput, NodalState}
 use crate::linear_solver::{LinearSolverError, SolverMemory, SolverTimings};
 pub use crate::newton::NewtonSettings;
 use crate::newton::{assembly_input, NewtonStrategy, StepProblem};
-use crate::rigid_modes::{free_rigid_motion, FreeMotion};
+use crate::rigid_modes::{free_rigid_motion, short, FreeMotion};
 use crate::scheme::TimeScheme;
 use crate::slip::Slip;
 
@@ -124,17 +124,6 @@ impl std::fmt::Display for ResidualPeak {
 /// `; <peak>` or nothing.
 fn peak_note(peak: &Option<Box<ResidualPeak>>) -> String {
     peak.as_ref().map_or(String::new(), |p| format!("; {p}"))
-}
-
-/// A coordinate with at most 4 decimals and no trailing zeros.
-fn short(x: f64) -> String {
-    let s = format!("{x:.4}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" {
-        "0".into()
-    } else {
-        s.into()
-    }
 }
 
 /// The domains of a static model that can move as a rigid body, and how.

@@ -243,7 +243,7 @@ fn free_combinations(comp: &Component, y: &[Vec<f64>], limit: f64) -> Option<(us
 }
 
 /// Short decimal form of a coordinate (at most 4 decimals, no trailing zeros).
-fn short(x: f64) -> String {
+pub(crate) fn short(x: f64) -> String {
     let s = format!("{x:.4}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" {
