@@ -207,7 +207,7 @@ pub struct DomainSpec {
 }
 
 /// Default factor of `domains[k].ghost_penalty`.
-pub const DEFAULT_GHOST_PENALTY: f64 = 0.01;
+pub const DEFAULT_GHOST_PENALTY: f64 = 0.1;
 
 /// How a grid cell integrates over its material points (`domains[k].quadrature`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
