@@ -637,7 +637,7 @@ fn split_beam_run(
 
 /// Issue 31, item 4: benchmark 12 split at x = 2, 4, 6, FEM | MPM and MPM | FEM, beside the
 /// MPM-only beam, on grids h = 0.2, 0.1, 0.05, 0.025 m (FEM mesh of the same size), the load
-/// in 4 and in 20 static steps (56 runs, about 15 minutes). Asserted: every run converges
+/// in 4 and in 20 static steps (56 runs, about 80 s on 2 cores). Asserted: every run converges
 /// with the default settings (no band, no ghost penalty set: the mesh motion widens itself);
 /// at h ≤ 0.1 the tip within 1.5 % of Timoshenko where it measures and, in 4 steps, within
 /// 0.5 % of the one-FEM-domain beam of the same h (compared at the same place: the tip scaled
@@ -647,7 +647,6 @@ fn split_beam_run(
 /// h = 0.025 (the linear MPM's quadrature error growing with the points' travel through the
 /// cells; README).
 #[test]
-#[ignore = "long: 56 static beams (about 15 minutes); LOAM_LONG=1 scripts/test.sh runs it"]
 fn beam_split_placement_and_refinement_study() {
     for &h in &[0.2, 0.1, 0.05, 0.025] {
         for &steps in &[4usize, 20] {
