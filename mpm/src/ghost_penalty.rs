@@ -95,11 +95,6 @@ impl GhostPenalty {
         Self { alpha, faces: Vec::new(), gamma: Vec::new(), zone: Vec::new() }
     }
 
-    /// The factor α.
-    pub fn alpha(&self) -> f64 {
-        self.alpha
-    }
-
     /// Nodes per face block on `grid`.
     fn face_nodes(grid: &Grid) -> usize {
         let element = grid.mesh.element;
@@ -259,15 +254,21 @@ fn face_matrix(
     let nf = face.nodes.len();
     let cells = [mesh.cell(face.cells[0]), mesh.cell(face.cells[1])];
     let coords = [grid.cell_coords(face.cells[0]), grid.cell_coords(face.cells[1])];
-    // the face's corners: global nodes and physical positions
-    let corners: Vec<usize> = face.facet.iter().map(|&a| cells[0][a]).collect();
-    let position = |a: usize| mesh.coords[a];
-    // the face's Gauss rule in its own parameters, with the corner weights of each point
-    let rule = face_rule(corners.len(), dim);
-    let size = face_size(&corners.iter().map(|&a| position(a)).collect::<Vec<_>>(), dim);
+    // the face's corners: global nodes and physical positions (the face is straight or planar:
+    // one normal and one measure for all its points)
+    let n_corners = face.facet.len();
+    let mut corners = [0usize; 4];
+    let mut positions = [[0.0; 3]; 4];
+    for (k, &a) in face.facet.iter().enumerate() {
+        corners[k] = cells[0][a];
+        positions[k] = mesh.coords[corners[k]];
+    }
+    let corners = &corners[..n_corners];
+    let (normal, measure) = face_normal(&positions[..n_corners], dim);
+    let size = if dim == 2 { measure } else { measure.sqrt() };
     let mut g = [0.0; MAX_FACE_NODES * MAX_FACE_NODES];
-    for (weights, w) in rule {
-        let (normal, measure) = face_normal(&corners.iter().map(|&a| position(a)).collect::<Vec<_>>(), dim);
+    // the face's Gauss rule in its own parameters, with the corner weights of each point
+    for (weights, w) in face_rule(n_corners, dim) {
         let mut jump = [0.0; MAX_FACE_NODES];
         let mut radius = 0.0;
         for (side, sign) in [(0, 1.0), (1, -1.0)] {
@@ -346,16 +347,6 @@ fn face_normal(corners: &[[f64; 3]], dim: usize) -> ([f64; 3], f64) {
     let norm = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
     // a triangle's area, or a planar quadrilateral's from its diagonals: both ½ |n|
     ([n[0] / norm, n[1] / norm, n[2] / norm], 0.5 * norm)
-}
-
-/// Size `h_F` of a face: its length in 2D, the square root of its area in 3D.
-fn face_size(corners: &[[f64; 3]], dim: usize) -> f64 {
-    let (_, measure) = face_normal(corners, dim);
-    if dim == 2 {
-        measure
-    } else {
-        measure.sqrt()
-    }
 }
 
 #[cfg(test)]

@@ -125,7 +125,7 @@ pub struct MpmDomain {
     pressure_dofs: Option<Vec<usize>>,
     /// How a cell integrates over its points ([`crate::quadrature`]).
     quadrature: PointQuadrature,
-    /// Ghost penalty on the faces of the material's edge cells ([`crate::ghost_penalty`]).
+    /// Ghost penalty on the faces of the cut cells ([`crate::ghost_penalty`]).
     ghost: Option<GhostPenalty>,
     /// Worst quality of the attached grid's cells over the steps so far (1: undistorted).
     worst_cell_quality: f64,
@@ -165,15 +165,10 @@ impl MpmDomain {
         self.attachment.as_ref().map(|_| (self.worst_cell_quality, self.widenings.as_slice()))
     }
 
-    /// Stabilises the material's edge cells by the ghost penalty of factor `alpha`
+    /// Stabilises the cut cells by the ghost penalty of factor `alpha`
     /// ([`crate::ghost_penalty`]; 0 switches it off).
     pub fn set_ghost_penalty(&mut self, alpha: f64) {
         self.ghost = (alpha > 0.0).then(|| GhostPenalty::new(alpha));
-    }
-
-    /// The factor of the ghost penalty (0 if off).
-    pub fn ghost_penalty(&self) -> f64 {
-        self.ghost.as_ref().map_or(0.0, GhostPenalty::alpha)
     }
 
     /// How the grid's cells integrate over their points ([`crate::quadrature`]).
