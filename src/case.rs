@@ -196,7 +196,7 @@ pub struct DomainSpec {
     /// footing; `loam_mpm::quadrature`). All bodies on one background grid share it.
     #[serde(default)]
     pub quadrature: Quadrature,
-    /// Factor α ≥ 0 of the ghost penalty on the faces of the material's edge cells (MPM
+    /// Factor α ≥ 0 of the ghost penalty on the faces of cut cells (MPM
     /// domains; `γ = α E` on the jump of the normal derivative of the step's displacement
     /// across a face, Burman 2010, Coombs 2023; `loam_mpm::ghost_penalty`): keeps the nodes
     /// that the material only grazes in the system (default [`DEFAULT_GHOST_PENALTY`] in

@@ -13,7 +13,7 @@
 //! Acad. Sci. Paris, Ser. I 348, 1217–1220), brought to implicit MPM by Coombs 2023 (*Ghost
 //! stabilisation of the material point method for stable quasi-static and dynamic analysis
 //! of large deformation problems*, Int. J. Numer. Methods Eng. 124, 4841–4875): across every
-//! face `F` that an edge cell of the material shares with another cell holding material, the
+//! face `F` that a cut cell (below) shares with another cell holding material, the
 //! jump of the normal derivative of the step's displacement increment is penalised,
 //!
 //! $$ G(Δu, δu) = \sum_F γ\, h_F \int_F [\![∂_n Δu]\!] \cdot [\![∂_n δu]\!] \, dΓ, \qquad
