@@ -13,6 +13,7 @@ use loam_fem::formulation::Formulation;
 use loam_fem::model::NewtonSettings;
 use loam_fem::scheme::TimeScheme;
 use loam_laws::MaterialSpec;
+use loam_mpm::basis::Basis;
 use serde::Deserialize;
 
 /// A problem in a case file, with the JSON path (or file and line) it concerns.
@@ -314,6 +315,11 @@ pub struct GridSpec {
     /// inclined grid boundaries, e.g. for slip on a slope.
     #[serde(default)]
     pub rotation: f64,
+    /// Shape functions: `linear` (default: the cell's), `gimp` (uGIMP) or `bspline2`
+    /// (quadratic B-splines), the smooth ones on unrotated quad4 grids in 2D without
+    /// shared-node interfaces or penalty walls (`loam_mpm::basis`).
+    #[serde(default)]
+    pub basis: Basis,
 }
 
 /// Where an MPM body's material points are.

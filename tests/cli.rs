@@ -409,3 +409,60 @@ fn second_interrupt_still_writes_the_summary() {
     let reason = written["end"]["reason"].as_str().unwrap();
     assert!(reason.contains("abandoned") && written["end"]["time"] == 0.0, "{reason}");
 }
+
+/// A smooth basis where it cannot act: each refused with exit 2 and one line naming the key
+/// (issue 23's acceptance: `"basis": "bspline2"` on a tri grid).
+#[test]
+fn smooth_basis_where_it_cannot_act_is_refused_naming_the_key() {
+    use serde_json::json;
+    let check = |name: &str, case: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(root().join("cases").join(case)).unwrap()).unwrap();
+        edit(&mut json);
+        check_file(&write_case(name, &json))
+    };
+    expect_bad(
+        "bspline2 on tri3",
+        check("basis-tri", "collapse_bui2008_tri.json", &|j| j["domains"][0]["grid"]["basis"] = json!("bspline2")),
+        &["domains[0].grid.basis", "quad4"],
+    );
+    expect_bad(
+        "unknown basis",
+        check("basis-name", "cantilever_mpm.json", &|j| j["domains"][0]["grid"]["basis"] = json!("cubic")),
+        &["domains[0].grid.basis", "cubic"],
+    );
+    expect_bad(
+        "gimp on a coupled grid",
+        check("basis-coupled", "coupled_beam_split.json", &|j| {
+            let k = j["domains"].as_array().unwrap().iter().position(|d| d["type"] == "mpm").unwrap();
+            j["domains"][k]["grid"]["basis"] = json!("gimp");
+        }),
+        &["interfaces[0].soil", "gimp"],
+    );
+    expect_bad(
+        "filled_cells on a smooth grid",
+        check("basis-filled", "cantilever_mpm.json", &|j| {
+            j["domains"][0]["grid"]["basis"] = json!("gimp");
+            j["domains"][0]["quadrature"] = json!("filled_cells");
+        }),
+        &["domains[0].quadrature"],
+    );
+    expect_bad(
+        "ghost penalty on a smooth grid",
+        check("basis-ghost", "cantilever_mpm.json", &|j| {
+            j["domains"][0]["grid"]["basis"] = json!("bspline2");
+            j["domains"][0]["ghost_penalty"] = json!(0.1);
+        }),
+        &["domains[0].ghost_penalty"],
+    );
+    expect_bad(
+        "penalty wall on a smooth grid",
+        check("basis-wall", "biaxial_mc_softening_mpm.json", &|j| {
+            for d in j["domains"].as_array_mut().unwrap() {
+                d["grid"]["basis"] = json!("gimp");
+                d["ghost_penalty"] = json!(0.0);
+            }
+        }),
+        &["boundary_conditions[", "penalty", "gimp"],
+    );
+}

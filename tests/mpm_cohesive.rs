@@ -47,6 +47,7 @@ fn vertical_cut(height: f64, h: f64) -> Case {
         cells: vec![(8.0 / h).round() as usize, rows],
         element: loam_fem::element::ElementType::Quad4,
         rotation: 0.0,
+        basis: Default::default(),
     });
     let Some(BodySpec::Cells { mesh: MeshSpec::Rectangle { size, cells, .. }, .. }) =
         c.domains[0].material_points.as_mut()

@@ -6,8 +6,10 @@
 
 use serde::Deserialize;
 
-/// Largest number of nodes of any element here (hex8).
-pub const MAX_NODES: usize = 8;
+/// Largest number of nodes of an element block: 8 for the elements here (hex8), 9 for the
+/// 3 × 3-node support of a point on a smooth MPM basis in 2D (GIMP, quadratic B-splines:
+/// `loam_mpm::basis`), whose blocks go through the same kernels.
+pub const MAX_NODES: usize = 9;
 
 /// The element shapes Loam knows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize)]

@@ -31,7 +31,8 @@ use nalgebra::Matrix3;
 use crate::element::{ElementType, MAX_NODES};
 use crate::formulation::Formulation;
 
-/// Largest number of element DOFs (hex8 × 3).
+/// Largest number of displacement DOFs of an element block (hex8 × 3; a smooth MPM basis's
+/// 3 × 3-node support in 2D has 18).
 pub const MAX_DOFS: usize = 24;
 
 /// Geometry of one integration point in the step reference configuration.
@@ -224,7 +225,7 @@ pub fn delta_deformation_gradient(
     geometry: &PointGeometry,
     disp: &[[f64; 3]],
 ) -> Matrix3<f64> {
-    let nn = ctx.element.num_nodes();
+    let nn = disp.len();
     let dim = ctx.element.dim();
     let mut delta_f = Matrix3::<f64>::identity();
     for a in 0..nn {
@@ -330,16 +331,16 @@ impl Default for PointOutput {
     }
 }
 
-/// Rows of the discrete gradient operator at one point: `b[(a, i)][c]` is
-/// `∂F̃_{ACTIVE[c]}/∂u_ai`. Returns the number of active components.
+/// Rows of the discrete gradient operator at one point of a block of `nn` nodes in `dim`
+/// dimensions: `b[(a, i)][c]` is `∂F̃_{ACTIVE[c]}/∂u_ai`. Returns the number of active
+/// components.
 pub(crate) fn gradient_operator(
     formulation: Formulation,
-    element: ElementType,
+    nn: usize,
+    dim: usize,
     geometry: &PointGeometry,
     b: &mut [[f64; 9]; MAX_DOFS],
 ) -> usize {
-    let nn = element.num_nodes();
-    let dim = element.dim();
     let active = active_components(formulation);
     for a in 0..nn {
         for i in 0..dim {
@@ -456,7 +457,9 @@ fn element_tensor<const D: usize, const NN: usize>(
 }
 
 /// Internal force vector `f_int` (length `nn·dim`) and, if asked, the consistent tangent
-/// `stiffness` (row-major, `(nn·dim)²`) of one element over its integration points.
+/// `stiffness` (row-major, `(nn·dim)²`) of one element over its integration points. The
+/// block has `nn = disp.len()` nodes: those of `ctx.element`, or the support of a smooth MPM
+/// basis (9 in 2D), whose functions `geometry` carries.
 ///
 /// `f0`, `f_prev`, `geometry`, `point_out` hold one entry per point; `committed` and `trial` hold the
 /// points' histories back to back with stride `law.state_len()`. Outputs are overwritten.
@@ -472,13 +475,13 @@ pub fn solid_element(
     f_int: &mut [f64],
     stiffness: Option<&mut [f64]>,
 ) -> Result<(), KernelError> {
-    use ElementType::*;
     use Formulation::*;
-    let run = match (ctx.formulation, ctx.element) {
-        (PlaneStrain | PlaneStress, Quad4) => element_tensor::<2, 4>,
-        (PlaneStrain | PlaneStress, Tri3) => element_tensor::<2, 3>,
-        (ThreeD, Tet4) => element_tensor::<3, 4>,
-        (ThreeD, Hex8) => element_tensor::<3, 8>,
+    let run = match (ctx.formulation, ctx.element.dim(), disp.len()) {
+        (PlaneStrain | PlaneStress, 2, 4) => element_tensor::<2, 4>,
+        (PlaneStrain | PlaneStress, 2, 3) => element_tensor::<2, 3>,
+        (PlaneStrain | PlaneStress, 2, 9) => element_tensor::<2, 9>,
+        (ThreeD, 3, 4) => element_tensor::<3, 4>,
+        (ThreeD, 3, 8) => element_tensor::<3, 8>,
         _ => element_general,
     };
     run(ctx, disp, geometry, f0, f_prev, committed, trial, point_out, f_int, stiffness)
@@ -499,7 +502,8 @@ fn element_general(
     f_int: &mut [f64],
     mut stiffness: Option<&mut [f64]>,
 ) -> Result<(), KernelError> {
-    let ndof = ctx.element.num_nodes() * ctx.element.dim();
+    let (nn, dim) = (disp.len(), ctx.element.dim());
+    let ndof = nn * dim;
     let stride = ctx.law.state_len();
     f_int[..ndof].fill(0.0);
     if let Some(k) = stiffness.as_deref_mut() {
@@ -519,7 +523,7 @@ fn element_general(
         let out = evaluate_point(ctx, g, disp, state, stiffness.is_some(), &mut response)
             .map_err(|source| KernelError::Law { point: p, source })?;
         point_out[p] = out;
-        let nc = gradient_operator(ctx.formulation, ctx.element, g, &mut b);
+        let nc = gradient_operator(ctx.formulation, nn, dim, g, &mut b);
         let w = g.weight;
         for r_ in 0..ndof {
             let mut v = 0.0;

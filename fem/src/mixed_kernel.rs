@@ -92,7 +92,8 @@ fn mixed_law<'a>(ctx: &KernelContext<'a>) -> Result<&'a dyn MixedLaw, KernelErro
 /// consistent tangent (row-major) of one u–p element over its integration points, for nodal
 /// displacements `disp` and nodal pressures `pressure`.
 ///
-/// Arguments as [`crate::kernel::solid_element`]; outputs are overwritten.
+/// Arguments as [`crate::kernel::solid_element`] (`nn = disp.len()` nodes); outputs are
+/// overwritten.
 /// `projection_rule`: the cell's own Gauss points (weights: their share of the cell's
 /// volume) on which an MPM cell integrates the pressure projection, scaled by its fill
 /// fraction; `None` integrates it on the integration points (FEM).
@@ -111,7 +112,7 @@ pub fn mixed_element(
     projection_rule: Option<&[PointGeometry]>,
 ) -> Result<(), KernelError> {
     let law = mixed_law(ctx)?;
-    let nn = ctx.element.num_nodes();
+    let nn = disp.len();
     let dim = ctx.element.dim();
     let nu = nn * dim;
     let nd = nu + nn;
@@ -163,7 +164,7 @@ pub fn mixed_element(
         }
         let theta = law.volumetric_strain(det_f.ln(), &committed[q * stride..(q + 1) * stride]);
         let volumetric = theta - p * inv_k;
-        let nc = gradient_operator(ctx.formulation, ctx.element, g, &mut b);
+        let nc = gradient_operator(ctx.formulation, nn, dim, g, &mut b);
         for r in 0..nu {
             let v: f64 = (0..nc).map(|c| stress[(active[c] / 3, active[c] % 3)] * b[r][c]).sum();
             residual[r] += w * v;

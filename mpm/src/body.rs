@@ -2,12 +2,13 @@
 //! a step computes for them (CB-Geo's names: `locate_particles`, `p2g`,
 //! `compute_internal_forces`, `g2p`/`update_particles`).
 //!
-//! - [`Body::locate`]: find each point's cell (points outside the grid are erased), sort the
-//!   points by (cell, id), evaluate the shape functions and their gradients at the points in
-//!   the grid's configuration at the start of the step;
+//! - [`Body::locate`]: find each point's support (its cell on the linear basis, the 3 × 3
+//!   nodes its functions reach on a smooth one: [`crate::basis`]; points outside the grid are
+//!   erased), sort the points by (support, id), evaluate the shape functions and their
+//!   gradients at the points in the grid's configuration at the start of the step;
 //! - [`Body::project`]: `m_I += Σ_p N_I m_p`, `(m v)_I += Σ_p N_I m_p v_p`,
 //!   `(m a)_I += Σ_p N_I m_p a_p`;
-//! - [`Body::add_cell`]: the points of one cell as the kernel's integration points (weight
+//! - [`Body::cell_contribution`]: the points of one support as the kernel's integration points (weight
 //!   `V_p^n`, `F0 = F_p^n`) and their lumped mass `M_I = Σ_p N_I m_p` with gravity and inertia;
 //! - [`Body::convect`]: `Δu_p = Σ N_I Δu_I`, `a_p = Σ N_I a_I`,
 //!   `v_p ← v_p + Δt ((1 − γ) a_p^n + γ a_p^{n+1})` (blended with the grid velocity, see
@@ -19,7 +20,7 @@ use std::sync::Arc;
 use loam_fem::domain::{AssemblyInput, PointExtent, PointLoad};
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
-use loam_fem::kernel::{point_geometry, solid_element, KernelContext, KernelError, PointGeometry, PointOutput};
+use loam_fem::kernel::{solid_element, KernelContext, KernelError, PointGeometry, PointOutput};
 use loam_fem::mixed_kernel::mixed_element;
 use loam_laws::ConstitutiveLaw;
 use nalgebra::Matrix3;
@@ -49,6 +50,16 @@ impl VelocityBlend {
             Self::PicFraction(theta) => theta,
             Self::RelaxationTime(tau) => -(-dt / tau).exp_m1(),
         }
+    }
+}
+
+/// Edge of the square (cube in 3D) of volume `volume` of a point at `x`: `V^(1/3)` in 3D,
+/// `√(V/t)` in plane strain and stress, `√(V/(2π x))` in axisymmetry.
+pub fn point_size(formulation: Formulation, thickness: f64, volume: f64, x: &[f64; 3]) -> f64 {
+    match formulation {
+        Formulation::ThreeD => volume.cbrt(),
+        Formulation::Axisymmetric => (volume / (2.0 * std::f64::consts::PI * x[0].max(1e-300))).sqrt(),
+        _ => (volume / thickness).sqrt(),
     }
 }
 
@@ -87,10 +98,10 @@ pub struct Trial {
 
 impl Trial {
     /// Per-block mutable views for the cells `blocks` (ascending; `None` where the body has
-    /// no point), for the parallel element loop; `cell_start` as [`Body::points_in_cell`].
+    /// no point), for the parallel element loop; `support_start` as [`Body::points_in_support`].
     pub fn views(
         &mut self,
-        cell_start: &[usize],
+        support_start: &[usize],
         state_len: usize,
         blocks: &[usize],
     ) -> Vec<Option<(&mut [f64], &mut [PointOutput])>> {
@@ -98,7 +109,7 @@ impl Trial {
         let (mut rest_s, mut rest_o) = (self.state.as_mut_slice(), self.out.as_mut_slice());
         let mut consumed = 0;
         for &c in blocks {
-            let range = cell_start[c]..cell_start[c + 1];
+            let range = support_start[c]..support_start[c + 1];
             if range.is_empty() {
                 views.push(None);
                 continue;
@@ -139,11 +150,11 @@ pub struct Body {
     /// Number of points at the start (ids run over `0..initial_count`).
     initial_count: usize,
     index_of_id: Vec<usize>,
-    /// Per point (in the sorted order): its cell and its shape functions there.
-    cell_of_point: Vec<usize>,
+    /// Per point (in the sorted order): its support and its shape functions there.
+    support_of_point: Vec<usize>,
     geometry: Vec<PointGeometry>,
-    /// Points of grid cell `c`: `cell_start[c]..cell_start[c + 1]`.
-    cell_start: Vec<usize>,
+    /// Points of support `s`: `support_start[s]..support_start[s + 1]`.
+    support_start: Vec<usize>,
     trial: Trial,
     erased: usize,
     /// Forces carried by material points (particle Neumann conditions).
@@ -167,9 +178,9 @@ impl Body {
             id_offset,
             initial_count,
             index_of_id: (0..initial_count).collect(),
-            cell_of_point: Vec::new(),
+            support_of_point: Vec::new(),
             geometry: Vec::new(),
-            cell_start: Vec::new(),
+            support_start: Vec::new(),
             trial: Trial::default(),
             erased: 0,
             point_loads: Vec::new(),
@@ -222,24 +233,25 @@ impl Body {
         self.index_of_id.get(local).copied().filter(|&k| k != usize::MAX)
     }
 
-    /// Points of grid cell `c` (indices into the sorted points).
-    pub fn points_in_cell(&self, c: usize) -> std::ops::Range<usize> {
-        self.cell_start[c]..self.cell_start[c + 1]
+    /// Points of support `s` (indices into the sorted points).
+    pub fn points_in_support(&self, s: usize) -> std::ops::Range<usize> {
+        self.support_start[s]..self.support_start[s + 1]
     }
 
-    /// Whether the body has points in grid cell `c`.
-    pub fn occupies(&self, c: usize) -> bool {
-        self.cell_start[c + 1] > self.cell_start[c]
+    /// Whether the body has points in support `s` (a grid cell on the linear basis).
+    pub fn occupies(&self, s: usize) -> bool {
+        self.support_start[s + 1] > self.support_start[s]
     }
 
-    /// Sum of the quadrature weights of the body's points in cell `c`.
-    pub fn cell_weight(&self, c: usize) -> f64 {
-        self.geometry[self.points_in_cell(c)].iter().map(|g| g.weight).sum()
+    /// Sum of the quadrature weights of the body's points in support `s` (a grid cell on
+    /// the linear basis).
+    pub fn cell_weight(&self, s: usize) -> f64 {
+        self.geometry[self.points_in_support(s)].iter().map(|g| g.weight).sum()
     }
 
-    /// Scales the quadrature weights of the body's points in cell `c`.
-    pub fn scale_cell_weights(&mut self, c: usize, factor: f64) {
-        let range = self.points_in_cell(c);
+    /// Scales the quadrature weights of the body's points in support `s`.
+    pub fn scale_cell_weights(&mut self, s: usize, factor: f64) {
+        let range = self.points_in_support(s);
         self.geometry[range].iter_mut().for_each(|g| g.weight *= factor);
     }
 
@@ -248,15 +260,23 @@ impl Body {
         self.point_loads.push(load);
     }
 
-    /// Locate: every point's cell in `grid` (points outside are erased), the points sorted
-    /// by (cell, id), their shape functions and gradients in the grid's current
-    /// configuration.
+    /// Locate: every point's support in `grid` (points outside are erased), the points
+    /// sorted by (support, id), their shape functions and gradients in the grid's current
+    /// configuration (on GIMP with the point's initial domain: the square of its initial
+    /// volume, [`crate::basis`]).
     pub fn locate(&mut self, grid: &Grid, formulation: Formulation, thickness: f64) {
         let n_before = self.points.len();
-        let located: Vec<Option<(usize, [f64; 3])>> =
-            self.points.position.par_iter().with_min_len(1024).map(|x| grid.locate(x)).collect();
-        // counting sort by cell, each cell's points by id: order (cell, id)
-        let num_cells = grid.mesh.num_cells();
+        let pts = &self.points;
+        let located: Vec<Option<(usize, PointGeometry)>> = (pts.position.par_iter(), pts.initial_volume.par_iter())
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(|(x, &v0)| {
+                let half = 0.5 * point_size(formulation, thickness, v0, x);
+                grid.point_functions(x, [half; 3], formulation, thickness)
+            })
+            .collect();
+        // counting sort by support, each support's points by id: order (support, id)
+        let num_cells = grid.num_supports();
         let mut start = vec![0usize; num_cells + 1];
         for (c, _) in located.iter().flatten() {
             start[c + 1] += 1;
@@ -288,36 +308,29 @@ impl Body {
         for (k, &id) in self.points.id.iter().enumerate() {
             self.index_of_id[id] = k;
         }
-        self.cell_of_point.clear();
-        self.cell_of_point.extend(order.iter().map(|&p| located[p].expect("kept points are located").0));
-        let element = grid.mesh.element;
-        let nn = element.num_nodes();
+        self.support_of_point.clear();
+        self.support_of_point.extend(order.iter().map(|&p| located[p].as_ref().expect("kept points are located").0));
         order
             .par_iter()
             .with_min_len(1024)
             .zip(self.points.volume.par_iter())
             .map(|(&p, &volume)| {
-                let (cell, xi) = located[p].expect("kept points are located");
-                let coords = grid.cell_coords(cell);
-                let mut g =
-                    point_geometry(element, formulation, thickness, &coords[..nn], &xi, 1.0, grid.cell_map(cell))
-                        .expect("located points lie in cells that are not inverted");
+                let mut g = located[p].as_ref().expect("kept points are located").1;
                 g.weight = volume;
                 g
             })
             .collect_into_vec(&mut self.geometry);
-        self.cell_start = start;
+        self.support_start = start;
         self.trial.state.clone_from(&self.points.state);
         self.trial.out.resize(self.points.len(), PointOutput::default());
     }
 
     /// Project (p2g): adds the points' mass, momentum and mass-weighted acceleration to the
-    /// grid nodes of their cells.
+    /// grid nodes of their supports.
     pub fn project(&self, grid: &Grid, dim: usize, sums: &mut GridSums) {
-        let nn = grid.mesh.element.num_nodes();
-        for (p, &cell) in self.cell_of_point.iter().enumerate() {
+        for (p, &support) in self.support_of_point.iter().enumerate() {
             let m = self.points.mass[p];
-            for (a, &node) in grid.mesh.cell(cell).iter().enumerate().take(nn) {
+            for (a, &node) in grid.support(support).iter().enumerate() {
                 let w = self.geometry[p].shape[a] * m;
                 sums.mass[node] += w;
                 for i in 0..dim {
@@ -339,9 +352,9 @@ impl Body {
         self.trial = trial;
     }
 
-    /// Start of each cell's points (see [`Body::points_in_cell`]).
-    pub fn cell_start(&self) -> &[usize] {
-        &self.cell_start
+    /// Start of each support's points (see [`Body::points_in_support`]).
+    pub fn support_start(&self) -> &[usize] {
+        &self.support_start
     }
 
     /// Compute internal forces of one cell: the kernel over the body's points in `cell`
@@ -365,9 +378,9 @@ impl Body {
         f_int: &mut [f64],
         stiffness: Option<&mut [f64]>,
     ) -> Result<(), KernelError> {
-        let range = self.points_in_cell(cell);
+        let range = self.points_in_support(cell);
         let sl = self.law.state_len();
-        let nn = ctx.element.num_nodes();
+        let nn = disp.len();
         let dim = ctx.element.dim();
         let nd = f_int.len();
         let f = &self.points.deformation_gradient[range.clone()];
@@ -415,25 +428,24 @@ impl Body {
         Ok(())
     }
 
-    /// Particle Neumann: every loaded point `p` in cell `c` adds `−N_I(ξ_p) F f(t)` to the
-    /// residual of the block of `c` (`r = f_int − f_ext + M ã`); `block_of_cell` gives the
-    /// block of a cell. The point's natural coordinates are fixed within a step (the grid
+    /// Particle Neumann: every loaded point `p` in support `s` adds `−N_I(ξ_p) F f(t)` to
+    /// the residual of the block of `s` (`r = f_int − f_ext + M ã`; blocks of `nd` DOFs whose
+    /// first `nn · dim` are the displacements of the support's `nn` nodes); `block_of_support`
+    /// gives the block of a support. The point's functions are fixed within a step (the grid
     /// moves with the body), so the force is a follower of the body without a tangent
     /// contribution.
     pub fn add_point_loads(
         &self,
         time: f64,
-        nd: usize,
-        dim: usize,
-        block_of_cell: impl Fn(usize) -> usize,
+        (nn, dim, nd): (usize, usize, usize),
+        block_of_support: impl Fn(usize) -> usize,
         vectors: &mut [f64],
     ) {
-        let nn = nd / dim;
         for load in &self.point_loads {
             let f = load.amplitude.at(time);
             for &id in &load.ids {
                 let Some(k) = self.index_of(id) else { continue }; // erased
-                let b = block_of_cell(self.cell_of_point[k]);
+                let b = block_of_support(self.support_of_point[k]);
                 let v = &mut vectors[b * nd..(b + 1) * nd];
                 for a in 0..nn {
                     let n = self.geometry[k].shape[a];
@@ -448,12 +460,11 @@ impl Body {
     /// Convect (g2p, update particles): see the module doc. `node_ids` maps grid nodes to
     /// global nodes.
     pub fn convect(&mut self, grid: &Grid, node_ids: &[usize], input: &AssemblyInput<'_>) {
-        let nn = grid.mesh.element.num_nodes();
         let dim = grid.mesh.element.dim();
         let (dt, gamma) = (input.time_step, input.gamma);
         let theta = self.velocity_blend.theta(dt);
         let dynamic = input.inertial_acceleration.is_some();
-        let (geometry, cells) = (&self.geometry, &self.cell_of_point);
+        let (geometry, supports) = (&self.geometry, &self.support_of_point);
         let pts = &mut self.points;
         let outs = &self.trial.out;
         (
@@ -469,12 +480,12 @@ impl Body {
             .zip(pts.work.par_iter_mut().zip(pts.initial_volume.par_iter()))
             .enumerate()
             .for_each(|(p, ((x, u, v, a, f, sigma, vol), (work, v0)))| {
-                let cell = grid.mesh.cell(cells[p]);
+                let nodes = grid.support(supports[p]);
                 let mut du = [0.0; 3];
                 let mut acc = [0.0; 3];
                 let mut v_grid = [0.0; 3];
-                for a_ in 0..nn {
-                    let g = node_ids[cell[a_]] * dim;
+                for (a_, &node) in nodes.iter().enumerate() {
+                    let g = node_ids[node] * dim;
                     let n = geometry[p].shape[a_];
                     for i in 0..dim {
                         du[i] += n * (input.state.u[g + i] - input.committed.u[g + i]);
@@ -541,11 +552,10 @@ impl Body {
 
     /// Interpolates the nodal accelerations `a` (full DOF vector) to the points.
     pub fn interpolate_acceleration(&mut self, grid: &Grid, node_ids: &[usize], a: &[f64]) {
-        let element = grid.mesh.element;
-        let dim = element.dim();
-        for (p, &cell) in self.cell_of_point.iter().enumerate() {
+        let dim = grid.mesh.element.dim();
+        for (p, &support) in self.support_of_point.iter().enumerate() {
             let mut acc = [0.0; 3];
-            for (k, &node) in grid.mesh.cell(cell).iter().enumerate().take(element.num_nodes()) {
+            for (k, &node) in grid.support(support).iter().enumerate() {
                 let g = node_ids[node] * dim;
                 for i in 0..dim {
                     acc[i] += self.geometry[p].shape[k] * a[g + i];
@@ -567,11 +577,7 @@ impl Body {
         let pts = &self.points;
         (0..pts.len()).map(move |p| {
             let x = pts.position[p];
-            let size = |v: f64| match formulation {
-                Formulation::ThreeD => v.cbrt(),
-                Formulation::Axisymmetric => (v / (2.0 * std::f64::consts::PI * x[0].max(1e-300))).sqrt(),
-                _ => (v / thickness).sqrt(),
-            };
+            let size = |v: f64| point_size(formulation, thickness, v, &x);
             PointExtent { position: x, size: size(pts.volume[p]), initial_size: size(pts.initial_volume[p]) }
         })
     }
@@ -580,21 +586,28 @@ impl Body {
     /// points' pressure `p_p = J_p tr σ_p / 3` (the mean Kirchhoff stress of the u–p
     /// formulation), the start of a step's nodal pressures.
     pub fn project_pressure(&self, grid: &Grid, sums: &mut [f64]) {
-        let nn = grid.mesh.element.num_nodes();
-        for (p, &cell) in self.cell_of_point.iter().enumerate() {
+        for (p, &support) in self.support_of_point.iter().enumerate() {
             let f = &self.points.deformation_gradient[p];
             let pressure = f.determinant() * self.points.cauchy[p].trace() / 3.0;
-            for (a, &node) in grid.mesh.cell(cell).iter().enumerate().take(nn) {
+            for (a, &node) in grid.support(support).iter().enumerate() {
                 sums[node] += self.geometry[p].shape[a] * self.points.mass[p] * pressure;
+            }
+        }
+    }
+
+    /// Marks the grid nodes whose function is non-zero at one of the body's points.
+    pub fn mark_reached_nodes(&self, grid: &Grid, reached: &mut [bool]) {
+        for (p, &support) in self.support_of_point.iter().enumerate() {
+            for (a, &node) in grid.support(support).iter().enumerate() {
+                reached[node] |= self.geometry[p].shape[a] != 0.0;
             }
         }
     }
 
     /// Nodal mass `Σ_p N_I m_p` of this body's points (per grid node).
     pub fn nodal_mass(&self, grid: &Grid, mass: &mut [f64]) {
-        let nn = grid.mesh.element.num_nodes();
-        for (p, &cell) in self.cell_of_point.iter().enumerate() {
-            for (a, &node) in grid.mesh.cell(cell).iter().enumerate().take(nn) {
+        for (p, &support) in self.support_of_point.iter().enumerate() {
+            for (a, &node) in grid.support(support).iter().enumerate() {
                 mass[node] += self.geometry[p].shape[a] * self.points.mass[p];
             }
         }

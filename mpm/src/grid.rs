@@ -24,8 +24,11 @@
 //! platen travel instead of 0.13 m.)
 
 use loam_fem::element::{ElementType, MAX_NODES};
-use loam_fem::kernel::CellMap;
+use loam_fem::formulation::Formulation;
+use loam_fem::kernel::{point_geometry, CellMap, KernelError, PointGeometry};
 use loam_fem::mesh::Mesh;
+
+use crate::basis::{Basis, SmoothLattice, SUPPORT_NODES};
 use nalgebra::Vector3;
 
 /// Marker of a lattice cell without a grid cell (removed: inside a structure).
@@ -152,6 +155,25 @@ pub struct Grid {
     moved: Vec<bool>,
     /// Bins over the moved cells in their current positions (`None` if none moved).
     moved_bins: Option<Bins>,
+    /// The supports of a smooth basis (`None`: the cells' linear functions).
+    smooth: Option<SmoothLattice>,
+}
+
+/// Why a grid cannot carry a smooth basis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum BasisError {
+    /// The grid is not a structured lattice of quad4 cells in 2D.
+    #[error("a smooth basis needs a structured grid of quad4 cells in 2D (tri3 and unstructured grids keep \"linear\"; hex8 grids are not supported yet)")]
+    NotQuadLattice,
+    /// The lattice is rotated.
+    #[error("a smooth basis needs a grid whose cell edges follow x and y (not rotated)")]
+    Rotated,
+    /// Cells were removed or the grid moves with a structure.
+    #[error("a smooth basis needs a fixed grid without holes: a grid attached to a structure by shared interface nodes moves and loses the cells inside the structure, and the functions reaching over neighbouring cells are defined on the fixed lattice only")]
+    NotFixed,
+    /// Fewer than two cells in a direction.
+    #[error("a smooth basis needs two or more cells in each direction")]
+    TooFewCells,
 }
 
 /// A cell that the motion of the grid would invert.
@@ -201,7 +223,132 @@ impl Grid {
     fn with_locator(mesh: Mesh, locator: Locator) -> Self {
         let affine = (0..mesh.num_cells()).map(|c| affine_cell(&mesh, c)).collect();
         let moved = vec![false; mesh.num_cells()];
-        Self { reference: mesh.coords.clone(), mesh, locator, affine, moved, moved_bins: None }
+        Self { reference: mesh.coords.clone(), mesh, locator, affine, moved, moved_bins: None, smooth: None }
+    }
+
+    /// Gives the grid the shape functions `basis` ([`crate::basis`]): a smooth one needs a
+    /// structured, unrotated, fixed lattice of quad4 cells in 2D with two or more cells per
+    /// direction.
+    pub fn set_basis(&mut self, basis: Basis) -> Result<(), BasisError> {
+        if !basis.is_smooth() {
+            self.smooth = None;
+            return Ok(());
+        }
+        let Locator::Lattice { origin, spacing, cells, rotation, cell_index } = &self.locator else {
+            return Err(BasisError::NotQuadLattice);
+        };
+        if self.mesh.element != ElementType::Quad4 {
+            return Err(BasisError::NotQuadLattice);
+        }
+        if *rotation != (1.0, 0.0) {
+            return Err(BasisError::Rotated);
+        }
+        if cell_index.is_some() || self.has_moved() {
+            return Err(BasisError::NotFixed);
+        }
+        if cells[0] < 2 || cells[1] < 2 {
+            return Err(BasisError::TooFewCells);
+        }
+        let lattice = SmoothLattice::new(basis, [origin[0], origin[1]], [spacing[0], spacing[1]], [cells[0], cells[1]]);
+        self.smooth = Some(lattice);
+        Ok(())
+    }
+
+    /// The grid's shape functions.
+    pub fn basis(&self) -> Basis {
+        self.smooth.as_ref().map_or(Basis::Linear, SmoothLattice::basis)
+    }
+
+    /// Number of supports: the blocks that group the material points whose functions reach
+    /// the same nodes (the cells on the linear basis; 3 × 3-node windows on a smooth one).
+    pub fn num_supports(&self) -> usize {
+        self.smooth.as_ref().map_or_else(|| self.mesh.num_cells(), SmoothLattice::num_supports)
+    }
+
+    /// The grid nodes of support `s`.
+    pub fn support(&self, s: usize) -> &[usize] {
+        match &self.smooth {
+            Some(lattice) => lattice.support(s),
+            None => self.mesh.cell(s),
+        }
+    }
+
+    /// Nodes per support.
+    pub fn support_len(&self) -> usize {
+        if self.smooth.is_some() {
+            SUPPORT_NODES
+        } else {
+            self.mesh.element.num_nodes()
+        }
+    }
+
+    /// Supports sharing a node with any of `supports` (ascending, included).
+    pub fn dilate_supports(&self, supports: &[usize]) -> Vec<usize> {
+        match &self.smooth {
+            Some(lattice) => lattice.dilate(supports),
+            None => self.dilate(supports),
+        }
+    }
+
+    /// The support of a material point at `x` whose domain has the half lengths `half_size`
+    /// along the axes (GIMP's `l_p,d`) and its shape functions and gradients in the grid's
+    /// current configuration (weight: the caller's), or `None` outside the grid.
+    pub fn point_functions(
+        &self,
+        x: &[f64; 3],
+        half_size: [f64; 3],
+        formulation: Formulation,
+        thickness: f64,
+    ) -> Option<(usize, PointGeometry)> {
+        if let Some(lattice) = &self.smooth {
+            return lattice.evaluate(x, half_size, formulation);
+        }
+        let (cell, xi) = self.locate(x)?;
+        let element = self.mesh.element;
+        let coords = self.cell_coords(cell);
+        let g = point_geometry(
+            element,
+            formulation,
+            thickness,
+            &coords[..element.num_nodes()],
+            &xi,
+            1.0,
+            self.cell_map(cell),
+        )
+        .expect("located points lie in cells that are not inverted");
+        Some((cell, g))
+    }
+
+    /// The Gauss rule of support `s` in the step's configuration on which a u–p support
+    /// integrates its pressure projection ([`loam_fem::mixed_kernel`]): the cell's
+    /// [`ElementType::gauss_points_mixed`], or a 3 × 3 rule over a smooth support's region.
+    /// Writes its points into `rule` and returns how many.
+    pub fn projection_rule(
+        &self,
+        s: usize,
+        formulation: Formulation,
+        thickness: f64,
+        rule: &mut [PointGeometry; MAX_NODES],
+    ) -> Result<usize, KernelError> {
+        if let Some(lattice) = &self.smooth {
+            lattice.projection_rule(s, formulation, thickness, rule);
+            return Ok(SUPPORT_NODES);
+        }
+        let element = self.mesh.element;
+        let coords = self.cell_coords(s);
+        let gauss = element.gauss_points_mixed();
+        for (g, gp) in rule.iter_mut().zip(&gauss) {
+            *g = point_geometry(
+                element,
+                formulation,
+                thickness,
+                &coords[..element.num_nodes()],
+                &gp.xi,
+                gp.weight,
+                self.cell_map(s),
+            )?;
+        }
+        Ok(gauss.len())
     }
 
     /// The grid without the cells marked in `remove` (e.g. those inside a structure) and

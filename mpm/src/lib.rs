@@ -18,6 +18,10 @@
 //!    points, `v_p ← v_p + Δt/2 (a_p^n + a_p^{n+1})`, `x_p ← x_p + Δu_p`, commit `F`, volume
 //!    and law state.
 //!
+//! A grid's shape functions are the cells' linear ones or a smooth basis (uGIMP, quadratic
+//! B-splines: [`basis`]) whose functions reach over neighbouring cells; a point's block is
+//! then its **support**, the 3 × 3 nodes its functions reach, in place of its cell.
+//!
 //! One grid is one [`mpm_domain::MpmDomain`]: the bodies ([`body::Body`], one material each)
 //! and the penalty walls ([`penalty_boundary`]) on it are parts of it, not domains of their
 //! own.
@@ -25,6 +29,7 @@
 #![allow(non_snake_case)]
 
 pub mod attachment;
+pub mod basis;
 pub mod body;
 pub mod ghost_penalty;
 pub mod grid;

@@ -34,7 +34,7 @@ use loam_fem::domain::{
 };
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
-use loam_fem::kernel::{point_geometry, KernelContext, PointGeometry};
+use loam_fem::kernel::{KernelContext, PointGeometry};
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 
@@ -86,10 +86,10 @@ struct CellBlocks {
     first_body: Vec<u8>,
     /// For each block: bit `a` set if it carries the equation `Δu = 0` of its node `a`, which
     /// no active cell touches (residual `Δu`, unit diagonal).
-    orphans: Vec<u8>,
+    orphans: Vec<u16>,
     /// As `orphans` for the pressure DOFs (u–p grids): also at interface nodes, whose
     /// pressure only the soil has.
-    pressure_orphans: Vec<u8>,
+    pressure_orphans: Vec<u16>,
     /// Rings of cells around the active ones in the pattern (0: the pattern is the active
     /// set and is rebuilt whenever it changes).
     rings: usize,
@@ -187,9 +187,9 @@ impl MpmDomain {
         self.pressure_dofs.as_deref()
     }
 
-    /// DOFs of a cell's block: `nn·dim` displacements, then `nn` pressures on a u–p grid.
+    /// DOFs of a support's block: `nn·dim` displacements, then `nn` pressures on a u–p grid.
     fn block_len(&self) -> usize {
-        let nn = self.grid.mesh.element.num_nodes();
+        let nn = self.grid.support_len();
         nn * self.dim() + if self.pressure_dofs.is_some() { nn } else { 0 }
     }
 
@@ -324,7 +324,7 @@ impl MpmDomain {
     /// identity rows of pattern nodes that no active cell touches. Returns whether the
     /// blocks changed.
     pub fn update_pattern(&mut self) -> bool {
-        let num_cells = self.grid.mesh.num_cells();
+        let num_cells = self.grid.num_supports();
         let active: Vec<usize> = (0..num_cells).filter(|&c| self.bodies.iter().any(|b| b.occupies(c))).collect();
         let cb = &mut self.blocks;
         let changed = if cb.rings == 0 {
@@ -335,7 +335,7 @@ impl MpmDomain {
         if changed {
             let mut cells = active.clone();
             for _ in 0..cb.rings {
-                cells = self.grid.dilate(&cells);
+                cells = self.grid.dilate_supports(&cells);
             }
             cb.in_pattern = vec![false; num_cells];
             for &c in &cells {
@@ -344,11 +344,19 @@ impl MpmDomain {
             cb.pattern = cells;
         }
         cb.active = active;
-        let mesh = &self.grid.mesh;
-        let mut live = vec![false; mesh.coords.len()];
-        for &c in &cb.active {
-            for &a in mesh.cell(c) {
-                live[a] = true;
+        // live nodes: those of the active cells (linear basis), or those that a point's
+        // function reaches (smooth basis: a support also holds nodes whose functions vanish at
+        // all its points, which would leave empty rows)
+        let mut live = vec![false; self.grid.mesh.coords.len()];
+        if self.grid.basis().is_smooth() {
+            for body in &self.bodies {
+                body.mark_reached_nodes(&self.grid, &mut live);
+            }
+        } else {
+            for &c in &cb.active {
+                for &a in self.grid.support(c) {
+                    live[a] = true;
+                }
             }
         }
         let mut live_pressure = live.clone();
@@ -358,9 +366,9 @@ impl MpmDomain {
         for &c in &cb.pattern {
             let first = self.bodies.iter().position(|b| b.occupies(c));
             cb.first_body.push(first.map_or(NONE, |k| k as u8));
-            let (mut mask, mut pressure_mask) = (0u8, 0u8);
-            if first.is_none() {
-                for (a, &node) in mesh.cell(c).iter().enumerate() {
+            let (mut mask, mut pressure_mask) = (0u16, 0u16);
+            {
+                for (a, &node) in self.grid.support(c).iter().enumerate() {
                     let tied = self.attachment.as_ref().is_some_and(|att| att.kind[node] == GridNodeKind::Tied);
                     if !live[node] && !tied {
                         live[node] = true; // owned by this block
@@ -485,16 +493,50 @@ impl MpmDomain {
         vectors: &mut [f64],
     ) -> Result<(), DomainError> {
         let element = self.grid.mesh.element;
-        let nn = element.num_nodes();
+        let nn = self.grid.support_len();
         let dim = self.dim();
         let nd = self.block_len();
         let pressure_dofs = self.pressure_dofs.as_deref();
         let (formulation, thickness) = (self.formulation, self.thickness);
         let (grid, node_ids, name, blocks) = (&self.grid, &self.node_ids, &self.name, &self.blocks);
         let attachment = self.attachment.as_ref();
-        // blocks without points: zero, but for the orphan nodes' equations `r = Δu` (`K = I`:
-        // they keep their place; at the soil node of a slip pair only the tangential part,
-        // `r = (I − n⊗n) Δu`, its normal component belongs to the structure's equation)
+        // the orphan nodes' equations `r = Δu` (`K = I`: they keep their place; at the soil
+        // node of a slip pair only the tangential part, `r = (I − n⊗n) Δu`, its normal
+        // component belongs to the structure's equation), added to block `b`
+        let orphan_rows = |b: usize, km: &mut [f64], fv: &mut [f64]| {
+            for (a, &node) in grid.support(blocks.pattern[b]).iter().enumerate() {
+                if blocks.orphans[b] & (1 << a) == 0 {
+                    continue;
+                }
+                let normal = match attachment.map(|att| att.kind[node]) {
+                    Some(GridNodeKind::Slip { normal, .. }) => Some(normal),
+                    _ => None,
+                };
+                let dof = node_ids[node] * dim;
+                for i in 0..dim {
+                    for j in 0..dim {
+                        let p = if i == j { 1.0 } else { 0.0 } - normal.map_or(0.0, |n| n[i] * n[j]);
+                        fv[a * dim + i] += p * (input.state.u[dof + j] - input.committed.u[dof + j]);
+                        if input.with_tangent {
+                            km[(a * dim + i) * nd + a * dim + j] += p;
+                        }
+                    }
+                }
+            }
+            if let Some(pressure_dofs) = pressure_dofs {
+                let nu = nn * dim;
+                for (a, &node) in grid.support(blocks.pattern[b]).iter().enumerate() {
+                    if blocks.pressure_orphans[b] & (1 << a) != 0 {
+                        let dof = pressure_dofs[node];
+                        fv[nu + a] += input.state.u[dof] - input.committed.u[dof];
+                        if input.with_tangent {
+                            km[(nu + a) * nd + nu + a] += 1.0;
+                        }
+                    }
+                }
+            }
+        };
+        // blocks without points: zero, but for the orphan nodes' equations
         matrices
             .par_chunks_mut(nd * nd)
             .zip(vectors.par_chunks_mut(nd))
@@ -506,44 +548,11 @@ impl MpmDomain {
                 if input.with_tangent {
                     km.fill(0.0);
                 }
-                for (a, &node) in grid.mesh.cell(blocks.pattern[b]).iter().enumerate() {
-                    if blocks.orphans[b] & (1 << a) == 0 {
-                        continue;
-                    }
-                    let normal = match attachment.map(|att| att.kind[node]) {
-                        Some(GridNodeKind::Slip { normal, .. }) => Some(normal),
-                        _ => None,
-                    };
-                    let dof = node_ids[node] * dim;
-                    for i in 0..dim {
-                        for j in 0..dim {
-                            let p = if i == j { 1.0 } else { 0.0 } - normal.map_or(0.0, |n| n[i] * n[j]);
-                            fv[a * dim + i] += p * (input.state.u[dof + j] - input.committed.u[dof + j]);
-                            if input.with_tangent {
-                                km[(a * dim + i) * nd + a * dim + j] = p;
-                            }
-                        }
-                    }
-                }
-                if let Some(pressure_dofs) = pressure_dofs {
-                    let nu = nn * dim;
-                    for (a, &node) in grid.mesh.cell(blocks.pattern[b]).iter().enumerate() {
-                        if blocks.pressure_orphans[b] & (1 << a) != 0 {
-                            let dof = pressure_dofs[node];
-                            fv[nu + a] = input.state.u[dof] - input.committed.u[dof];
-                            if input.with_tangent {
-                                km[(nu + a) * nd + nu + a] = 1.0;
-                            }
-                        }
-                    }
-                }
+                orphan_rows(b, km, fv);
             });
-        // the element's Gauss rule for the u–p projection (at most one point per node)
-        let mixed_rule = element.gauss_points_mixed();
-        debug_assert!(mixed_rule.len() <= MAX_NODES);
         for (k, body) in self.bodies.iter_mut().enumerate() {
             let mut trial = body.take_trial();
-            let views = trial.views(body.cell_start(), body.law().state_len(), &blocks.pattern);
+            let views = trial.views(body.support_start(), body.law().state_len(), &blocks.pattern);
             let body_ref = &*body;
             let ctx = KernelContext {
                 element,
@@ -560,7 +569,7 @@ impl MpmDomain {
                 .try_for_each(|(b, ((km, fv), view))| {
                     let Some((trial, out)) = view else { return Ok(()) };
                     let cell = blocks.pattern[b];
-                    let nodes = grid.mesh.cell(cell);
+                    let nodes = grid.support(cell);
                     let mut disp = [[0.0; 3]; MAX_NODES];
                     let mut inertia = [[0.0; 3]; MAX_NODES];
                     let mut pressure = [0.0; MAX_NODES];
@@ -576,28 +585,16 @@ impl MpmDomain {
                             pressure[a] = input.state.u[p[local]];
                         }
                     }
-                    // the cell's Gauss rule in the step's configuration, for the projection
+                    // the support's Gauss rule in the step's configuration, for the projection
                     let mut cell_rule = [NO_GEOMETRY; MAX_NODES];
-                    let rule_len = if pressure_dofs.is_some() { mixed_rule.len() } else { 0 };
-                    if rule_len > 0 {
-                        let coords = grid.cell_coords(cell);
-                        for (g, gp) in cell_rule.iter_mut().zip(&mixed_rule) {
-                            *g = point_geometry(
-                                element,
-                                formulation,
-                                thickness,
-                                &coords[..nn],
-                                &gp.xi,
-                                gp.weight,
-                                grid.cell_map(cell),
-                            )
-                            .map_err(|err| DomainError {
-                                domain: name.clone(),
-                                element: cell,
-                                message: err.to_string(),
-                            })?;
+                    let rule_len = match pressure_dofs {
+                        Some(_) => {
+                            grid.projection_rule(cell, formulation, thickness, &mut cell_rule).map_err(|err| {
+                                DomainError { domain: name.clone(), element: cell, message: err.to_string() }
+                            })?
                         }
-                    }
+                        None => 0,
+                    };
                     let cell_rule = &cell_rule[..rule_len];
                     let pressure = pressure_dofs.map(|_| (&pressure[..nn], cell_rule));
                     let fail = |err: loam_fem::kernel::KernelError| DomainError {
@@ -641,10 +638,17 @@ impl MpmDomain {
             body.restore_trial(trial);
             result?;
         }
-        let block_of_cell =
-            |c: usize| blocks.pattern.binary_search(&c).expect("the cell of a material point is in the pattern");
+        // blocks with points: a smooth basis's nodes that no point's function reaches
+        matrices
+            .par_chunks_mut(nd * nd)
+            .zip(vectors.par_chunks_mut(nd))
+            .enumerate()
+            .filter(|(b, _)| blocks.first_body[*b] != NONE && (blocks.orphans[*b] | blocks.pressure_orphans[*b]) != 0)
+            .for_each(|(b, (km, fv))| orphan_rows(b, km, fv));
+        let block_of_support =
+            |s: usize| blocks.pattern.binary_search(&s).expect("the support of a material point is in the pattern");
         for body in &self.bodies {
-            body.add_point_loads(input.time, nd, dim, block_of_cell, vectors);
+            body.add_point_loads(input.time, (nn, dim, nd), block_of_support, vectors);
         }
         Ok(())
     }
@@ -678,7 +682,7 @@ impl MpmDomain {
         }
         let mut active = vec![0.0; mesh.coords.len()];
         for &c in &self.blocks.active {
-            for &node in mesh.cell(c) {
+            for &node in self.grid.support(c) {
                 active[node] = 1.0;
             }
         }
@@ -793,7 +797,7 @@ impl Domain for MpmDomain {
     fn blocks(&self, layout: &mut BlockLayout) {
         let dim = self.dim();
         for &c in &self.blocks.pattern {
-            let cell = self.grid.mesh.cell(c);
+            let cell = self.grid.support(c);
             let pressures = self.pressure_dofs.iter().flat_map(|p| cell.iter().map(move |&a| p[a]));
             layout.push(cell.iter().flat_map(|&a| (0..dim).map(move |i| self.node_ids[a] * dim + i)).chain(pressures));
         }
@@ -969,7 +973,7 @@ impl Domain for MpmDomain {
 
     fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
         let state: MpmState = bincode::deserialize(bytes).map_err(|e| format!("domain '{}': {e}", self.name))?;
-        let cells = self.grid.mesh.num_cells();
+        let cells = self.grid.num_supports();
         if state.bodies.len() != self.bodies.len()
             || state.walls.len() != self.walls.len()
             || state.pattern.iter().any(|&c| c >= cells)

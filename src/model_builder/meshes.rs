@@ -541,7 +541,10 @@ fn structured_grid(case: &Case, loc: &str, g: &GridSpec) -> Result<Grid, CaseErr
     if g.rotation != 0.0 && dim != 2 {
         return Err(CaseError::new(format!("{loc}.grid.rotation"), "only 2D grids can be rotated"));
     }
-    Ok(Grid::rotated(origin, size, cells, g.element, g.rotation.to_radians()))
+    let mut grid = Grid::rotated(origin, size, cells, g.element, g.rotation.to_radians());
+    grid.set_basis(g.basis)
+        .map_err(|e| CaseError::new(format!("{loc}.grid.basis"), format!("\"{}\": {e}", g.basis.name())))?;
+    Ok(grid)
 }
 
 /// Even–odd rule.
@@ -774,6 +777,15 @@ fn couple_grids(
                 Some(i) => CaseError::new(format!("interfaces[{}]", requests[g][i].0), e.message),
                 None => CaseError::new("interfaces", e.message),
             };
+            if group.grid.basis().is_smooth() {
+                return Err(CaseError::new(
+                    format!("interfaces[{}].soil", requests[g][0].0),
+                    format!(
+                        "the grid of '{soil}' has the smooth basis \"{}\": shared interface nodes move the grid with the structure and remove its cells inside it, and the smooth functions are defined on the fixed lattice only (use \"basis\": \"linear\" for a coupled grid)",
+                        group.grid.basis().name()
+                    ),
+                ));
+            }
             let coupled = coupling::couple(soil, &group.grid, &views, &reqs).map_err(at)?;
             for (k, points) in &group.bodies {
                 coupling::check_points_outside(&case.domains[*k].name, &points.position, &views)
@@ -914,6 +926,7 @@ fn grid_domain(
     let dim = case.formulation.dim();
     let mut domain: Option<MpmDomain> = None;
     let mut indices = Vec::with_capacity(bodies.len());
+    let smooth = grid.basis().is_smooth();
     let mut grid = Some(grid);
     let mut node_ids = Some(node_ids);
     let first = bodies[0].0;
@@ -940,8 +953,20 @@ fn grid_domain(
                 ));
             }
         }
-        let default_alpha = default_ghost_penalty(case);
+        if smooth && d.quadrature == Quadrature::FilledCells {
+            return Err(CaseError::new(
+                format!("domains[{k}].quadrature"),
+                "filled_cells scales the points' weights per cell of the linear basis; a smooth grid.basis integrates over the points' own volumes (material_points)",
+            ));
+        }
+        let default_alpha = if smooth { 0.0 } else { default_ghost_penalty(case) };
         let alpha = d.ghost_penalty.unwrap_or(default_alpha);
+        if smooth && alpha > 0.0 {
+            return Err(CaseError::new(
+                format!("domains[{k}].ghost_penalty"),
+                "the ghost penalty acts on the jump of the normal derivative across the faces of cut cells, which a smooth grid.basis (C¹ across cell edges) does not have: leave it out or set 0",
+            ));
+        }
         if !(alpha.is_finite() && (0.0..=1e3).contains(&alpha)) {
             return Err(CaseError::new(
                 format!("domains[{k}].ghost_penalty"),
