@@ -19,7 +19,8 @@
 //!
 //! Run: `cargo bench --bench mpm_cantilever` (448, 1 792, 7 168 points), or choose sizes
 //! (material points or `nN`) with `LOAM_BENCH_MPM_SIZES=448,28672,n64`; threads with
-//! `LOAM_BENCH_THREADS=1,2`. Nothing is asserted about times.
+//! `LOAM_BENCH_THREADS=1,2`; the grid's shape functions with
+//! `LOAM_BENCH_BASES=linear,gimp,bspline2` (default linear). Nothing is asserted about times.
 
 mod common;
 
@@ -27,8 +28,9 @@ use common::{print_table, time_steps, StepTiming};
 use loam::case::Case;
 use loam::simulation::Simulation;
 
-/// The case JSON for `n` cells through the thickness, `steps` steps of 0.01 s.
-pub fn case_json(n: usize, steps: usize) -> String {
+/// The case JSON for `n` cells through the thickness, `steps` steps of 0.01 s, on the grid
+/// basis `basis`.
+pub fn case_json(n: usize, steps: usize, basis: &str) -> String {
     let h = 1.0 / n as f64;
     format!(
         r#"{{
@@ -37,7 +39,7 @@ pub fn case_json(n: usize, steps: usize) -> String {
   "thickness": 1.0,
   "materials": {{ "beam": {{ "law": "neo_hookean", "density": 1000.0, "young_modulus": 9.0e7, "poisson_ratio": 0.0 }} }},
   "domains": [ {{ "name": "beam", "type": "mpm", "material": "beam",
-     "grid": {{ "origin": [0.0, -1.5], "size": [8.0, 3.0], "cells": [{gx}, {gy}], "element": "quad4" }},
+     "grid": {{ "origin": [0.0, -1.5], "size": [8.0, 3.0], "cells": [{gx}, {gy}], "element": "quad4", "basis": "{basis}" }},
      "material_points": {{ "cells": {{ "mesh": {{ "rectangle": {{ "origin": [0.0, 0.0], "size": [7.0, 1.0], "cells": [{bx}, {n}], "element": "quad4" }} }},
                            "points_per_cell": 4 }} }} }} ],
   "regions": {{ "clamp": {{ "x": 0.0 }} }},
@@ -65,10 +67,11 @@ fn parse_size(s: &str) -> Option<usize> {
     Some(((points / 28.0).sqrt()).round() as usize)
 }
 
-fn run(n: usize, threads: usize, steps: usize) -> StepTiming {
-    let case = Case::parse(&case_json(n, steps)).expect("benchmark case parses");
+fn run(n: usize, threads: usize, steps: usize, basis: &str) -> StepTiming {
+    let case = Case::parse(&case_json(n, steps, basis)).expect("benchmark case parses");
     let mut sim = Simulation::new(case).expect("benchmark case builds");
-    let mut row = time_steps(&mut sim, &format!("n = {n}"), 28 * n * n, threads, 1, steps);
+    let label = if basis == "linear" { format!("n = {n}") } else { format!("n = {n} {basis}") };
+    let mut row = time_steps(&mut sim, &label, 28 * n * n, threads, 1, steps);
     row.extra.push(format!("{:.5}", sim.monitor_values()[0]));
     row
 }
@@ -84,11 +87,17 @@ fn main() {
         .map(|v| v.split(',').filter_map(|s| s.trim().parse().ok()).collect())
         .unwrap_or_else(|| vec![1, 2]);
     let steps: usize = std::env::var("LOAM_BENCH_STEPS").ok().and_then(|v| v.parse().ok()).unwrap_or(10);
+    let bases: Vec<String> = std::env::var("LOAM_BENCH_BASES")
+        .ok()
+        .map(|v| v.split(',').map(|s| s.trim().to_string()).collect())
+        .unwrap_or_else(|| vec!["linear".into()]);
     let mut rows = Vec::new();
     for &n in &sizes {
         eprintln!("n = {n} (h = {:.5} m), {} material points", 1.0 / n as f64, 28 * n * n);
-        for &th in &threads {
-            rows.push(run(n, th, steps));
+        for basis in &bases {
+            for &th in &threads {
+                rows.push(run(n, th, steps, basis));
+            }
         }
     }
     print_table(&rows, &["tip uy (m)"]);

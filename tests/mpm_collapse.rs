@@ -268,3 +268,26 @@ fn bui2008_adaptive_steps_end_on_the_small_step_surface() {
     println!("final surfaces {:.2} mm RMS apart (x = 0 … 0.5 m every 1 mm; tolerance 2 mm, issue 5)", rms * 1e3);
     assert!(rms <= 0.002);
 }
+
+/// Benchmark 8 on the smooth bases (issue 23): the quadrilateral case (h = 5 mm, 4 points
+/// per cell) with `grid.basis` = `gimp` and `bspline2`, measured against the experiment as
+/// the linear case. Measured: GIMP at rest at 0.68 s, runout 0.4048 m (−3.6 %), surface
+/// 2.72 mm RMS, failure line 31.8°; B-splines at rest at 0.69 s, runout 0.3986 m (−5.1 %,
+/// just outside the 5 % of the linear case), surface 2.43 mm RMS, failure line 28.6°.
+/// Asserted: each at rest with its final surface and failure line within the linear case's
+/// tolerances; the runout within [`RUNOUT_TOLERANCE`] for GIMP, and printed for the
+/// B-splines (their shorter runout is the README's open point). About 1.5 minutes.
+#[test]
+#[ignore = "long (about 1.5 min): LOAM_LONG=1 scripts/test.sh"]
+fn bui2008_collapse_on_smooth_bases() {
+    for basis in ["gimp", "bspline2"] {
+        let mut json = case_json("collapse_bui2008_quad.json");
+        json["domains"][0]["grid"]["basis"] = serde_json::json!(basis);
+        let c = measure(basis, parse(json));
+        let [at_rest, runout, surface, angle] = check(&c);
+        assert!(at_rest && surface && angle, "{basis}: at rest {at_rest}, surface {surface}, failure line {angle}");
+        if basis == "gimp" {
+            assert!(runout, "{basis}: runout outside its tolerance");
+        }
+    }
+}
