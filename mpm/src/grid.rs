@@ -31,6 +31,10 @@ use loam_fem::mesh::Mesh;
 use crate::basis::{Basis, SmoothLattice, SUPPORT_NODES};
 use nalgebra::Vector3;
 
+/// An empty integration point (storage for a cell's or support's Gauss rule).
+pub const NO_GEOMETRY: PointGeometry =
+    PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
+
 /// Marker of a lattice cell without a grid cell (removed: inside a structure).
 const NO_CELL: u32 = u32::MAX;
 
@@ -334,8 +338,21 @@ impl Grid {
             lattice.projection_rule(s, formulation, thickness, rule);
             return Ok(SUPPORT_NODES);
         }
+        self.cell_rule(s, formulation, thickness, rule)
+    }
+
+    /// The Gauss rule [`ElementType::gauss_points_mixed`] of `cell` in the step's
+    /// configuration (weights: its share of the cell's volume, with the thickness or `2πR`).
+    /// Writes its points into `rule` and returns how many.
+    pub fn cell_rule(
+        &self,
+        cell: usize,
+        formulation: Formulation,
+        thickness: f64,
+        rule: &mut [PointGeometry; MAX_NODES],
+    ) -> Result<usize, KernelError> {
         let element = self.mesh.element;
-        let coords = self.cell_coords(s);
+        let coords = self.cell_coords(cell);
         let gauss = element.gauss_points_mixed();
         for (g, gp) in rule.iter_mut().zip(&gauss) {
             *g = point_geometry(
@@ -345,7 +362,7 @@ impl Grid {
                 &coords[..element.num_nodes()],
                 &gp.xi,
                 gp.weight,
-                self.cell_map(s),
+                self.cell_map(cell),
             )?;
         }
         Ok(gauss.len())

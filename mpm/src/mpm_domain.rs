@@ -34,14 +34,14 @@ use loam_fem::domain::{
 };
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
-use loam_fem::kernel::{KernelContext, PointGeometry};
+use loam_fem::kernel::KernelContext;
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 
 use crate::attachment::{GridAttachment, GridNodeKind, MIN_CELL_QUALITY};
 use crate::body::{Body, GridSums};
 use crate::ghost_penalty::{GhostPenalty, CUT_FRACTION};
-use crate::grid::Grid;
+use crate::grid::{Grid, NO_GEOMETRY};
 use crate::penalty_boundary::{GridNodes, PenaltyBoundary};
 use crate::quadrature::{cell_volume, normalise_filled_cells, PointQuadrature};
 
@@ -50,10 +50,6 @@ const NONE: u8 = u8::MAX;
 
 /// Largest element block (hex8 in 3D, u–p): 32 DOFs.
 const MAX_BLOCK: usize = loam_fem::mixed_kernel::MAX_MIXED_DOFS;
-
-/// An empty integration point (storage for the cell rule of the u–p projection).
-const NO_GEOMETRY: PointGeometry =
-    PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
 
 /// Rings of inactive cells kept in the sparsity pattern around the active ones (default 1;
 /// `LOAM_MPM_PATTERN_RINGS=0` rebuilds the pattern at every change of the active set).

@@ -41,11 +41,11 @@
 //! surface or beside an empty cell the material may fill only part of the cell, and the
 //! points' own volumes are kept there.
 
+use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
-use loam_fem::kernel::point_geometry;
 
 use crate::body::Body;
-use crate::grid::Grid;
+use crate::grid::{Grid, NO_GEOMETRY};
 
 /// How a grid cell integrates over its material points (`domains[k].quadrature`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -94,25 +94,9 @@ pub fn normalise_filled_cells(grid: &Grid, formulation: Formulation, thickness: 
 /// Volume of grid cell `c` in its current position, as the points' weights count it
 /// (thickness, or `2πR` of an axisymmetric model): the element's Gauss rule.
 pub fn cell_volume(grid: &Grid, formulation: Formulation, thickness: f64, c: usize) -> f64 {
-    let element = grid.mesh.element;
-    let coords = grid.cell_coords(c);
-    element
-        .gauss_points_mixed()
-        .iter()
-        .filter_map(|gp| {
-            point_geometry(
-                element,
-                formulation,
-                thickness,
-                &coords[..element.num_nodes()],
-                &gp.xi,
-                gp.weight,
-                grid.cell_map(c),
-            )
-            .ok()
-        })
-        .map(|g| g.weight)
-        .sum()
+    let mut rule = [NO_GEOMETRY; MAX_NODES];
+    let points = grid.cell_rule(c, formulation, thickness, &mut rule).unwrap_or(0);
+    rule[..points].iter().map(|g| g.weight).sum()
 }
 
 #[cfg(test)]
