@@ -455,14 +455,4 @@ fn smooth_basis_where_it_cannot_act_is_refused_naming_the_key() {
         }),
         &["domains[0].ghost_penalty"],
     );
-    expect_bad(
-        "penalty wall on a smooth grid",
-        check("basis-wall", "biaxial_mc_softening_mpm.json", &|j| {
-            for d in j["domains"].as_array_mut().unwrap() {
-                d["grid"]["basis"] = json!("gimp");
-                d["ghost_penalty"] = json!(0.0);
-            }
-        }),
-        &["boundary_conditions[", "penalty", "gimp"],
-    );
 }

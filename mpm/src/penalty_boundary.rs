@@ -206,9 +206,9 @@ pub struct PenaltySettings {
 /// near the wall (contact form).
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct PenaltyPoint {
-    /// Grid cell that holds it.
+    /// Grid support that holds it (its cell on the linear basis).
     cell: usize,
-    /// Shape functions of the cell at the point.
+    /// Shape functions of the support's nodes at the point.
     shape: [f64; MAX_NODES],
     /// Measure `w` (m² in plane problems).
     weight: f64,
@@ -327,17 +327,24 @@ impl PenaltyBoundary {
         self.settings.displacement.map(|d| d * f)
     }
 
-    /// The point at `x` if it lies in a cell with projected mass on every node (`mass` per
-    /// grid node).
-    fn place(grid: &Grid, x: [f64; 3], weight: f64, normal: [f64; 3], gap: f64, mass: &[f64]) -> Option<PenaltyPoint> {
-        let (cell, xi) = grid.locate(&x)?;
-        if !grid.mesh.cell(cell).iter().all(|&a| mass[a] > 0.0) {
+    /// The point at `x` if every node its functions reach carries projected mass (`mass` per
+    /// grid node): on the linear basis every node of its cell, on a smooth one every node of
+    /// its support whose function is not zero there (the functions of a point, without a
+    /// GIMP domain: the field's value at `x`).
+    fn place(
+        &self,
+        grid: &Grid,
+        x: [f64; 3],
+        weight: f64,
+        normal: [f64; 3],
+        gap: f64,
+        mass: &[f64],
+    ) -> Option<PenaltyPoint> {
+        let (cell, g) = grid.point_functions(&x, [0.0; 3], self.formulation, self.thickness)?;
+        if !grid.support(cell).iter().zip(&g.shape).all(|(&a, &n)| n == 0.0 || mass[a] > 0.0) {
             return None;
         }
-        let mut shape = [0.0; MAX_NODES];
-        let element = grid.mesh.element;
-        element.shape_functions(&xi, &mut shape[..element.num_nodes()]);
-        Some(PenaltyPoint { cell, shape, weight, normal, gap, position: x })
+        Some(PenaltyPoint { cell, shape: g.shape, weight, normal, gap, position: x })
     }
 
     /// Penalty vector `v` (force on the body `−β w v`) of point `k` at `input`, its
@@ -356,7 +363,7 @@ impl PenaltyBoundary {
         for i in 0..dim {
             g[i] = -(wall[i] - self.offset[i]);
         }
-        for (a, &node) in at.grid.mesh.cell(p.cell).iter().enumerate() {
+        for (a, &node) in at.grid.support(p.cell).iter().enumerate() {
             let dof = at.node_ids[node] * dim;
             for i in 0..dim {
                 g[i] += p.shape[a] * (input.state.u[dof + i] - input.committed.u[dof + i]);
@@ -392,7 +399,8 @@ impl PenaltyBoundary {
 impl PenaltyBoundary {
     /// Places the penalty points at the wall's position at `t_n`: the boundary particles
     /// (Dirichlet form) or the material points within one size of the wall (contact form),
-    /// each kept only in a cell with projected mass on every node; their cells are the
+    /// each kept only where its functions reach projected mass alone; their supports (cells on
+    /// the linear basis) are the
     /// element blocks.
     ///
     /// `mass` is the nodal mass projected by the bodies (per grid node), `material` the
@@ -418,7 +426,7 @@ impl PenaltyBoundary {
                     .min_by(|a, b| a.0.abs().total_cmp(&b.0.abs()));
                 if let Some((dist, n)) = near {
                     let w = size * self.formulation.measure_factor(self.thickness, x[0]);
-                    points.extend(Self::place(grid, x, w, n, dist - r, mass));
+                    points.extend(self.place(grid, x, w, n, dist - r, mass));
                 }
             }
         } else {
@@ -426,7 +434,7 @@ impl PenaltyBoundary {
                 let x0 = self.particles.position[b];
                 let x = [x0[0] + o[0], x0[1] + o[1], x0[2] + o[2]];
                 let (w, n) = (self.particles.weight[b], self.particles.normal[b]);
-                points.extend(Self::place(grid, x, w, n, 0.0, mass));
+                points.extend(self.place(grid, x, w, n, 0.0, mass));
             }
         }
         // by cell, then by position (deterministic whatever the order of the projection)
@@ -451,24 +459,24 @@ impl PenaltyBoundary {
         changed
     }
 
-    /// Appends the wall's blocks (the cells holding its points) to `layout`.
+    /// Appends the wall's blocks (the supports holding its points) to `layout`.
     pub fn blocks(&self, at: GridNodes<'_>, layout: &mut BlockLayout) {
         let dim = at.grid.mesh.element.dim();
         for &c in &self.cells {
-            layout.push(at.grid.mesh.cell(c).iter().flat_map(|&a| (0..dim).map(move |i| at.node_ids[a] * dim + i)));
+            layout.push(at.grid.support(c).iter().flat_map(|&a| (0..dim).map(move |i| at.node_ids[a] * dim + i)));
         }
     }
 
     /// Length of the wall's part of the element buffers: matrices, vectors.
     pub fn buffer_lengths(&self, grid: &Grid) -> (usize, usize) {
-        let nd = grid.mesh.element.num_nodes() * grid.mesh.element.dim();
+        let nd = grid.support_len() * grid.mesh.element.dim();
         (self.cells.len() * nd * nd, self.cells.len() * nd)
     }
 
     /// `r_I = Σ β w N_I v` and `K_IJ = Σ β w N_I N_J P` over the acting points of each block
     /// (`v` and `P` of the form, see the module doc).
     pub fn assemble(&self, at: GridNodes<'_>, input: &AssemblyInput<'_>, matrices: &mut [f64], vectors: &mut [f64]) {
-        let nn = at.grid.mesh.element.num_nodes();
+        let nn = at.grid.support_len();
         let dim = at.grid.mesh.element.dim();
         let nd = nn * dim;
         for blk in 0..self.cells.len() {

@@ -260,15 +260,6 @@ fn build_penalty_wall(
         }
     };
     let grid = grid_part.domain.grid();
-    if grid.basis().is_smooth() {
-        return Err(CaseError::new(
-            format!("{loc}.penalty"),
-            format!(
-                "the grid of '{domain}' has the smooth basis \"{}\": a penalty wall places its points in the grid's cells and acts on their linear functions, which is not yet done for a smooth basis (use \"basis\": \"linear\", or grid boundary conditions)",
-                grid.basis().name()
-            ),
-        ));
-    }
     let vertices: Vec<[f64; 2]> = match (&spec.segment, &spec.polyline) {
         (Some(s), None) => s.to_vec(),
         (None, Some(p)) => p.clone(),
