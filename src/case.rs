@@ -317,7 +317,7 @@ pub struct GridSpec {
     pub rotation: f64,
     /// Shape functions: `linear` (default: the cell's), `gimp` (uGIMP) or `bspline2`
     /// (quadratic B-splines), the smooth ones on unrotated quad4 grids in 2D without
-    /// shared-node interfaces or penalty walls (`loam_mpm::basis`).
+    /// shared-node interfaces (`loam_mpm::basis`).
     #[serde(default)]
     pub basis: Basis,
 }

@@ -447,12 +447,4 @@ fn smooth_basis_where_it_cannot_act_is_refused_naming_the_key() {
         }),
         &["domains[0].quadrature"],
     );
-    expect_bad(
-        "ghost penalty on a smooth grid",
-        check("basis-ghost", "cantilever_mpm.json", &|j| {
-            j["domains"][0]["grid"]["basis"] = json!("bspline2");
-            j["domains"][0]["ghost_penalty"] = json!(0.1);
-        }),
-        &["domains[0].ghost_penalty"],
-    );
 }

@@ -116,11 +116,12 @@ fn cantilever(basis: &str, n: usize) -> f64 {
     u[1] / common::timoshenko(x0[0]) - 1.0
 }
 
-/// Benchmark 1 on every basis, h = 0.25 / 0.125 / 0.0625 m, 4 points per cell: the error of
-/// the point nearest the tip against Timoshenko at its own position. Measured: linear
-/// −3.27 / −1.01 / −0.44 % (order 1.97), GIMP −1.76 / −0.63 / −0.34 % (order 1.98),
-/// B-splines −0.22 / −0.23 / −0.24 % (converged on the coarsest grid), every Richardson
-/// limit −0.22 to −0.24 %. Asserted: each limit within 0.5 % of Timoshenko; linear and GIMP
+/// Benchmark 1 on every basis, h = 0.25 / 0.125 / 0.0625 m, 4 points per cell (static: the
+/// default ghost penalty acts on the smooth bases' empty neighbour cells): the error of the
+/// point nearest the tip against Timoshenko at its own position. Measured: linear
+/// −3.27 / −1.01 / −0.44 % (order 1.97), GIMP −1.96 / −0.66 / −0.35 % (order 2.05),
+/// B-splines −0.27 / −0.23 / −0.24 % (converged on the coarsest grid), every Richardson
+/// limit −0.24 to −0.25 %. Asserted: each limit within 0.5 % of Timoshenko; linear and GIMP
 /// at order 2 (1.8–2.2); the smooth bases' error below the linear one on every grid, and the
 /// B-splines' within 0.5 % on every grid.
 #[test]
@@ -158,20 +159,20 @@ fn cantilever_converges_on_every_basis() {
 ///
 /// | cells | linear | GIMP | B-splines |
 /// |---|---|---|---|
-/// | 10 | +9.39 %; 0.101 | +0.37 %; 0.016 | +1.32 %; 0.016 |
-/// | 20 | +8.85 %; 0.117 | +0.56 %; 0.014 | +0.62 %; 0.012 |
-/// | 40 | +8.93 %; 0.109 | +0.57 %; 0.019 | +0.35 %; 0.012 |
-/// | 80 | +8.27 %; 0.127 | +0.34 %; 0.014 | +0.22 %; 0.013 |
+/// | 10 | +9.39 %; 0.101 | +0.15 %; 0.015 | +0.08 %; 0.010 |
+/// | 20 | +8.85 %; 0.117 | +0.48 %; 0.014 | +0.31 %; 0.012 |
+/// | 40 | +8.93 %; 0.109 | +0.53 %; 0.019 | +0.29 %; 0.012 |
+/// | 80 | +8.27 %; 0.127 | +0.33 %; 0.014 | +0.20 %; 0.013 |
 ///
 /// Linear MPM stalls at 8–9 % of the settlement and 10–13 % stress error (the cell-crossing
-/// error); the B-splines' settlement converges (orders 1.09 / 0.83 / 0.69), GIMP's stays
-/// within 0.6 %. The stress error of both smooth bases stays at 1.2–1.9 %: with 2 × 2 points
-/// per cell the points' quadrature error (Steffen, Kirby & Berzins 2008) is of the order of
-/// the stress itself times a factor that does not fall with h; 16 points per cell halve it
-/// for the B-splines (0.44 / 0.34 % at 20 / 40 cells). Asserted: linear's settlement error
-/// above 5 % on every grid (a fixed linear MPM would fail this), the smooth bases' within
-/// 1.5 % and the B-splines' falling from the coarsest to the finest grid to within 0.3 %;
-/// the smooth stress errors below a fifth of the linear one on every grid.
+/// error); both smooth bases stay within 0.55 % of the settlement on every grid, 15–100 times
+/// closer, but without an order: like their stress error (1.0–1.9 %), it sits at the floor of
+/// the points' quadrature error (Steffen, Kirby & Berzins 2008), which does not fall with h
+/// at 2 × 2 points per cell (16 points per cell halve the stress error on the B-splines:
+/// 0.44 / 0.34 % at 20 / 40 cells, measured without the ghost penalty). Asserted: linear's
+/// settlement error above 5 % on every grid (a fixed linear MPM would fail this), the smooth
+/// bases' below 0.6 %; the smooth stress errors below a fifth of the linear one on every
+/// grid.
 #[test]
 fn compaction_column_smooth_bases_remove_the_cell_crossing_error() {
     let exact = top_settlement();
@@ -196,8 +197,7 @@ fn compaction_column_smooth_bases_remove_the_cell_crossing_error() {
     let settlement = |r: &Column| (r.top - exact).abs() / exact;
     let (linear, gimp, bspline) = (&runs[0].1, &runs[1].1, &runs[2].1);
     assert!(linear.iter().all(|r| settlement(r) > 0.05), "linear MPM stalls above 5 %");
-    assert!(gimp.iter().chain(bspline).all(|r| settlement(r) < 0.015), "smooth settlement within 1.5 %");
-    assert!(settlement(&bspline[3]) < 0.003 && settlement(&bspline[3]) < 0.5 * settlement(&bspline[0]));
+    assert!(gimp.iter().chain(bspline).all(|r| settlement(r) < 0.006), "smooth settlement within 0.6 %");
     for k in 0..grids.len() {
         assert!(gimp[k].l2 < 0.2 * linear[k].l2 && bspline[k].l2 < 0.2 * linear[k].l2, "grid {k}");
     }

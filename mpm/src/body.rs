@@ -249,6 +249,23 @@ impl Body {
         self.geometry[self.points_in_support(s)].iter().map(|g| g.weight).sum()
     }
 
+    /// Adds the quadrature weights of the body's points to the grid cells that hold them
+    /// (per grid cell; on a smooth basis, whose supports are not cells, located from the
+    /// points' positions).
+    pub fn add_cell_weights(&self, grid: &Grid, weights: &mut [f64]) {
+        if !grid.basis().is_smooth() {
+            for (s, w) in weights.iter_mut().enumerate().take(grid.num_supports()) {
+                *w += self.cell_weight(s);
+            }
+            return;
+        }
+        for (x, g) in self.points.position.iter().zip(&self.geometry) {
+            if let Some((c, _)) = grid.locate(x) {
+                weights[c] += g.weight;
+            }
+        }
+    }
+
     /// Scales the quadrature weights of the body's points in support `s`.
     pub fn scale_cell_weights(&mut self, s: usize, factor: f64) {
         let range = self.points_in_support(s);

@@ -30,6 +30,19 @@
 //! grid's cells does, has none, and its results are those of the unstabilised method (the
 //! MPM cantilever of benchmark 1 keeps FEM's strain energy to 1e-9).
 //!
+//! **On a smooth basis** ([`crate::basis`]) the same face term acts on the grid's nodal
+//! values through the cells' linear functions, i.e. on the kinks of the control net rather
+//! than of the field: for quadratic B-splines the jump of the net's normal derivative at a
+//! node is `h` times the field's second derivative there, so the term penalises
+//! `α E h² |∂²Δu|²` near the material's edge, a higher-order ghost penalty that still
+//! vanishes for linear increments. There a node is in the system when a point's function
+//! reaches it, even in a cell without points, so the faces marked are those between cells
+//! whose nodes are all in the system, one of them cut (an empty cell counts as cut).
+//! Measured on the smooth footing of issue 23 at h = B/10 (contact wall, u–p): without it
+//! Newton's converged increments moved nodes the material barely reaches by up to 2.9 m in
+//! steps of 3 mm of footing travel; with α = 0.1 by at most 0.05 m; the cantilever's tip
+//! moves by 0.03 % (GIMP) and 0.006 % (B-splines).
+//!
 //! Each face between two cells of the sparsity pattern near a cut cell (the cut cells grown by
 //! one ring when the blocks were last declared) is a block over the union of the two cells'
 //! nodes (6 for quads, 4 for triangles, 12 for hexahedra, 5 for tetrahedra); faces that are

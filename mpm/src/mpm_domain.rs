@@ -355,6 +355,7 @@ impl MpmDomain {
                 }
             }
         }
+        let reached = live.clone();
         let mut live_pressure = live.clone();
         cb.first_body.clear();
         cb.orphans.clear();
@@ -381,33 +382,49 @@ impl MpmDomain {
         }
         let mut changed = changed;
         if let Some(ghost) = &mut self.ghost {
-            let mut active = vec![false; num_cells];
+            // per grid cell: the points' weights (a smooth basis groups its points by support:
+            // their cells from their positions) and the stiffest body's modulus
+            let num_cells = self.grid.mesh.num_cells();
+            let mut fill = vec![0.0f64; num_cells];
             let mut modulus = vec![0.0f64; num_cells];
-            let moduli: Vec<f64> = self.bodies.iter().map(|b| young_modulus(b.law().elastic_lame())).collect();
-            for &c in &cb.active {
-                active[c] = true;
-                for (body, &e) in self.bodies.iter().zip(&moduli) {
-                    if body.occupies(c) {
+            let mut body_fill = vec![0.0f64; num_cells];
+            for body in &self.bodies {
+                let e = young_modulus(body.law().elastic_lame());
+                body_fill.iter_mut().for_each(|w| *w = 0.0);
+                body.add_cell_weights(&self.grid, &mut body_fill);
+                for c in 0..num_cells {
+                    if body_fill[c] > 0.0 {
+                        fill[c] += body_fill[c];
                         modulus[c] = modulus[c].max(e);
                     }
                 }
             }
+            // cells in the system: those holding points (linear basis), or those whose nodes a
+            // point's function reaches (smooth basis: their nodes are unknowns even without
+            // points in them, and the faces to them hold those nodes)
+            let active: Vec<bool> = if self.grid.basis().is_smooth() {
+                (0..num_cells).map(|c| self.grid.mesh.cell(c).iter().all(|&a| reached[a])).collect()
+            } else {
+                fill.iter().map(|&w| w > 0.0).collect()
+            };
             let cut: Vec<bool> = (0..num_cells)
                 .map(|c| {
-                    active[c] && {
-                        let filled: f64 = self.bodies.iter().map(|b| b.cell_weight(c)).sum();
-                        filled < CUT_FRACTION * cell_volume(&self.grid, self.formulation, self.thickness, c)
-                    }
+                    active[c] && fill[c] < CUT_FRACTION * cell_volume(&self.grid, self.formulation, self.thickness, c)
                 })
                 .collect();
             if changed || !ghost.covers(&cut) {
                 // faces declared around the cut cells
                 let cut_cells: Vec<usize> = (0..num_cells).filter(|&c| cut[c]).collect();
+                let zone_cells = self.grid.dilate(&cut_cells);
                 let mut zone = vec![false; num_cells];
-                for c in self.grid.dilate(&cut_cells) {
+                for &c in &zone_cells {
                     zone[c] = true;
                 }
-                ghost.rebuild(&self.grid, &cb.pattern, zone);
+                if self.grid.basis().is_smooth() {
+                    ghost.rebuild(&self.grid, &self.grid.dilate(&zone_cells), zone);
+                } else {
+                    ghost.rebuild(&self.grid, &cb.pattern, zone);
+                }
                 changed = true;
             }
             ghost.mark(&active, &cut, &modulus);

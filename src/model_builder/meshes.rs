@@ -959,14 +959,8 @@ fn grid_domain(
                 "filled_cells scales the points' weights per cell of the linear basis; a smooth grid.basis integrates over the points' own volumes (material_points)",
             ));
         }
-        let default_alpha = if smooth { 0.0 } else { default_ghost_penalty(case) };
+        let default_alpha = default_ghost_penalty(case);
         let alpha = d.ghost_penalty.unwrap_or(default_alpha);
-        if smooth && alpha > 0.0 {
-            return Err(CaseError::new(
-                format!("domains[{k}].ghost_penalty"),
-                "the ghost penalty acts on the jump of the normal derivative across the faces of cut cells, which a smooth grid.basis (C¹ across cell edges) does not have: leave it out or set 0",
-            ));
-        }
         if !(alpha.is_finite() && (0.0..=1e3).contains(&alpha)) {
             return Err(CaseError::new(
                 format!("domains[{k}].ghost_penalty"),
