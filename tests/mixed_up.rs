@@ -666,7 +666,7 @@ fn bui_collapse_with_mixed_up() {
 /// B/20. Its load–settlement curve against the same continuum problem in Lagrangian FEM
 /// (`footing_undrained_fem_up` pushed 0.15 m in 50 steps, u–p, B/20), which has no cell
 /// crossing, at 0.05 / 0.075 / 0.10 / 0.125 m (the FEM curve interpolated linearly): within
-/// 3 % (measured +1.1 / +1.4 / +0.9 / −2.6 %). At E_u/s_u = 100 both curves still rise over
+/// 3 % (measured +1.7 / +1.0 / +0.8 / −2.7 %). At E_u/s_u = 100 both curves still rise over
 /// 0.12–0.15 B, so the benchmark's plateau (mean over the last 20 % of the settlement) is
 /// above Prandtl's 5.14 in both (FEM 5.65, B-splines 5.49: printed, not asserted against
 /// 5.14; README, Shape functions). About 5 minutes.
