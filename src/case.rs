@@ -512,6 +512,11 @@ pub struct PenaltySpec {
     /// leave the wall or roll on it (default false: the bilateral Dirichlet form).
     #[serde(default)]
     pub contact: bool,
+    /// Coulomb friction coefficient μ of a contact wall (instead of `slip`, which is μ = 0,
+    /// and of the default no-slip): stick while the tangential force stays within μ times
+    /// the normal one, slide at that limit (`loam_mpm::penalty_boundary::coulomb_penalty`).
+    #[serde(default)]
+    pub friction: Option<f64>,
 }
 
 /// A frictionless slip boundary.

@@ -326,9 +326,32 @@ fn build_penalty_wall(
             format!("lies outside the grid of domain '{domain}'"),
         ));
     }
+    let kind = match spec.friction {
+        None if spec.slip => PenaltyKind::Slip,
+        None => PenaltyKind::NoSlip,
+        Some(mu) => {
+            let at = format!("{loc}.penalty.friction");
+            if !(mu.is_finite() && (0.0..=10.0).contains(&mu)) {
+                return Err(CaseError::new(at, format!("must be a Coulomb coefficient in [0, 10], got {mu}")));
+            }
+            if !spec.contact {
+                return Err(CaseError::new(
+                    at,
+                    "Coulomb friction needs the contact form (\"contact\": true): the Dirichlet form holds the body in tension as in compression and has no normal force to scale the friction",
+                ));
+            }
+            if spec.slip {
+                return Err(CaseError::new(
+                    at,
+                    "give either \"slip\": true (frictionless) or a friction coefficient, not both",
+                ));
+            }
+            PenaltyKind::Coulomb(mu)
+        }
+    };
     let settings = PenaltySettings {
         penalty_factor: spec.penalty_factor,
-        kind: if spec.slip { PenaltyKind::Slip } else { PenaltyKind::NoSlip },
+        kind,
         contact: spec.contact,
         displacement,
         amplitude: bc.amplitude.clone(),
