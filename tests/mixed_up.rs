@@ -663,12 +663,13 @@ fn bui_collapse_with_mixed_up() {
 
 /// Benchmark 11 on quadratic B-splines (`cases/footing_undrained_mpm_up_smooth.json`, issue
 /// 23): the footing as a rigid slip contact wall moving through a fixed grid, u–p soil,
-/// B/20. Its load–settlement curve against the same continuum problem in Lagrangian FEM
-/// (`footing_undrained_fem_up` pushed 0.15 m in 50 steps, u–p, B/20), which has no cell
-/// crossing, at 0.05 / 0.075 / 0.10 / 0.125 m (the FEM curve interpolated linearly): within
-/// 3 % (measured +1.7 / +1.0 / +0.8 / −2.7 %). At E_u/s_u = 100 both curves still rise over
-/// 0.12–0.15 B, so the benchmark's plateau (mean over the last 20 % of the settlement) is
-/// above Prandtl's 5.14 in both (FEM 5.65, B-splines 5.49: printed, not asserted against
+/// B/20, 3 × 3 points per cell on a uniform lattice. Its load–settlement curve against the
+/// same continuum problem in Lagrangian FEM (`footing_undrained_fem_up` pushed 0.15 m in 50
+/// steps, u–p, B/20), which has no cell crossing, at 0.05 / 0.075 / 0.10 / 0.125 m (the FEM
+/// curve interpolated linearly): within 3 % (measured +2.1 / +1.5 / −0.4 / −1.6 %; with 2 × 2
+/// points per cell −4.2 % at 0.125 m, which fails). At E_u/s_u = 100 both curves still rise
+/// over 0.12–0.15 B, so the benchmark's plateau (mean over the last 20 % of the settlement) is
+/// above Prandtl's 5.14 in both (FEM 5.65, B-splines 5.60: printed, not asserted against
 /// 5.14; README, Shape functions). About 5 minutes.
 #[test]
 #[ignore = "long (about 5 min): LOAM_LONG=1 scripts/test.sh"]
