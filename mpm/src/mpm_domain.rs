@@ -363,18 +363,18 @@ impl MpmDomain {
         for &c in &cb.pattern {
             let first = self.bodies.iter().position(|b| b.occupies(c));
             cb.first_body.push(first.map_or(NONE, |k| k as u8));
+            // a node not live is owned by the first block that holds it (on the linear basis
+            // always a block without points; on a smooth one possibly one with points)
             let (mut mask, mut pressure_mask) = (0u16, 0u16);
-            {
-                for (a, &node) in self.grid.support(c).iter().enumerate() {
-                    let tied = self.attachment.as_ref().is_some_and(|att| att.kind[node] == GridNodeKind::Tied);
-                    if !live[node] && !tied {
-                        live[node] = true; // owned by this block
-                        mask |= 1 << a;
-                    }
-                    if !live_pressure[node] {
-                        live_pressure[node] = true;
-                        pressure_mask |= 1 << a;
-                    }
+            for (a, &node) in self.grid.support(c).iter().enumerate() {
+                let tied = self.attachment.as_ref().is_some_and(|att| att.kind[node] == GridNodeKind::Tied);
+                if !live[node] && !tied {
+                    live[node] = true;
+                    mask |= 1 << a;
+                }
+                if !live_pressure[node] {
+                    live_pressure[node] = true;
+                    pressure_mask |= 1 << a;
                 }
             }
             cb.orphans.push(mask);
