@@ -519,13 +519,17 @@ pub struct PenaltySpec {
     pub friction: Option<f64>,
 }
 
-/// A frictionless slip boundary.
+/// A slip boundary: frictionless, or with Coulomb friction ([`loam_fem::friction`]).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SlipSpec {
     /// Boundary normal; by default the mean normal of the boundary edges/faces in the region.
     #[serde(default)]
     pub normal: Option<Vec<f64>>,
+    /// Coulomb coefficient μ_b of the boundary (default 0, frictionless): stick while the
+    /// tangential force is within μ_b times the normal reaction, slide otherwise.
+    #[serde(default)]
+    pub friction: f64,
 }
 
 /// A load on a region.

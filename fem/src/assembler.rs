@@ -31,6 +31,7 @@ use crate::assembly::{AssemblyPattern, BlockLayout};
 use crate::convergence::BlockNorms;
 use crate::dofs::{Block, DofMap, DofTie, NodeRole, CONSTRAINED};
 use crate::domain::{AssemblyInput, Domain, DomainError};
+use crate::friction::NodalFriction;
 use crate::linear_solver::{LinearSolver, LinearSolverError, LinearSolverKind, SolverTimings};
 use crate::slip::{Slip, SlipRotations};
 
@@ -81,6 +82,7 @@ pub struct Assembler {
     /// Whether `rhs` holds the correction of the last solve (else the residual).
     solved: bool,
     rotations: SlipRotations,
+    friction: NodalFriction,
     solver: LinearSolver,
 }
 
@@ -108,6 +110,7 @@ impl Assembler {
         for d in rotations.normal_dofs() {
             constrained[d] = true;
         }
+        let friction = NodalFriction::new(dim, &rotations.frictional_nodes(), &layout);
         let dofs = DofMap::with_roles(dim, &constrained, system.roles, system.pressure_nodes, system.ties);
         let pattern = AssemblyPattern::new(&dofs, &layout);
         let n_eq = dofs.num_equations();
@@ -144,6 +147,7 @@ impl Assembler {
             solved: false,
             buffer_dofs: layout.dofs,
             rotations,
+            friction,
             solver,
             dofs,
             pattern,
@@ -183,7 +187,7 @@ impl Assembler {
     }
 
     /// Step 1: every domain fills its part of the element buffers; blocks are rotated to
-    /// the local frames of slip nodes.
+    /// the local frames of slip nodes; frictional slip nodes take their slip in the step.
     pub fn assemble(&mut self, domains: &mut [Box<dyn Domain>], input: &AssemblyInput<'_>) -> Result<(), DomainError> {
         let mut mats = self.matrices.as_mut_slice();
         let mut vecs = self.vectors.as_mut_slice();
@@ -195,17 +199,23 @@ impl Assembler {
             vecs = rest_v;
         }
         self.rotations.rotate_blocks(&mut self.matrices, &mut self.vectors);
+        if !self.friction.is_empty() {
+            let matrices = input.with_tangent.then_some(self.matrices.as_slice());
+            self.friction.after_assembly(&input.state.u, &input.committed.u, matrices, input.stiffness);
+        }
         Ok(())
     }
 
-    /// Step 2: `R = gather(r_e) − f_ext` per DOF (`f_ext` in local frames) and the right-hand
-    /// side `−R` per equation; returns `‖R‖` over the equations (pressure equations
-    /// equilibrated, see the module doc).
+    /// Step 2: `R = gather(r_e) − f_ext` per DOF (`f_ext` in local frames), the friction of
+    /// frictional slip nodes ([`crate::friction`]) and the right-hand side `−R` per
+    /// equation; returns `‖R‖` over the equations (pressure equations equilibrated, see the
+    /// module doc).
     pub fn residual(&mut self, f_ext: &[f64]) -> f64 {
         self.pattern.gather_vector(&self.vectors, &mut self.residual);
         for (r, f) in self.residual.iter_mut().zip(f_ext) {
             *r -= f;
         }
+        self.friction.apply_to_residual(&mut self.residual);
         self.rhs.fill(0.0);
         for (g, &e) in self.dofs.equations().iter().enumerate() {
             if e != CONSTRAINED {
@@ -254,9 +264,16 @@ impl Assembler {
         BlockNorms { soil: sq[0].sqrt(), interface: sq[1].sqrt(), structure: sq[2].sqrt() }
     }
 
-    /// Step 3a: gathers the element matrices into the global matrix.
+    /// Step 3a: gathers the element matrices into the global matrix (with the friction's
+    /// tangent, written into the blocks: call once per assembly, after the residual).
     pub fn tangent(&mut self) {
+        self.friction.apply_to_matrices(&mut self.matrices);
         self.pattern.gather_matrix(&self.matrices, &mut self.values);
+    }
+
+    /// Frictional slip nodes that stick and that slide at the last residual.
+    pub fn friction_counts(&self) -> (usize, usize) {
+        self.friction.counts()
     }
 
     /// Step 3b: solves `K δu = −R`; the correction per DOF is then [`Assembler::correction`]
@@ -374,11 +391,13 @@ impl Assembler {
         (0..n * n).map(|k| dense[(k / n, k % n)]).collect()
     }
 
-    /// Reactions of the last residual: `R` at the constrained DOFs, 0 elsewhere (global frame).
+    /// Reactions of the last residual: `R` at the constrained DOFs, the friction forces at
+    /// frictional slip nodes, 0 elsewhere (global frame).
     pub fn reactions(&self, out: &mut [f64]) {
         for (g, &e) in self.dofs.equations().iter().enumerate() {
             out[g] = if e == CONSTRAINED { self.residual[g] } else { 0.0 };
         }
+        self.friction.write_reactions(out);
         self.rotations.to_global(out);
     }
 

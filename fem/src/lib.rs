@@ -19,6 +19,7 @@ pub mod dofs;
 pub mod domain;
 pub mod element;
 pub mod formulation;
+pub mod friction;
 pub mod gmsh;
 pub mod kernel;
 pub mod krylov;

@@ -442,7 +442,43 @@ impl Model {
             self.invalidate_pattern();
             self.restored_solver_memory = None;
         }
+        self.hold_grid_boundaries();
         Ok(())
+    }
+
+    /// The boundary conditions on a grid's start-of-step kinematics: a grid node's velocity
+    /// and acceleration are projected from the material points each step, and where the
+    /// boundary holds the node they are set to rest in the held directions — the fixed
+    /// components (prescribed 0) and the normal of slip nodes — as explicit and implicit MPM
+    /// codes apply the grid's boundary conditions after the projection (e.g. Sulsky, Zhou &
+    /// Schreyer 1995, CPC 87, §3; Guilkey & Weiss 2003, IJNME 57). Otherwise the Newmark
+    /// kinematics of a held node carry the projected normal velocity `v_n` of the points
+    /// beside it: a spurious inertia `M v_n/(β Δt)` in the node's reaction (the normal force
+    /// of a frictional boundary), and a reversed nodal velocity `−v_n` in the points' update.
+    fn hold_grid_boundaries(&mut self) {
+        let dim = self.dim;
+        for c in &self.constraints {
+            for (&d, &v) in c.dofs.iter().zip(&c.values) {
+                if v == 0.0 && self.roles[d / dim] == NodeRole::Grid {
+                    self.committed.v[d] = 0.0;
+                    self.committed.a[d] = 0.0;
+                }
+            }
+        }
+        for s in &self.slips {
+            if self.roles[s.node] != NodeRole::Grid {
+                continue;
+            }
+            let len = s.normal[..dim].iter().map(|x| x * x).sum::<f64>().sqrt();
+            let n = s.normal.map(|x| x / len);
+            for field in [&mut self.committed.v, &mut self.committed.a] {
+                let x = &mut field[s.node * dim..s.node * dim + dim];
+                let along: f64 = (0..dim).map(|i| x[i] * n[i]).sum();
+                for i in 0..dim {
+                    x[i] -= along * n[i];
+                }
+            }
+        }
     }
 
     /// The committed state of the model and of every domain, for a checkpoint: with the
@@ -820,6 +856,18 @@ impl Linearisation<'_> {
             }
         }
         out
+    }
+
+    /// The equation of DOF `dof` (in the local frame at slip nodes: component 0 the normal),
+    /// `None` if the DOF is constrained.
+    pub fn equation(&self, dof: usize) -> Option<usize> {
+        let e = self.model.assembler.as_ref().expect("prepared").dofs().equation(dof);
+        (e != crate::dofs::CONSTRAINED).then_some(e)
+    }
+
+    /// Frictional slip nodes that stick and that slide at the last evaluation.
+    pub fn friction_counts(&self) -> (usize, usize) {
+        self.model.assembler.as_ref().expect("prepared").friction_counts()
     }
 
     /// Residual per equation and the tangent (dense, row-major) at `u = u_pred + δu`, where

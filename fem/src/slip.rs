@@ -16,13 +16,17 @@ use std::collections::HashMap;
 
 use crate::assembly::BlockLayout;
 
-/// A slip condition: node and outward (or inward) unit normal of the boundary.
+/// A slip condition: node and unit normal of the boundary, with a Coulomb friction
+/// coefficient ([`crate::friction`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Slip {
     /// Global node id.
     pub node: usize,
-    /// Boundary normal (normalised when the rotations are built).
+    /// Boundary normal (normalised when the rotations are built); outward (pointing out of
+    /// the body) where `friction > 0`, which takes the normal force's sign from it.
     pub normal: [f64; 3],
+    /// Coulomb coefficient μ of the boundary (0: frictionless).
+    pub friction: f64,
 }
 
 /// Local basis `Q` (columns `q[.][k]`, axis 0 the normal) for a normal in `dim` dimensions.
@@ -58,6 +62,8 @@ pub struct SlipRotations {
     basis: HashMap<usize, [[f64; 3]; 3]>,
     /// Nodes whose normal DOF is a constraint (slip boundaries), ascending.
     constrained: Vec<usize>,
+    /// Friction coefficient of the constrained nodes that have one.
+    friction: HashMap<usize, f64>,
     /// (matrix offset, vector offset, block DOFs, local node, global node) per occurrence.
     occurrences: Vec<(usize, usize, usize, usize, usize)>,
 }
@@ -74,9 +80,15 @@ impl SlipRotations {
     ) -> Self {
         let mut basis: HashMap<usize, [[f64; 3]; 3]> = HashMap::new();
         let mut constrained = Vec::new();
+        let mut friction = HashMap::new();
         for s in slips.iter().filter(|s| !has_dirichlet(s.node)) {
             basis.insert(s.node, local_basis(s.normal, dim));
             constrained.push(s.node);
+            if s.friction > 0.0 {
+                friction.insert(s.node, s.friction);
+            } else {
+                friction.remove(&s.node);
+            }
         }
         for s in frames.iter().filter(|s| !has_dirichlet(s.node)) {
             basis.entry(s.node).or_insert_with(|| local_basis(s.normal, dim));
@@ -95,7 +107,14 @@ impl SlipRotations {
                 }
             }
         }
-        Self { dim, basis, constrained, occurrences }
+        Self { dim, basis, constrained, friction, occurrences }
+    }
+
+    /// The frictional slip nodes: (node, μ, local basis), ascending by node.
+    pub fn frictional_nodes(&self) -> Vec<(usize, f64, [[f64; 3]; 3])> {
+        let mut out: Vec<_> = self.friction.iter().map(|(&n, &mu)| (n, mu, self.basis[&n])).collect();
+        out.sort_unstable_by_key(|e| e.0);
+        out
     }
 
     /// Global DOFs that become constraints: the normal DOF of every slip node.

@@ -63,7 +63,16 @@ pub(super) fn boundary_conditions(
             if normal[..dim].iter().map(|v| v * v).sum::<f64>() <= 0.0 {
                 return Err(CaseError::new(format!("boundary_conditions[{k}].slip.normal"), "must not be zero"));
             }
-            model.slips.extend(nodes.iter().map(|&node| Slip { node, normal }));
+            let friction = slip.friction;
+            if !(0.0..=MAX_FRICTION).contains(&friction) {
+                return Err(CaseError::new(
+                    format!("boundary_conditions[{k}].slip.friction"),
+                    format!("must be a Coulomb coefficient in [0, {MAX_FRICTION}], got {friction}"),
+                ));
+            }
+            // friction takes the sign of the normal force from the outward normal
+            let normal = if friction > 0.0 { outward(normal, nodes, &model.coords, parts) } else { normal };
+            model.slips.extend(nodes.iter().map(|&node| Slip { node, normal, friction }));
             constraint_of_bc.push(model.constraints.len());
             model.constraints.push(Constraint::without_dofs(bc.amplitude.clone()));
             continue;
@@ -360,6 +369,46 @@ fn build_penalty_wall(
 }
 
 /// The boundary facets of every part (global node ids).
+/// Largest Coulomb coefficient a slip boundary accepts (μ = 10 already holds any grain).
+const MAX_FRICTION: f64 = 10.0;
+
+/// `normal` turned to point out of the part whose boundary holds `nodes`: away from the
+/// centroid of that part's boundary nodes (the parts that carry slip boundaries, grids and
+/// meshes, are convex where a boundary is straight enough to slide on).
+fn outward(normal: [f64; 3], nodes: &[usize], coords: &[[f64; 3]], parts: &[Part]) -> [f64; 3] {
+    use loam_fem::domain::Domain;
+    let Some(&first) = nodes.first() else { return normal };
+    for p in parts {
+        let facets = match p {
+            Part::Fem(_, d) => d.boundary_facets(),
+            Part::Grid(g) => g.domain.boundary_facets(),
+        };
+        if !facets.iter().any(|f| f.contains(&first)) {
+            continue;
+        }
+        let mut boundary: Vec<usize> = facets.into_iter().flatten().collect();
+        boundary.sort_unstable();
+        boundary.dedup();
+        let centroid = mean(boundary.iter().map(|&n| coords[n]));
+        let region = mean(nodes.iter().map(|&n| coords[n]));
+        let away: f64 = (0..3).map(|d| normal[d] * (region[d] - centroid[d])).sum();
+        return if away < 0.0 { normal.map(|v| -v) } else { normal };
+    }
+    normal
+}
+
+/// Mean of points.
+fn mean(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
+    let (mut sum, mut count) = ([0.0; 3], 0.0f64);
+    for x in points {
+        for d in 0..3 {
+            sum[d] += x[d];
+        }
+        count += 1.0;
+    }
+    sum.map(|v| v / count.max(1.0))
+}
+
 fn part_facets(parts: &[Part]) -> Vec<Vec<usize>> {
     use loam_fem::domain::Domain;
     parts

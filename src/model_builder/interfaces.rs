@@ -72,8 +72,8 @@ pub(super) fn attach(case: &Case, model: &mut Model, parts: &mut [Part]) -> Resu
                     model.constraints.extend(copy_constraints(model, *structure, soil, dim, |i| !held(soil, i)));
                 }
                 None => {
-                    model.frames.push(Slip { node: soil, normal: node.normal });
-                    model.frames.push(Slip { node: *structure, normal: node.normal });
+                    model.frames.push(Slip { node: soil, normal: node.normal, friction: 0.0 });
+                    model.frames.push(Slip { node: *structure, normal: node.normal, friction: 0.0 });
                     model.ties.push(DofTie { leader: structure * dim, follower: soil * dim });
                 }
             }

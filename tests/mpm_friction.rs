@@ -1,0 +1,146 @@
+//! Coulomb friction on grid boundaries (issue 24, item 1): a slip boundary of the grid with
+//! `slip.friction` = μ_b sticks while the tangential nodal force is within μ_b times the
+//! normal reaction and slides otherwise (`loam_fem::friction`). Each test prints measured
+//! against reference and fails for a wrong friction.
+
+mod common;
+
+use common::{last, monitor, report, run};
+use loam::simulation::Simulation;
+
+const G: f64 = 9.81;
+
+/// Distance of a rigid block sliding down an incline of angle α with friction μ under
+/// gravity ramped linearly from 0 to g over `ramp` s: `x(t) = a (t²/2 − t t_r/2 + t_r²/6)`,
+/// `a = g (sin α − μ cos α)` (t ≥ t_r; the friction follows the normal force, so the block's
+/// acceleration follows the ramp).
+fn ramped_slide(alpha: f64, mu: f64, ramp: f64, t: f64) -> f64 {
+    G * (alpha.sin() - mu * alpha.cos()) * (t * t / 2.0 - t * ramp / 2.0 + ramp * ramp / 6.0)
+}
+
+/// `cases/block_friction_grid_mpm.json`: an elastic block on the grid's base, a slip
+/// boundary with μ_b = 0.3, under gravity tilted by 30°. It slides `x(t)` of the rigid block
+/// within 1 %, and the base's tangential over normal force is μ_b within 1 % over the second
+/// half; with μ_b = 0.7 > tan 30° it sticks: the centre moves less than 0.1 % of the
+/// frictionless slide (what moves is the block's elastic shear).
+#[test]
+fn block_slides_and_sticks_on_a_frictional_grid_boundary() {
+    let alpha = 30f64.to_radians();
+    let ramp = 0.05;
+    for (mu, slides) in [(0.3, true), (0.7, false)] {
+        let mut json = common::case_json("block_friction_grid_mpm.json");
+        json["boundary_conditions"][0]["slip"]["friction"] = serde_json::json!(mu);
+        let (sim, h) = run(common::parse(json));
+        let t = h.last().unwrap().0;
+        let u = last(&sim, &h, "centre_ux");
+        if slides {
+            report(
+                &format!("μ_b = {mu}: block down the 30° grid boundary at t = {t} s [m]"),
+                u,
+                ramped_slide(alpha, mu, ramp, t),
+                0.01,
+            );
+            let (fx, fy) = (monitor(&sim, "base_fx"), monitor(&sim, "base_fy"));
+            let rows = &h[h.len() / 2..];
+            let ratio = rows.iter().map(|r| -r.1[fx]).sum::<f64>() / rows.iter().map(|r| r.1[fy]).sum::<f64>();
+            report(&format!("μ_b = {mu}: base's tangential over normal force over the second half"), ratio, mu, 0.01);
+        } else {
+            let free = ramped_slide(alpha, 0.0, ramp, t);
+            println!(
+                "μ_b = {mu} ≥ tan α: the block's centre moved {:.3} mm (frictionless: {:.0} mm; asserted < 0.1 %)",
+                u * 1e3,
+                free * 1e3
+            );
+            assert!(u.abs() < 1e-3 * free);
+        }
+    }
+}
+
+/// A block of material points on a frictional grid base, in 2D (quad4) and 3D (hex8).
+fn block_on_base(dim: usize) -> Simulation {
+    let text = if dim == 2 {
+        r#"{
+  "description": "block on a frictional base",
+  "formulation": "plane_strain",
+  "materials": { "block": { "law": "neo_hookean", "density": 1000.0, "young_modulus": 1.0e6, "poisson_ratio": 0.3 } },
+  "domains": [ { "name": "block", "type": "mpm", "material": "block",
+      "grid": { "origin": [0.0, 0.0], "size": [0.6, 0.3], "cells": [6, 3], "element": "quad4" },
+      "material_points": { "cells": { "mesh": { "rectangle": { "origin": [0.1, 0.0], "size": [0.3, 0.2], "cells": [3, 2], "element": "quad4" } }, "points_per_cell": 4 } } } ],
+  "regions": { "base": { "y": 0.0 } },
+  "boundary_conditions": [ { "region": "base", "slip": { "friction": 0.5 } } ],
+  "gravity": { "acceleration": [0.0, -9.81] },
+  "analysis": { "type": "dynamic", "time_step": 0.01, "end_time": 0.1 },
+  "output": { "vtk": false }
+}"#
+    } else {
+        r#"{
+  "description": "block on a frictional base",
+  "formulation": "3d",
+  "materials": { "block": { "law": "neo_hookean", "density": 1000.0, "young_modulus": 1.0e6, "poisson_ratio": 0.3 } },
+  "domains": [ { "name": "block", "type": "mpm", "material": "block",
+      "grid": { "origin": [0.0, 0.0, 0.0], "size": [0.4, 0.4, 0.3], "cells": [4, 4, 3], "element": "hex8" },
+      "material_points": { "cells": { "mesh": { "box": { "origin": [0.1, 0.1, 0.0], "size": [0.2, 0.2, 0.2], "cells": [2, 2, 2], "element": "hex8" } }, "points_per_cell": 8 } } } ],
+  "regions": { "base": { "z": 0.0 } },
+  "boundary_conditions": [ { "region": "base", "slip": { "friction": 0.5 } } ],
+  "gravity": { "acceleration": [0.0, 0.0, -9.81] },
+  "analysis": { "type": "dynamic", "time_step": 0.01, "end_time": 0.1 },
+  "output": { "vtk": false }
+}"#
+    };
+    Simulation::new(loam::case::Case::parse(text).expect("case parses")).expect("builds")
+}
+
+/// The friction's tangent is the derivative of the residual: central differences of `R(δu)`
+/// at a correction `δu₀`, entry by entry; relative error < 1e-6 of the largest entry. `δu₀`
+/// is a small random field (1e-5 m) under which the base nodes stick, with the base nodes
+/// right of the block's centre moved along the base (2e-4 m, in 3D along a direction
+/// between the axes), which makes them slide in a direction that follows the slip. The
+/// states are set by a first evaluation at `δu₀` and do not change under the perturbations.
+#[test]
+fn frictional_boundary_tangent_matches_finite_differences() {
+    for dim in [2, 3] {
+        let mut sim = block_on_base(dim);
+        let coords = sim.model.coords.clone();
+        let mut lin = sim.model.linearise(0.01).expect("step starts");
+        let n = lin.num_equations();
+        let mut delta0: Vec<f64> = (0..n).map(|e| 1e-5 * ((e * 7919 % 23) as f64 / 23.0 - 0.4)).collect();
+        for (node, x) in coords.iter().enumerate() {
+            if x[dim - 1] == 0.0 && x[0] > 0.25 {
+                for t in 1..dim {
+                    if let Some(e) = lin.equation(node * dim + t) {
+                        delta0[e] = 2e-4 * t as f64;
+                    }
+                }
+            }
+        }
+        lin.evaluate(&delta0).expect("assembles");
+        let (_, k) = lin.evaluate(&delta0).expect("assembles");
+        let (stick, slide) = lin.friction_counts();
+        println!("{dim}D: {stick} base nodes stick, {slide} slide at δu₀");
+        assert!(stick > 0 && slide > 0, "both states are checked");
+        // the direction m = −R_t/|R_t| of a node that starts to slide with a small force is
+        // strongly curved: the central difference's error goes as h² (3D: 5.5e-4, 5.5e-6,
+        // 5.5e-8 of the largest entry at h = 1e-7, 1e-8, 1e-9), so a small step
+        let h = 1e-9;
+        let (mut worst, mut scale) = (0.0f64, 0.0f64);
+        for j in 0..n {
+            let mut plus = delta0.clone();
+            plus[j] += h;
+            let mut minus = delta0.clone();
+            minus[j] -= h;
+            let (rp, _) = lin.evaluate(&plus).unwrap();
+            assert_eq!(lin.friction_counts(), (stick, slide), "states change under a perturbation");
+            let (rm, _) = lin.evaluate(&minus).unwrap();
+            for i in 0..n {
+                let fd = (rp[i] - rm[i]) / (2.0 * h);
+                worst = worst.max((fd - k[i * n + j]).abs());
+                scale = scale.max(k[i * n + j].abs());
+            }
+        }
+        println!(
+            "{dim}D: max |K − K_FD| = {worst:.3e}, max |K| = {scale:.3e}, relative {:.2e} (tolerance 1e-6)",
+            worst / scale
+        );
+        assert!(worst <= 1e-6 * scale, "{dim}D: the friction's tangent is off its finite differences");
+    }
+}
