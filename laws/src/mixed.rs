@@ -20,7 +20,8 @@
 //!
 //! `K ln J` is the mean Kirchhoff stress of Hencky elasticity, and of every Hencky-based
 //! plasticity law of this crate whose plastic flow is isochoric (`det Cp = 1`, so that
-//! `J_e = J`): Tresca and Mohr–Coulomb with ψ = 0, von Mises and Drucker–Prager with ψ = 0.
+//! `J_e = J`): Tresca and Mohr–Coulomb with ψ = 0, von Mises and Drucker–Prager with ψ = 0, and
+//! the μ(I) law of granular flow ([`crate::mu_i`]).
 //! Their u–p return is the return of the displacement form at a fixed mean stress, which a
 //! deviatoric flow keeps; beyond the apex of a frictional surface (`p ≥ c cot φ`) no
 //! deviatoric stress is admissible and `τ = p 1` (a tension cut-off, continuous with the
