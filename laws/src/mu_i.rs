@@ -38,15 +38,18 @@
 //!    `f − c x/(1 − x) − α x = 0`,  `α = (μ₂ − μ_s) p`,  `c = G I₀ Δt/t_g`,
 //!
 //!    a quadratic `α x² − (f + c + α) x + f = 0` whose root in `[0, 1)` is
-//!    `x = 2f / (f + c + α + √((f − α + c)² + 4αc))` — closed form, without cancellation
-//!    (every term is positive), so no local iteration is needed (the safeguarded Newton a
-//!    general `μ(I)` would need has nothing to do here). Then `I = I₀ x/(1 − x)`,
-//!    `s = (μ p/τ̄_tr) s_tr`, `τ = s − p 1`, `ε_e` from `τ` (volume unchanged).
+//!    `x = 2f / (f + c + α + √((f − α + c)² + 4αc))`: a closed form without cancellation
+//!    (every term is positive), exact to round-off, so this law needs no local iteration
+//!    (a safeguarded Newton would only approximate it). Then `I = I₀ x/(1 − x)`,
+//!    `s = (μ p/τ̄_tr) s_tr`, `τ = s − p 1`, `ε_e = tr ε_tr/3 + s/2G` (volume unchanged).
 //!    The limits: `Δt → ∞` (slow loading) gives `x → 0`, `μ → μ_s`; `Δt → 0⁺` gives
-//!    `μ → μ₂` where `τ̄_tr ≥ μ₂ p` (an instantaneous load meets the largest friction).
+//!    `μ → μ₂` where `τ̄_tr ≥ μ₂ p` and no flow (`Δγ → 0`) below (an instantaneous load meets
+//!    the largest friction).
 //!    **A static step** (`Δt = 0`) is a step without time, taken as infinitely slow: the
 //!    quasi-static limit `μ = μ_s` (`x = 0`, `I = 0`), a rate-independent Drucker–Prager
-//!    cone with `√J₂ = μ_s p` and isochoric flow.
+//!    cone with `√J₂ = μ_s p` and isochoric flow. It is not the limit `Δt → 0⁺` above: a
+//!    load step of a static analysis that hands the law a pseudo-time `Δt > 0` gets the
+//!    rate-dependent law at that `Δt`.
 //!
 //! The algorithmic tangent `∂τ_a/∂ε_tr,b` is the exact derivative of this closed form,
 //! evaluated in dual numbers ([`crate::dual`]); it is `Hencky` when elastic and 0 at the
