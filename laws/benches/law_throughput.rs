@@ -62,6 +62,9 @@ fn main() {
                "swelling_slope": 0.02, "compression_slope": 0.1, "critical_state_slope": 1.0,
                "initial_shear_modulus": 2e6, "alpha_shear": 50.0}),
         json!({"law": "newtonian_fluid", "density": 1000.0, "viscosity": 1.0, "bulk_modulus": 2e6}),
+        json!({"law": "mu_i", "density": 1500.0, "young_modulus": 5e7, "poisson_ratio": 0.3,
+               "static_friction_coefficient": 0.38, "limit_friction_coefficient": 0.64,
+               "reference_inertial_number": 0.279, "grain_diameter": 0.5e-3, "grain_density": 2450.0}),
     ];
     println!("| law | state | evaluations/s |");
     println!("|---|---|---:|");
@@ -81,6 +84,10 @@ fn main() {
             "drucker_prager" => vec![
                 ("elastic", stretch(hencky_strain(lambda, mu, [-100e3, -120e3, -150e3]))),
                 ("plastic (cone)", stretch(hencky_strain(lambda, mu, [-50e3, -200e3, -400e3]))),
+            ],
+            "mu_i" => vec![
+                ("elastic", stretch(hencky_strain(lambda, mu, [-100e3, -120e3, -150e3]))),
+                ("plastic (flowing)", stretch(hencky_strain(lambda, mu, [-50e3, -200e3, -400e3]))),
             ],
             _ => vec![("elastic", stretch([0.01, -0.02, 0.005]))],
         };

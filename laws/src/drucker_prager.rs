@@ -170,6 +170,7 @@ impl PrincipalModel for DruckerPrager {
     fn principal_update(
         &self,
         eps_tr: [f64; 3],
+        _time_step: f64,
         committed: &[f64],
         trial: &mut [f64],
     ) -> Result<PrincipalResponse, LawError> {
@@ -230,6 +231,7 @@ impl MixedPrincipalModel for DruckerPrager {
         &self,
         eps_tr: [f64; 3],
         pressure: f64,
+        _time_step: f64,
         committed: &[f64],
         trial: &mut [f64],
     ) -> Result<MixedPrincipalResponse, LawError> {

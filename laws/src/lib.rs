@@ -40,6 +40,7 @@ pub mod mixed;
 pub mod modified_cam_clay;
 pub mod mohr_coulomb;
 pub mod mohr_coulomb_softening;
+pub mod mu_i;
 pub mod multiplicative;
 pub mod neo_hookean;
 pub mod newtonian_fluid;

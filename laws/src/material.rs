@@ -24,6 +24,7 @@ use crate::linear_elastic::LinearElastic;
 use crate::modified_cam_clay::ModifiedCamClay;
 use crate::mohr_coulomb::{MohrCoulomb, Strength};
 use crate::mohr_coulomb_softening::{ExponentialSoftening, MohrCoulombSoftening};
+use crate::mu_i::MuI;
 use crate::neo_hookean::NeoHookean;
 use crate::newtonian_fluid::NewtonianFluid;
 use crate::saint_venant_kirchhoff::SaintVenantKirchhoff;
@@ -180,6 +181,28 @@ pub const SLOPE: Range =
 pub const CRITICAL_STATE_SLOPE: Range =
     Range { max: 3.0, why_max: "M = 6 sin φ/(3 − sin φ) < 3 for any friction angle", ..FACTOR };
 
+/// Friction coefficients `μ = tan θ` of the μ(I) law: above 0 (a cohesionless material
+/// without friction has no strength at rest), at most 10 (θ = 84°; no granular material
+/// comes near, and an angle in degrees typed by mistake is refused).
+pub const FRICTION_COEFFICIENT: Range = Range {
+    min: 1e-3,
+    max: 10.0,
+    zero: false,
+    unit: "",
+    why_min: "a friction angle below 0.06°: a granular material without strength at rest",
+    why_max: "tan 84°: a coefficient tan θ, not an angle in degrees",
+};
+
+/// Grain diameters (m): fine powders have 1e-6, boulders 1.
+pub const GRAIN_DIAMETER: Range = Range {
+    min: 1e-9,
+    max: 100.0,
+    zero: false,
+    unit: "m",
+    why_min: "a nanometre: a molecule, not a grain",
+    why_max: "larger than any boulder",
+};
+
 /// Checks that `value` lies in `range` (see [`Range`]); the message says which bound it
 /// breaks and why.
 pub fn in_range(parameter: &'static str, value: f64, range: Range) -> Result<(), ParameterError> {
@@ -335,6 +358,28 @@ pub struct DruckerPragerParameters {
     pub fit: DruckerPragerFit,
 }
 
+/// μ(I) granular-flow parameters (`law: "mu_i"`, Jop, Forterre & Pouliquen 2006).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MuIParameters {
+    /// Bulk density ρ₀ of the granular material in kg/m³ (> 0).
+    pub density: f64,
+    /// Young's modulus E of the solid-like (elastic) response in Pa (> 0).
+    pub young_modulus: f64,
+    /// Poisson's ratio ν in (−1, 0.5] (0.5 in mixed_up only).
+    pub poisson_ratio: f64,
+    /// Static friction coefficient μ_s = tan θ_s (the ratio τ̄/p at rest), in (0, 10].
+    pub static_friction_coefficient: f64,
+    /// Limit friction coefficient μ₂ = tan θ₂ of fast flow (> μ_s), at most 10.
+    pub limit_friction_coefficient: f64,
+    /// Reference inertial number I₀ (> 0) at which μ is halfway between μ_s and μ₂.
+    pub reference_inertial_number: f64,
+    /// Grain diameter d in m (> 0).
+    pub grain_diameter: f64,
+    /// Grain (solid) density ρ_s in kg/m³ (> 0).
+    pub grain_density: f64,
+}
+
 /// Newtonian fluid parameters (`law: "newtonian_fluid"`).
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -367,6 +412,8 @@ pub enum MaterialSpec {
     ModifiedCamClay(ModifiedCamClayParameters),
     /// Drucker–Prager matched to Mohr–Coulomb ([`DruckerPrager`]).
     DruckerPrager(DruckerPragerParameters),
+    /// The μ(I) rheology of dense granular flow ([`MuI`]).
+    MuI(MuIParameters),
     /// Newtonian fluid ([`NewtonianFluid`]).
     NewtonianFluid(NewtonianFluidParameters),
 }
@@ -491,6 +538,33 @@ impl MaterialSpec {
                     s.cohesion,
                     s.dilatancy_angle,
                     p.fit,
+                ))
+            }
+            MaterialSpec::MuI(p) => {
+                elastic(p.density, p.young_modulus, p.poisson_ratio)?;
+                in_range("static_friction_coefficient", p.static_friction_coefficient, FRICTION_COEFFICIENT)?;
+                in_range("limit_friction_coefficient", p.limit_friction_coefficient, FRICTION_COEFFICIENT)?;
+                if p.limit_friction_coefficient <= p.static_friction_coefficient {
+                    return Err(ParameterError::new(
+                        "limit_friction_coefficient",
+                        format!(
+                            "must exceed static_friction_coefficient ({}), got {}",
+                            p.static_friction_coefficient, p.limit_friction_coefficient
+                        ),
+                    ));
+                }
+                in_range("reference_inertial_number", p.reference_inertial_number, FACTOR)?;
+                in_range("grain_diameter", p.grain_diameter, GRAIN_DIAMETER)?;
+                in_range("grain_density", p.grain_density, DENSITY)?;
+                Box::new(MuI::new(
+                    p.density,
+                    p.young_modulus,
+                    p.poisson_ratio,
+                    p.static_friction_coefficient,
+                    p.limit_friction_coefficient,
+                    p.reference_inertial_number,
+                    p.grain_diameter,
+                    p.grain_density,
                 ))
             }
             MaterialSpec::NewtonianFluid(p) => {

@@ -20,7 +20,8 @@
 //!
 //! `K ln J` is the mean Kirchhoff stress of Hencky elasticity, and of every Hencky-based
 //! plasticity law of this crate whose plastic flow is isochoric (`det Cp = 1`, so that
-//! `J_e = J`): Tresca and Mohr–Coulomb with ψ = 0, von Mises and Drucker–Prager with ψ = 0.
+//! `J_e = J`): Tresca and Mohr–Coulomb with ψ = 0, von Mises and Drucker–Prager with ψ = 0, and
+//! the μ(I) law of granular flow ([`crate::mu_i`]).
 //! Their u–p return is the return of the displacement form at a fixed mean stress, which a
 //! deviatoric flow keeps; beyond the apex of a frictional surface (`p ≥ c cot φ`) no
 //! deviatoric stress is admissible and `τ = p 1` (a tension cut-off, continuous with the
@@ -190,12 +191,14 @@ pub trait MixedPrincipalModel: Send + Sync {
     /// Lamé's constants `(λ, μ)` of the Hencky elasticity (Pa).
     fn lame(&self) -> (f64, f64);
 
-    /// The return at trial principal elastic log strains `eps_tr` and pressure `pressure`,
+    /// The return at trial principal elastic log strains `eps_tr`, pressure `pressure` and
+    /// time step `time_step` (as [`crate::multiplicative::PrincipalModel::principal_update`]),
     /// from the committed internal variables, writing the trial ones.
     fn mixed_principal_update(
         &self,
         eps_tr: [f64; 3],
         pressure: f64,
+        time_step: f64,
         committed: &[f64],
         trial: &mut [f64],
     ) -> Result<MixedPrincipalResponse, LawError>;
@@ -252,7 +255,7 @@ pub fn update_principal_mixed<M: MixedPrincipalModel + ?Sized>(
     let (trial_cp, trial_internal) = trial.split_at_mut(CP_INV_LEN);
     let components = kinematics.tangent.components();
     let b_e = mixed_kirchhoff_update(F, &cp_inv, components, response, pressure_tangent, |eps_tr| {
-        model.mixed_principal_update(eps_tr, pressure, &committed[CP_INV_LEN..], trial_internal)
+        model.mixed_principal_update(eps_tr, pressure, kinematics.time_step, &committed[CP_INV_LEN..], trial_internal)
     })?;
     write_sym(&(f_inv * b_e * f_inv.transpose()), trial_cp);
     Ok(())

@@ -163,6 +163,7 @@ impl PrincipalModel for ModifiedCamClay {
     fn principal_update(
         &self,
         eps_tr: [f64; 3],
+        _time_step: f64,
         committed: &[f64],
         trial: &mut [f64],
     ) -> Result<PrincipalResponse, LawError> {

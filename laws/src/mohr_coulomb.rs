@@ -273,6 +273,7 @@ impl<S: StrengthEvolution> PrincipalModel for MohrCoulombLaw<S> {
     fn principal_update(
         &self,
         eps_tr: [f64; 3],
+        _time_step: f64,
         committed: &[f64],
         trial: &mut [f64],
     ) -> Result<PrincipalResponse, LawError> {
@@ -372,6 +373,7 @@ impl<S: StrengthEvolution> MixedPrincipalModel for MohrCoulombLaw<S> {
         &self,
         eps_tr: [f64; 3],
         pressure: f64,
+        _time_step: f64,
         committed: &[f64],
         trial: &mut [f64],
     ) -> Result<MixedPrincipalResponse, LawError> {

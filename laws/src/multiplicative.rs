@@ -11,7 +11,9 @@
 //! 3. Trial principal elastic logarithmic strains `ε_tr,a = ½ ln x_a`.
 //! 4. A **principal-space return** ([`PrincipalModel`]) gives the principal Kirchhoff
 //!    stresses `τ_a`, the updated elastic log strains `ε_e,a` and `∂τ_a/∂ε_tr,b`
-//!    (exponential map: the plastic flow is integrated as `ε_e = ε_tr − Δε_p`).
+//!    (exponential map: the plastic flow is integrated as `ε_e = ε_tr − Δε_p`). It also
+//!    receives the step's `Δt`, which a rate-dependent flow rule reads (the μ(I) law)
+//!    and the rate-independent ones ignore.
 //! 5. `τ = Σ_a τ_a n_a ⊗ n_a`, `b_e = Σ_a exp(2 ε_e,a) n_a ⊗ n_a`,
 //!    `Cp⁻¹_{n+1} = F⁻¹ b_e F⁻ᵀ`.
 //! 6. Tangent: `τ(b_e,tr)` is an isotropic tensor function with eigenvalue functions
@@ -52,11 +54,13 @@ pub trait PrincipalModel: Send + Sync {
     /// Writes the virgin internal variables.
     fn initialise_internal(&self, internal: &mut [f64]);
 
-    /// The return mapping: from the trial principal elastic log strains (unsorted) and the
-    /// committed internal variables, writes the trial internal variables.
+    /// The return mapping: from the trial principal elastic log strains (unsorted), the time
+    /// step `time_step` (Δt in s, 0 for a static step; only rate-dependent models read it)
+    /// and the committed internal variables, writes the trial internal variables.
     fn principal_update(
         &self,
         eps_tr: [f64; 3],
+        time_step: f64,
         committed: &[f64],
         trial: &mut [f64],
     ) -> Result<PrincipalResponse, LawError>;
@@ -162,7 +166,7 @@ pub fn update<M: PrincipalModel + ?Sized>(
     let (trial_cp, trial_internal) = trial.split_at_mut(CP_INV_LEN);
     let components = kinematics.tangent.components();
     let ku = kirchhoff_update(F, &cp_inv, components, &mut response.tangent, |eps_tr| {
-        model.principal_update(eps_tr, &committed[CP_INV_LEN..], trial_internal)
+        model.principal_update(eps_tr, kinematics.time_step, &committed[CP_INV_LEN..], trial_internal)
     })?;
     write_sym(&(f_inv * ku.b_e * f_inv.transpose()), trial_cp);
     response.first_piola = piola_from_kirchhoff(&f_inv, &ku.tau, &mut response.tangent, components);
@@ -192,10 +196,11 @@ pub fn initialise_at_stress<M: PrincipalModel + ?Sized>(
     let spec = Spectral::of(stress)
         .ok_or_else(|| LawError::InitialStress { problem: "the initial stress is not finite".into() })?;
     let eps_e = model.elastic_strain(spec.values)?;
-    // Admissibility: the state must be elastic at the virgin internal variables.
+    // Admissibility: the state must be elastic at the virgin internal variables, at rest
+    // (a static step, Δt = 0).
     let committed = state[CP_INV_LEN..].to_vec();
     let mut scratch = committed.clone();
-    let r = model.principal_update(eps_e, &committed, &mut scratch)?;
+    let r = model.principal_update(eps_e, 0.0, &committed, &mut scratch)?;
     let mismatch = (0..3).map(|a| (r.tau[a] - spec.values[a]).abs()).fold(0.0, f64::max);
     if mismatch > 1e-8 * scale {
         return Err(LawError::InitialStress { problem: "the initial stress lies outside the yield surface".into() });

@@ -59,6 +59,15 @@ fn mc_json() -> serde_json::Value {
            "friction_angle": 25.0, "cohesion": 5e3, "dilatancy_angle": 5.0})
 }
 
+/// The μ(I) law for Jop, Forterre & Pouliquen (2006)'s glass beads, as in
+/// `cases/laws/mu_i_simple_shear.json`.
+fn mu_i_json() -> serde_json::Value {
+    json!({"law": "mu_i", "density": 1500.0, "young_modulus": 1e7, "poisson_ratio": 0.3,
+           "static_friction_coefficient": 20.9f64.to_radians().tan(),
+           "limit_friction_coefficient": 32.76f64.to_radians().tan(),
+           "reference_inertial_number": 0.279, "grain_diameter": 0.5e-3, "grain_density": 2450.0})
+}
+
 fn mcc(ocr: f64) -> ModifiedCamClay {
     ModifiedCamClay {
         density: 1800.0,
@@ -235,6 +244,7 @@ fn objectivity_under_superposed_rotation() {
             "friction_angle": 30.0, "cohesion": 5e3, "dilatancy_angle": 10.0, "fit": "plane_strain"})),
         Box::new(mcc(1.2)),
         build(json!({"law": "newtonian_fluid", "density": 1000.0, "viscosity": 10.0, "bulk_modulus": 2e6})),
+        build(mu_i_json()),
     ];
     let F = general([-0.01, 0.002, 0.004]);
     let Fn = general([-0.008, 0.0015, 0.003]);
@@ -496,6 +506,71 @@ fn elastic_paths_match_closed_forms() {
     assert!((sxy - sigma[(0, 1)]).abs() < 1e-9 * sigma[(0, 1)]);
 }
 
+/// `cases/laws/mu_i_simple_shear.json` (Jop, Forterre & Pouliquen 2006's glass beads under
+/// σ_v = 2450 Pa) through the driver, as `loam law` runs it, at the case's rate (I = 0.1)
+/// and at ten times less and more (I = 0.01, 1, by the time step): the steady friction read
+/// from `path.csv`, `μ = σ_xy/(−σ_yy)`, against the closed form `μ(I) = μ_s + (μ₂ − μ_s)/(I₀/I
+/// + 1)` at the imposed `I = γ̇ d/√(σ_v/ρ_s)`, `γ̇ = γ/(steps Δt)` (tolerance 1 %).
+///
+/// Why `σ_xy/(−σ_yy)` is the law's `τ̄/p`: in steady simple shear the isochoric flow
+/// `D_p = D` is a pure shear in the xy plane, so `dev τ` has its principal axes at 45°,
+/// `τ_xx = τ_yy = τ_zz = −p` and `τ̄ = ‖dev τ‖/√2 = |τ_xy|`, up to the normal stress
+/// differences of the rotated elastic strain (relative `O(τ̄/G)`, here 3e-4); the
+/// `inertial_number` column (the law's `I`, from its plastic shear rate) is checked against the
+/// imposed `I` too, and `q/(√3 p) = τ̄/p` against `μ` of that column.
+#[test]
+fn mu_i_simple_shear_follows_closed_form() {
+    let base: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(cases_dir().join("mu_i_simple_shear.json")).unwrap()).unwrap();
+    let m = &base["material"];
+    let (ms, m2, i0) = (
+        m["static_friction_coefficient"].as_f64().unwrap(),
+        m["limit_friction_coefficient"].as_f64().unwrap(),
+        m["reference_inertial_number"].as_f64().unwrap(),
+    );
+    let friction = |i: f64| ms + (m2 - ms) / (i0 / i + 1.0);
+    let (d, rho_s) = (m["grain_diameter"].as_f64().unwrap(), m["grain_density"].as_f64().unwrap());
+    let path = &base["path"];
+    let (gamma, steps, sigma_v) = (
+        path["shear_strain"].as_f64().unwrap(),
+        path["steps"].as_f64().unwrap(),
+        path["vertical_stress"].as_f64().unwrap(),
+    );
+    let dir = std::env::temp_dir().join("loam_laws_verification").join("mu_i_rates");
+    std::fs::create_dir_all(&dir).unwrap();
+    for scale in [10.0, 1.0, 0.1] {
+        let mut case = base.clone();
+        let dt = base["time_step"].as_f64().unwrap() * scale;
+        case["time_step"] = json!(dt);
+        let file = dir.join(format!("dt{scale}.json"));
+        std::fs::write(&file, case.to_string()).unwrap();
+        let out = dir.join(format!("dt{scale}"));
+        driver::run_path_file(&file, &out).unwrap();
+        // path.csv as the user reads it: header, then one row per step
+        let text = std::fs::read_to_string(out.join("path.csv")).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let last: Vec<f64> = lines.last().unwrap().split(',').map(|v| v.parse().unwrap()).collect();
+        let col = |name: &str| last[header.iter().position(|h| *h == name).unwrap()];
+        let imposed = gamma / (steps * dt) * d / (sigma_v / rho_s).sqrt();
+        let mu = col("sigma_xy") / -col("sigma_yy");
+        let reported = col("inertial_number");
+        let ratio = col("q") / (3f64.sqrt() * col("p"));
+        let closed = friction(imposed);
+        println!(
+            "mu_i simple shear at I = {imposed:.3}: σ_xy/(−σ_yy) = {mu:.6}, closed form μ(I) = {closed:.6} ({:+.2e}, tolerance 1 %); \
+             inertial_number {reported:.6} ({:+.2e}); q/(√3 p) = {ratio:.6} vs μ(inertial_number) {:+.1e}",
+            mu / closed - 1.0,
+            reported / imposed - 1.0,
+            ratio / friction(reported) - 1.0
+        );
+        assert!((mu / closed - 1.0).abs() < 0.01);
+        assert!((reported / imposed - 1.0).abs() < 0.01);
+        assert!((ratio / friction(reported) - 1.0).abs() < 1e-6);
+        assert_eq!(col("yield_flag"), 1.0);
+    }
+}
+
 /// Every case file under cases/laws runs and writes a path.csv with the required columns.
 #[test]
 fn every_case_file_runs() {
@@ -525,6 +600,7 @@ fn every_case_file_runs() {
         "modified_cam_clay",
         "drucker_prager",
         "newtonian_fluid",
+        "mu_i",
     ] {
         assert!(laws.contains(law), "no path file for {law}");
     }
@@ -590,6 +666,11 @@ fn parameter_checks_name_the_key() {
         m[k] = json!(v);
         m
     };
+    let mu_i = |k: &str, v: f64| {
+        let mut m = mu_i_json();
+        m[k] = json!(v);
+        m
+    };
     let cohesionless = {
         let mut m = mc("friction_angle", 0.0);
         m["cohesion"] = json!(0.0);
@@ -611,6 +692,12 @@ fn parameter_checks_name_the_key() {
         (soft("residual_cohesion", 2e4), "residual_cohesion"),
         (soft("shape_factor", -1.0), "shape_factor"),
         (json!({"law": "newtonian_fluid", "density": 1000.0, "viscosity": 1.0, "bulk_modulus": 0.0}), "bulk_modulus"),
+        (mu_i("static_friction_coefficient", 0.0), "static_friction_coefficient"),
+        (mu_i("limit_friction_coefficient", 0.3), "limit_friction_coefficient"),
+        (mu_i("reference_inertial_number", 0.0), "reference_inertial_number"),
+        (mu_i("grain_diameter", -1e-3), "grain_diameter"),
+        (mu_i("grain_density", 0.0), "grain_density"),
+        (mu_i("poisson_ratio", 0.6), "poisson_ratio"),
     ];
     for (m, key) in cases {
         let e = serde_json::from_value::<MaterialSpec>(m).unwrap().build().unwrap_err();
@@ -647,6 +734,10 @@ fn parameter_checks_name_the_key() {
         (fluid("bulk_modulus", 1e-320), "bulk_modulus", "at least 0.001 Pa"),
         (fluid("viscosity", 1e300), "viscosity", "at most 1e15 Pa·s"),
         (fluid("viscosity", 1e-320), "viscosity", "0 or at least 1e-9 Pa·s"),
+        (mu_i("static_friction_coefficient", 20.9), "static_friction_coefficient", "not an angle in degrees"),
+        (mu_i("grain_diameter", 1e300), "grain_diameter", "at most 100 m"),
+        (mu_i("grain_density", 1e300), "grain_density", "at most 100000 kg/m³"),
+        (mu_i("reference_inertial_number", 1e-320), "reference_inertial_number", "at least 1e-6"),
     ];
     for (m, key, says) in extremes {
         let e = serde_json::from_value::<MaterialSpec>(m).unwrap().build().unwrap_err();
