@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{last, monitor, report, run};
+use common::{last, monitor, report, residual_differences, run};
 use loam::simulation::Simulation;
 
 const G: f64 = 9.81;
@@ -122,21 +122,11 @@ fn frictional_boundary_tangent_matches_finite_differences() {
         // strongly curved: the central difference's error goes as h² (3D: 5.5e-4, 5.5e-6,
         // 5.5e-8 of the largest entry at h = 1e-7, 1e-8, 1e-9), so a small step
         let h = 1e-9;
-        let (mut worst, mut scale) = (0.0f64, 0.0f64);
-        for j in 0..n {
-            let mut plus = delta0.clone();
-            plus[j] += h;
-            let mut minus = delta0.clone();
-            minus[j] -= h;
-            let (rp, _) = lin.evaluate(&plus).unwrap();
+        let fd = residual_differences(&mut lin, &delta0, h, |lin| {
             assert_eq!(lin.friction_counts(), (stick, slide), "states change under a perturbation");
-            let (rm, _) = lin.evaluate(&minus).unwrap();
-            for i in 0..n {
-                let fd = (rp[i] - rm[i]) / (2.0 * h);
-                worst = worst.max((fd - k[i * n + j]).abs());
-                scale = scale.max(k[i * n + j].abs());
-            }
-        }
+        });
+        let worst = fd.iter().zip(&k).map(|(a, b)| (a - b).abs()).fold(0.0f64, f64::max);
+        let scale = k.iter().map(|v| v.abs()).fold(0.0f64, f64::max);
         println!(
             "{dim}D: max |K − K_FD| = {worst:.3e}, max |K| = {scale:.3e}, relative {:.2e} (tolerance 1e-6)",
             worst / scale

@@ -26,14 +26,14 @@
 //! `s = (1 − f_tr/√J₂,tr) s_tr`, `τ = s + p 1`, while `ξ c − η p ≥ 0`; beyond the apex
 //! `τ = p 1`, and at the end of the step the volume beyond `θ_apex = p_apex/K`,
 //! `p_apex = ξ c/η`, is released as plastic dilation where the point's pressure is at the
-//! apex, as for Mohr–Coulomb ([`elastic_strain_up`]). Tangents by dual numbers seeded on
+//! apex, as for Mohr–Coulomb ([`crate::mixed::elastic_strain_up`]). Tangents by dual numbers seeded on
 //! `(ε_tr, p)`.
 
 use nalgebra::Matrix3;
 use serde::Deserialize;
 
 use crate::dual::{Dual, Real};
-use crate::mixed::{elastic_strain_up, MixedPrincipalModel, MixedPrincipalResponse};
+use crate::mixed::{dual_mixed_response, MixedPrincipalModel, MixedPrincipalResponse, MixedReturn};
 use crate::multiplicative::{
     self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel, PrincipalResponse,
     PLASTIC_OUTPUT,
@@ -235,14 +235,11 @@ impl MixedPrincipalModel for DruckerPrager {
         committed: &[f64],
         trial: &mut [f64],
     ) -> Result<MixedPrincipalResponse, LawError> {
-        let eps: [Dual<4>; 3] = [Dual::seed(eps_tr[0], 0), Dual::seed(eps_tr[1], 1), Dual::seed(eps_tr[2], 2)];
-        let (t, region) = self.mixed_return(eps, Dual::seed(pressure, 3));
-        let tau = t.map(|x| x.v);
-        let eps_e =
-            elastic_strain_up(eps_tr, tau, self.mu, (region == DruckerPragerRegion::Apex).then(|| self.apex_strain()));
-        accumulate_plastic_strain(committed, trial, eps_tr, eps_e, region != DruckerPragerRegion::Elastic);
-        let dtau_deps = Matrix3::from_fn(|a, b| t[a].d[b]);
-        Ok((PrincipalResponse { tau, eps_e, dtau_deps }, t.map(|x| x.d[3])))
+        dual_mixed_response(eps_tr, pressure, self.mu, committed, trial, |eps, p| {
+            let (t, region) = self.mixed_return(eps, p);
+            let apex_cap = (region == DruckerPragerRegion::Apex).then(|| self.apex_strain());
+            Ok((t, MixedReturn { yielded: region != DruckerPragerRegion::Elastic, apex_cap }))
+        })
     }
 }
 

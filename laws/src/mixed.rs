@@ -36,6 +36,7 @@
 
 use nalgebra::Matrix3;
 
+use crate::dual::Dual;
 use crate::multiplicative::{checked_inverse, kirchhoff_update, PrincipalResponse};
 use crate::tensor::piola_from_kirchhoff;
 use crate::{Kinematics, LawError, StressResponse};
@@ -139,6 +140,39 @@ pub fn elastic_strain_up(eps_tr: [f64; 3], tau: [f64; 3], mu: f64, apex_cap: Opt
     let vol = apex_cap.map_or(trace, |cap| trace.min(cap)) / 3.0;
     let s = deviator(tau);
     s.map(|si| vol + si / (2.0 * mu))
+}
+
+/// Where a u–p return ended: whether it yielded, and the volumetric elastic strain cap of an
+/// apex return ([`elastic_strain_up`]'s `apex_cap`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MixedReturn {
+    /// Whether the step is plastic.
+    pub yielded: bool,
+    /// `Some(θ_apex)` for a return to the apex, `None` otherwise.
+    pub apex_cap: Option<f64>,
+}
+
+/// The u–p response of a principal return written once over dual numbers: `principal_return`
+/// maps the trial principal log strains and the pressure, seeded as the four derivative
+/// directions, to the principal Kirchhoff stresses; the tangent `∂τ_a/∂ε_tr,b` and `∂τ_a/∂p`
+/// are their derivatives, the elastic strains follow from [`elastic_strain_up`] with shear
+/// modulus `mu`, and the plastic strains accumulate into `trial` (the shared part of every
+/// [`MixedPrincipalModel::mixed_principal_update`]).
+pub fn dual_mixed_response(
+    eps_tr: [f64; 3],
+    pressure: f64,
+    mu: f64,
+    committed: &[f64],
+    trial: &mut [f64],
+    principal_return: impl FnOnce([Dual<4>; 3], Dual<4>) -> Result<([Dual<4>; 3], MixedReturn), LawError>,
+) -> Result<MixedPrincipalResponse, LawError> {
+    let eps: [Dual<4>; 3] = [Dual::seed(eps_tr[0], 0), Dual::seed(eps_tr[1], 1), Dual::seed(eps_tr[2], 2)];
+    let (t, ret) = principal_return(eps, Dual::seed(pressure, 3))?;
+    let tau = t.map(|x| x.v);
+    let eps_e = elastic_strain_up(eps_tr, tau, mu, ret.apex_cap);
+    crate::multiplicative::accumulate_plastic_strain(committed, trial, eps_tr, eps_e, ret.yielded);
+    let dtau_deps = Matrix3::from_fn(|a, b| t[a].d[b]);
+    Ok((PrincipalResponse { tau, eps_e, dtau_deps }, t.map(|x| x.d[3])))
 }
 
 /// Relative errors `(‖A − A_FD‖, ‖∂P/∂p − FD‖)` (each over the magnitude of its tangent) of

@@ -45,7 +45,7 @@
 use nalgebra::Matrix3;
 
 use crate::dual::{Dual, Real};
-use crate::mixed::{elastic_strain_up, MixedPrincipalModel, MixedPrincipalResponse};
+use crate::mixed::{dual_mixed_response, MixedPrincipalModel, MixedPrincipalResponse, MixedReturn};
 use crate::multiplicative::{
     self, accumulate_plastic_strain, hencky_matrix, hencky_strain, hencky_stress, PrincipalModel, PrincipalResponse,
     PLASTIC_OUTPUT,
@@ -377,13 +377,11 @@ impl<S: StrengthEvolution> MixedPrincipalModel for MohrCoulombLaw<S> {
         committed: &[f64],
         trial: &mut [f64],
     ) -> Result<MixedPrincipalResponse, LawError> {
-        let eps: [Dual<4>; 3] = [Dual::seed(eps_tr[0], 0), Dual::seed(eps_tr[1], 1), Dual::seed(eps_tr[2], 2)];
-        let (t, region) = self.mixed_return(eps, Dual::seed(pressure, 3))?;
-        let tau = t.map(|x| x.v);
-        let eps_e = elastic_strain_up(eps_tr, tau, self.mu, (region == Region::Apex).then(|| self.apex_strain()));
-        accumulate_plastic_strain(committed, trial, eps_tr, eps_e, region != Region::Elastic);
-        let dtau_deps = Matrix3::from_fn(|a, b| t[a].d[b]);
-        Ok((PrincipalResponse { tau, eps_e, dtau_deps }, t.map(|x| x.d[3])))
+        dual_mixed_response(eps_tr, pressure, self.mu, committed, trial, |eps, p| {
+            let (t, region) = self.mixed_return(eps, p)?;
+            let apex_cap = (region == Region::Apex).then(|| self.apex_strain());
+            Ok((t, MixedReturn { yielded: region != Region::Elastic, apex_cap }))
+        })
     }
 }
 

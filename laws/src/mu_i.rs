@@ -70,7 +70,9 @@
 use nalgebra::Matrix3;
 
 use crate::dual::{Dual, Real};
-use crate::mixed::{deviator, elastic_strain_up, MixedPrincipalModel, MixedPrincipalResponse};
+use crate::mixed::{
+    deviator, dual_mixed_response, elastic_strain_up, MixedPrincipalModel, MixedPrincipalResponse, MixedReturn,
+};
 use crate::multiplicative::{
     self, accumulate_plastic_strain, hencky_strain, hencky_stress, PrincipalModel, PrincipalResponse,
 };
@@ -275,14 +277,15 @@ impl MixedPrincipalModel for MuI {
         committed: &[f64],
         trial: &mut [f64],
     ) -> Result<MixedPrincipalResponse, LawError> {
-        let eps: [Dual<4>; 3] = [Dual::seed(eps_tr[0], 0), Dual::seed(eps_tr[1], 1), Dual::seed(eps_tr[2], 2)];
-        let (t, region, inertial_number) = self.mixed_return(eps, Dual::seed(pressure, 3), time_step);
-        let tau = t.map(|x| x.v);
-        let eps_e = elastic_strain_up(eps_tr, tau, self.mu, (region == MuIRegion::Apex).then_some(0.0));
-        accumulate_plastic_strain(committed, trial, eps_tr, eps_e, region != MuIRegion::Elastic);
+        let mut inertial_number = 0.0;
+        let response = dual_mixed_response(eps_tr, pressure, self.mu, committed, trial, |eps, p| {
+            let (t, region, i) = self.mixed_return(eps, p, time_step);
+            inertial_number = i;
+            let apex_cap = (region == MuIRegion::Apex).then_some(0.0);
+            Ok((t, MixedReturn { yielded: region != MuIRegion::Elastic, apex_cap }))
+        })?;
         trial[3] = inertial_number;
-        let dtau_deps = Matrix3::from_fn(|a, b| t[a].d[b]);
-        Ok((PrincipalResponse { tau, eps_e, dtau_deps }, t.map(|x| x.d[3])))
+        Ok(response)
     }
 }
 

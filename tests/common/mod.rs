@@ -29,6 +29,34 @@ pub fn parse(json: serde_json::Value) -> Case {
     Case::parse(&json.to_string()).expect("case parses")
 }
 
+/// Central differences `(R(δ₀ + h e_j) − R(δ₀ − h e_j))/2h` of the residual of a step's
+/// nonlinear system, column by column: the dense matrix `∂R_i/∂δ_j` (row-major), for checks
+/// of the consistent tangent. `after` sees the system after every evaluation (e.g. to check
+/// that an active set did not change).
+pub fn residual_differences(
+    lin: &mut loam_fem::model::Linearisation<'_>,
+    delta0: &[f64],
+    h: f64,
+    mut after: impl FnMut(&loam_fem::model::Linearisation<'_>),
+) -> Vec<f64> {
+    let n = delta0.len();
+    let mut fd = vec![0.0; n * n];
+    for j in 0..n {
+        let mut plus = delta0.to_vec();
+        plus[j] += h;
+        let mut minus = delta0.to_vec();
+        minus[j] -= h;
+        let (rp, _) = lin.evaluate(&plus).expect("assembles");
+        after(lin);
+        let (rm, _) = lin.evaluate(&minus).expect("assembles");
+        after(lin);
+        for i in 0..n {
+            fd[i * n + j] = (rp[i] - rm[i]) / (2.0 * h);
+        }
+    }
+    fd
+}
+
 /// Runs `case` to its end time.
 pub fn run(case: Case) -> (Simulation, History) {
     let mut sim = Simulation::new(case).expect("case builds");
