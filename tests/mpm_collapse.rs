@@ -9,7 +9,8 @@
 //! fails them: pure FLIP point velocities (no PIC share, `pic_relaxation_time` removed) leave
 //! a velocity noise that keeps the column creeping; it never comes to rest and runs out too
 //! far. [`bui2008_pure_flip_fails_the_tolerances`] (long suite) runs it and asserts that it
-//! fails the surface, runout and rest checks of [`check`].
+//! fails the runout and rest checks of [`check`] (its final surface, still creeping, lies inside
+//! the surface tolerance on the frictional base).
 
 mod common;
 
@@ -24,15 +25,17 @@ use loam_mpm::surface::SurfaceProfile;
 /// Experiment: runout (surface below 2 mm), height at the wall (m).
 const RUNOUT: f64 = 0.42;
 const HEIGHT_AT_WALL: f64 = 0.099;
-/// Runout tolerance (relative): the runout moves by 4 % between h = 5 mm and 2.5 mm (quad
-/// refinement, README "benchmark output"), so 5 % is the discretisation error at h = 5 mm;
-/// pure FLIP runs out 11 % too far.
+/// Runout tolerance (relative): 5 %. On the rough base the runout moved by 4 % between h = 5
+/// and 2.5 mm, so 5 % was the discretisation error at h = 5 mm; on the frictional base it moves
+/// from 0.433 to 0.504 m (its 2 mm threshold follows a sheet one material point thick: README,
+/// granular flow), so the tolerance does not bound the discretisation error there. Pure FLIP
+/// runs out 8.3 % too far (frictional base; 10.2 % on the rough base).
 const RUNOUT_TOLERANCE: f64 = 0.05;
 /// RMS of the vertical distance between the final surface and the experiment's, over the 23
 /// digitised points from the wall to x = 0.44 m (m). 4 mm: the digitising error (a few mm)
-/// plus the 2 mm that the same case moves between adaptive and small steps (measured: quad
-/// 3.52 mm, tri 2.49 mm); pure FLIP, which spreads the deposit too thin, lies above it
-/// (4.39 mm at 2 s, still creeping).
+/// plus the 2 mm that the same case moved between adaptive and small steps (measured on the
+/// frictional base: quad 2.91 mm, tri 2.54 mm); pure FLIP, still creeping at 2 s, lies inside
+/// it on the frictional base (3.24 mm) and lay outside on the rough base (4.39 mm).
 const SURFACE_RMS_TOLERANCE: f64 = 0.004;
 /// Failure line inclination (degrees). The experiment's line is 9 digitised points from
 /// (0.021, 0.099) to (0.179, 0.0005); the simulated one is fitted through the edge of the
@@ -226,8 +229,11 @@ fn bui2008_collapse_mixed_up() {
 
 /// The quadrilateral case with pure FLIP point velocities (`pic_relaxation_time` removed,
 /// θ = 0) fails the checks of [`check`]: it does not come to rest by its 2 s end time, and
-/// its runout and final surface lie outside their tolerances. This is what makes those
-/// tolerances able to fail. About 3 minutes.
+/// its runout lies outside its tolerance (measured on the frictional base: 0.4550 m, +8.3 %,
+/// still creeping). Its final surface at 2 s (3.24 mm RMS) lies inside the surface tolerance
+/// on the frictional base (on the rough base it lay outside, 4.39 mm): printed, not asserted —
+/// the surface check alone does not catch pure FLIP. This is what makes the rest and runout
+/// checks able to fail. About 3 minutes.
 #[test]
 #[ignore = "long (about 3 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_pure_flip_fails_the_tolerances() {
@@ -235,9 +241,12 @@ fn bui2008_pure_flip_fails_the_tolerances() {
     json["domains"][0].as_object_mut().expect("a domain").remove("pic_relaxation_time");
     let c = measure("pure FLIP", parse(json));
     let [at_rest, runout, surface, _] = check(&c);
+    println!(
+        "pure FLIP: final surface {} the surface tolerance (not asserted)",
+        if surface { "inside" } else { "outside" }
+    );
     assert!(!at_rest, "pure FLIP should not come to rest");
     assert!(!runout, "pure FLIP's runout should fail the runout tolerance");
-    assert!(!surface, "pure FLIP's final surface should fail the surface tolerance");
 }
 
 /// Consistency check (issue 5's time-to-answer target; the reference is Loam's own run):
@@ -277,13 +286,12 @@ fn bui2008_adaptive_steps_end_on_the_small_step_surface() {
 }
 
 /// Benchmark 8 on the smooth bases (issue 23): the quadrilateral case (h = 5 mm, 4 points
-/// per cell) with `grid.basis` = `gimp` and `bspline2`, measured against the experiment as
-/// the linear case. Measured: GIMP at rest at 0.68 s, runout 0.4048 m (−3.6 %), surface
-/// 2.72 mm RMS, failure line 31.8°; B-splines at rest at 0.69 s, runout 0.3986 m (−5.1 %,
-/// just outside the 5 % of the linear case), surface 2.43 mm RMS, failure line 28.6°.
-/// Asserted: each at rest with its final surface and failure line within the linear case's
-/// tolerances; the runout within [`RUNOUT_TOLERANCE`] for GIMP, and printed for the
-/// B-splines (their shorter runout is the README's open point). About 1.5 minutes.
+/// per cell, frictional base) with `grid.basis` = `gimp` and `bspline2`, measured against the
+/// experiment as the linear case. Measured: GIMP at rest at 0.72 s, runout 0.4352 m
+/// (+3.6 %), surface 1.96 mm RMS, failure line 31.5°; B-splines at rest at 0.72 s, runout
+/// 0.4261 m (+1.5 %), surface 2.30 mm RMS, failure line 28.3°. Asserted: each at rest with
+/// its runout, final surface and failure line within the linear case's tolerances. About 1.5
+/// minutes.
 #[test]
 #[ignore = "long (about 1.5 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_collapse_on_smooth_bases() {
@@ -292,9 +300,9 @@ fn bui2008_collapse_on_smooth_bases() {
         json["domains"][0]["grid"]["basis"] = serde_json::json!(basis);
         let c = measure(basis, parse(json));
         let [at_rest, runout, surface, angle] = check(&c);
-        assert!(at_rest && surface && angle, "{basis}: at rest {at_rest}, surface {surface}, failure line {angle}");
-        if basis == "gimp" {
-            assert!(runout, "{basis}: runout outside its tolerance");
-        }
+        assert!(
+            at_rest && runout && surface && angle,
+            "{basis}: at rest {at_rest}, runout {runout}, surface {surface}, failure line {angle}"
+        );
     }
 }
