@@ -638,13 +638,24 @@ fn footing_on_undrained_soil_fem() {
 /// Consistency check beside benchmark 8 with the u–p element (its validation against the
 /// experiment is `mpm_collapse::bui2008_collapse_mixed_up`): the isochoric flow with ψ = 0
 /// must not stiffen or soften the collapse (issue 15), so the u–p runout lies within 5 % of
-/// the displacement run's on the same grid and base (the rough base of
-/// `collapse_bui2008_quad_rough.json`, which the u–p case keeps), and both come to rest.
+/// the displacement run's on the same grid and base, and both come to rest. Both run on
+/// quadratic B-splines with the frictional base of `collapse_bui2008_quad.json` (measured:
+/// displacement 0.4261 m, u–p 0.4146 m, 2.7 % apart). On the linear basis the runout at the
+/// experiment's 2 mm threshold follows a sheet one material point thick (README, granular
+/// flow: it moves by −13 / +18 % as the PIC relaxation time is halved / doubled) and the two
+/// elements end 6.2 % (frictional base) and 6.3 % (rough base) apart; on B-splines the sheet
+/// does not form (−1.5 / +3.3 %). About 3 minutes.
 #[test]
-#[ignore = "long (about 2 min in release): LOAM_LONG=1 scripts/test.sh"]
+#[ignore = "long (about 3 min in release): LOAM_LONG=1 scripts/test.sh"]
 fn bui_collapse_with_mixed_up() {
-    let (sim_u, h_u) = run(case("collapse_bui2008_quad_rough.json"));
-    let (sim_up, h_up) = run(case("collapse_bui2008_quad_up.json"));
+    let mut displacement = common::case_json("collapse_bui2008_quad.json");
+    let mut mixed = common::case_json("collapse_bui2008_quad_up.json");
+    mixed["boundary_conditions"] = displacement["boundary_conditions"].clone();
+    for json in [&mut displacement, &mut mixed] {
+        json["domains"][0]["grid"]["basis"] = json!("bspline2");
+    }
+    let (sim_u, h_u) = run(common::parse(displacement));
+    let (sim_up, h_up) = run(common::parse(mixed));
     let runout = |sim: &Simulation, h: &History| h.last().unwrap().1[monitor(sim, "runout")];
     let height = |sim: &Simulation, h: &History| h.last().unwrap().1[monitor(sim, "height_at_wall")];
     for (label, sim, h) in [("displacement", &sim_u, &h_u), ("u–p", &sim_up, &h_up)] {
