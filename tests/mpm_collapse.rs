@@ -5,7 +5,7 @@
 //! `shared/benchmarks/bui2008/`, digitised from Bui et al. 2008, Int. J. Numer. Anal. Meth.
 //! Geomech. 32:1537–1570, figure of the final deposit; a few millimetres of digitising error).
 //!
-//! **What a wrong run does.** The tolerances are set so that the run the README calls wrong
+//! **What a wrong run does.** The tolerances are set so that the run docs/validation.md calls wrong
 //! fails them: pure FLIP point velocities (no PIC share, `pic_relaxation_time` removed) leave
 //! a velocity noise that keeps the column creeping; it never comes to rest and runs out too
 //! far. [`bui2008_pure_flip_fails_the_tolerances`] (long suite) runs it and asserts that it
@@ -25,7 +25,7 @@ use loam_mpm::surface::SurfaceProfile;
 const RUNOUT: f64 = 0.42;
 const HEIGHT_AT_WALL: f64 = 0.099;
 /// Runout tolerance (relative): the runout moves by 4 % between h = 5 mm and 2.5 mm (quad
-/// refinement, README "benchmark output"), so 5 % is the discretisation error at h = 5 mm;
+/// refinement, docs/validation.md, granular flow, "benchmark output"), so 5 % is the discretisation error at h = 5 mm;
 /// pure FLIP runs out 11 % too far.
 const RUNOUT_TOLERANCE: f64 = 0.05;
 /// RMS of the vertical distance between the final surface and the experiment's, over the 23
@@ -185,7 +185,7 @@ fn collapse(case_name: &str) {
 /// Quadrilateral grid h = 5 mm, 4 points per cell, frictional base μ_b = tan φ = 0.36
 /// (`cases/collapse_bui2008_quad.json`). Measured: at rest at 0.71 s, runout 0.4328 m
 /// (+3.05 %), surface 2.91 mm RMS, failure line 34.5°. (The rough base of
-/// `collapse_bui2008_quad_rough.json` ends at 0.3946 m, −6.0 %, outside the tolerance; README,
+/// `collapse_bui2008_quad_rough.json` ends at 0.3946 m, −6.0 %, outside the tolerance; docs/validation.md,
 /// granular flow.)
 #[test]
 fn bui2008_collapse_quadrilateral_grid() {
@@ -204,12 +204,12 @@ fn bui2008_collapse_triangular_grid() {
 /// `cases/collapse_bui2008_quad_up.json`: nodal pressures, Q1–Q1 with the Dohrmann–Bochev
 /// projection), on the rough base of `collapse_bui2008_quad_rough.json`, measured as the
 /// displacement cases (at rest at 0.71 s, runout 0.4194 m, −0.14 %; with the frictional base
-/// of the displacement case it runs out to 0.4598 m, +9.5 %: README, granular flow, open). Issue 15's criterion is asserted: the
+/// of the displacement case it runs out to 0.4598 m, +9.5 %: docs/validation.md, granular flow, open). Issue 15's criterion is asserted: the
 /// isochoric flow with ψ = 0 neither stiffens nor softens the collapse, so the column comes
 /// to rest with the experiment's runout within [`RUNOUT_TOLERANCE`]. The final surface and
 /// the failure line are printed against the displacement cases' tolerances and not asserted:
 /// they lie just outside them (surface 4.09 mm RMS against 4 mm, failure line 27.6° against
-/// 32.9° ± 5°; README, mixed u–p). The apex in u–p form is the return at the end of the step
+/// 32.9° ± 5°; docs/validation.md, mixed u–p). The apex in u–p form is the return at the end of the step
 /// of `loam_laws::mixed::elastic_strain_up`.
 #[test]
 fn bui2008_collapse_mixed_up() {
@@ -245,7 +245,7 @@ fn bui2008_pure_flip_fails_the_tolerances() {
 /// the same case run with Kratos' fixed Δt = 5e-5 s until at rest (about 13 000 steps):
 /// RMS vertical distance between the two final surfaces, sampled every millimetre from the
 /// wall to 0.5 m, within 2 mm (issue 5). For scale: two runs whose gravity differs by 1e-12
-/// end 0.8 mm apart (the flow amplifies round-off; README, Performance). About 7 minutes.
+/// end 0.8 mm apart (the flow amplifies round-off; docs/performance.md, MPM column collapse). About 7 minutes.
 #[test]
 #[ignore = "long (about 7 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_adaptive_steps_end_on_the_small_step_surface() {
@@ -283,7 +283,7 @@ fn bui2008_adaptive_steps_end_on_the_small_step_surface() {
 /// just outside the 5 % of the linear case), surface 2.43 mm RMS, failure line 28.6°.
 /// Asserted: each at rest with its final surface and failure line within the linear case's
 /// tolerances; the runout within [`RUNOUT_TOLERANCE`] for GIMP, and printed for the
-/// B-splines (their shorter runout is the README's open point). About 1.5 minutes.
+/// B-splines (their shorter runout is an open point of docs/validation.md, smooth bases). About 1.5 minutes.
 #[test]
 #[ignore = "long (about 1.5 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_collapse_on_smooth_bases() {
