@@ -30,6 +30,9 @@ LOAM_PYTHON="$PWD/.venv/bin/python" cargo test --release --quiet -p loam --lib \
   output::vtk::tests::meshio_reads_mesh_and_cloud -- --ignored --exact
 .venv/bin/python scripts/check_vtk.py
 
+echo "== Python: relative links and anchors of README.md and docs/ (standard library)"
+python3 scripts/check_links.py
+
 echo "== C: fmu/src/ffi.rs types compiled against the FMI 3.0 headers (fmpy's)"
 .venv/bin/python scripts/check_fmi_header.py
 

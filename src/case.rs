@@ -1,8 +1,8 @@
 //! Case files: the JSON description of a simulation.
 //!
 //! Every object rejects unknown keys, and every error names its JSON path, e.g.
-//! `materials.beam.poisson_ratio: must lie in (-1, 0.5), got 0.5`. See the README's
-//! "Case file reference" for a commented example of every key.
+//! `materials.beam.poisson_ratio: must lie in (-1, 0.5), got 0.5`. See docs/cases.md
+//! for a commented example and every key with its type, default and unit.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

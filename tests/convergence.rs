@@ -209,7 +209,7 @@ fn bar_period(n: usize, v0: f64) -> f64 {
 /// outer points cross into the empty cell beyond the bar as soon as h ≤ 0.5 m, and the
 /// linear-shape-function MPM loses energy at each crossing (13 % over five periods at
 /// h = 0.5 m, 19 % at 0.25 m): the cell-crossing error, which h = 1 m escapes only because
-/// its outermost points stay 5 mm inside their cell (README, "What is not validated").
+/// its outermost points stay 5 mm inside their cell (docs/validation.md, "What is not validated").
 #[test]
 fn vibrating_bar_period_converges_at_order_two() {
     let exact = 10.0;

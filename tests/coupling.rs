@@ -638,7 +638,7 @@ fn split_beam_run(
 /// FEM beam itself is 2.6 % stiff, the MPM-only beam 0.51 % from it) and the 20-step runs
 /// against FEM, which the runs whose free end is material points miss by up to 1.5 % at
 /// h = 0.025 (the linear MPM's quadrature error growing with the points' travel through the
-/// cells; README).
+/// cells; docs/validation.md, soil–structure coupling).
 #[test]
 fn beam_split_placement_and_refinement_study() {
     for &h in &[0.2, 0.1, 0.05, 0.025] {

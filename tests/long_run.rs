@@ -104,7 +104,7 @@ fn memory_is_flat_over_10000_steps() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// The output a run writes per step, for the README: monitors.csv per row and the `.vtu` of
+/// The output a run writes per step, for docs/restart.md: monitors.csv per row and the `.vtu` of
 /// each output (measured on a 20-step run with VTK at every step).
 #[test]
 fn output_size_per_step() {

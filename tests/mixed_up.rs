@@ -531,7 +531,7 @@ fn coupled_footing_rough_contact() {
 /// the change of geometry (at E_u/s_u = 100 the load at 0.12–0.15 B is still rising in the
 /// converged solution and the benchmark's plateau falls under refinement; at E_u/s_u = 1000
 /// the corner's soil already deforms enough for the B/20 run to rise over its last 30 % and
-/// the plateau to depend on the points per cell by 1.5 %: README, "What is not validated").
+/// the plateau to depend on the points per cell by 1.5 %: docs/validation.md, "What is not validated").
 /// Here the result does not depend on the points per cell (2 × 2 and 3 × 3 within 0.1 %,
 /// measured by editing the case). The plateau (mean over the last 20 % of the settlement)
 /// falls monotonically with h, at an observed order above 0.5; its Richardson extrapolation
@@ -641,7 +641,7 @@ fn footing_on_undrained_soil_fem() {
 /// the displacement run's on the same grid and base, and both come to rest. Both run on
 /// quadratic B-splines with the frictional base of `collapse_bui2008_quad.json` (measured:
 /// displacement 0.4261 m, u–p 0.4146 m, 2.7 % apart). On the linear basis the runout at the
-/// experiment's 2 mm threshold follows a sheet one material point thick (README, granular
+/// experiment's 2 mm threshold follows a sheet one material point thick (docs/validation.md, granular
 /// flow: it moves by −13 / +18 % as the PIC relaxation time is halved / doubled) and the two
 /// elements end 6.2 % (frictional base) and 6.3 % (rough base) apart; on B-splines the sheet
 /// does not form (−1.5 / +3.3 %). About 3 minutes.
@@ -682,7 +682,7 @@ fn bui_collapse_with_mixed_up() {
 /// points per cell −4.2 % at 0.125 m, which fails). At E_u/s_u = 100 both curves still rise
 /// over 0.12–0.15 B, so the benchmark's plateau (mean over the last 20 % of the settlement) is
 /// above Prandtl's 5.14 in both (FEM 5.65, B-splines 5.60: printed, not asserted against
-/// 5.14; README, Shape functions). About 5 minutes.
+/// 5.14; docs/validation.md, smooth bases). About 5 minutes.
 #[test]
 #[ignore = "long (about 5 min): LOAM_LONG=1 scripts/test.sh"]
 fn footing_on_bsplines_follows_the_fem_curve() {

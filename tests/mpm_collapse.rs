@@ -5,7 +5,7 @@
 //! `shared/benchmarks/bui2008/`, digitised from Bui et al. 2008, Int. J. Numer. Anal. Meth.
 //! Geomech. 32:1537–1570, figure of the final deposit; a few millimetres of digitising error).
 //!
-//! **What a wrong run does.** The tolerances are set so that the run the README calls wrong
+//! **What a wrong run does.** The tolerances are set so that the run docs/validation.md calls wrong
 //! fails them: pure FLIP point velocities (no PIC share, `pic_relaxation_time` removed) leave
 //! a velocity noise that keeps the column creeping; it never comes to rest and runs out too
 //! far. [`bui2008_pure_flip_fails_the_tolerances`] (long suite) runs it and asserts that it
@@ -27,7 +27,7 @@ const RUNOUT: f64 = 0.42;
 const HEIGHT_AT_WALL: f64 = 0.099;
 /// Runout tolerance (relative): 5 %. On the rough base the runout moved by 4 % between h = 5
 /// and 2.5 mm, so 5 % was the discretisation error at h = 5 mm; on the frictional base it moves
-/// from 0.433 to 0.504 m (its 2 mm threshold follows a sheet one material point thick: README,
+/// from 0.433 to 0.504 m (its 2 mm threshold follows a sheet one material point thick: docs/validation.md,
 /// granular flow), so the tolerance does not bound the discretisation error there. Pure FLIP
 /// runs out 8.3 % too far (frictional base; 10.2 % on the rough base).
 const RUNOUT_TOLERANCE: f64 = 0.05;
@@ -188,7 +188,7 @@ fn collapse(case_name: &str) {
 /// Quadrilateral grid h = 5 mm, 4 points per cell, frictional base μ_b = tan φ = 0.36
 /// (`cases/collapse_bui2008_quad.json`). Measured: at rest at 0.71 s, runout 0.4328 m
 /// (+3.05 %), surface 2.91 mm RMS, failure line 34.5°. (The rough base of
-/// `collapse_bui2008_quad_rough.json` ends at 0.3946 m, −6.0 %, outside the tolerance; README,
+/// `collapse_bui2008_quad_rough.json` ends at 0.3946 m, −6.0 %, outside the tolerance; docs/validation.md,
 /// granular flow.)
 #[test]
 fn bui2008_collapse_quadrilateral_grid() {
@@ -207,12 +207,12 @@ fn bui2008_collapse_triangular_grid() {
 /// `cases/collapse_bui2008_quad_up.json`: nodal pressures, Q1–Q1 with the Dohrmann–Bochev
 /// projection), on the rough base of `collapse_bui2008_quad_rough.json`, measured as the
 /// displacement cases (at rest at 0.71 s, runout 0.4194 m, −0.14 %; with the frictional base
-/// of the displacement case it runs out to 0.4598 m, +9.5 %: README, granular flow, open). Issue 15's criterion is asserted: the
+/// of the displacement case it runs out to 0.4598 m, +9.5 %: docs/validation.md, granular flow, open). Issue 15's criterion is asserted: the
 /// isochoric flow with ψ = 0 neither stiffens nor softens the collapse, so the column comes
 /// to rest with the experiment's runout within [`RUNOUT_TOLERANCE`]. The final surface and
 /// the failure line are printed against the displacement cases' tolerances and not asserted:
 /// they lie just outside them (surface 4.09 mm RMS against 4 mm, failure line 27.6° against
-/// 32.9° ± 5°; README, mixed u–p). The apex in u–p form is the return at the end of the step
+/// 32.9° ± 5°; docs/validation.md, mixed u–p). The apex in u–p form is the return at the end of the step
 /// of `loam_laws::mixed::elastic_strain_up`.
 #[test]
 fn bui2008_collapse_mixed_up() {
@@ -254,7 +254,7 @@ fn bui2008_pure_flip_fails_the_tolerances() {
 /// the same case run with Kratos' fixed Δt = 5e-5 s until at rest (about 13 000 steps):
 /// RMS vertical distance between the two final surfaces, sampled every millimetre from the
 /// wall to 0.5 m, within 2 mm (issue 5). For scale: two runs whose gravity differs by 1e-12
-/// end 0.8 mm apart (the flow amplifies round-off; README, Performance). About 7 minutes.
+/// end 0.8 mm apart (the flow amplifies round-off; docs/performance.md, MPM column collapse). About 7 minutes.
 #[test]
 #[ignore = "long (about 7 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_adaptive_steps_end_on_the_small_step_surface() {

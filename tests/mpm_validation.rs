@@ -131,7 +131,7 @@ fn plate_axisym_mpm_quads_and_triangles() {
 /// Valid only while no material point crosses a cell boundary: the outermost points start at
 /// x_p = 24.789 m and swing by ±0.159 m, so they stay 5 mm inside their cell; asserted below.
 /// Refined at this amplitude (h ≤ 0.5 m) they cross into the empty cell beyond the bar and
-/// the energy falls (the cell-crossing error of linear-shape-function MPM; README, "What is
+/// the energy falls (the cell-crossing error of linear-shape-function MPM; docs/validation.md, "What is
 /// not validated"); `tests/convergence.rs` refines at a tenth of the amplitude.
 #[test]
 fn vibrating_bar_period_amplitude_energy() {

@@ -1,5 +1,5 @@
 //! Reading a run's VTK output: the `.pvd` series of each domain and the `.vtu` files they
-//! list (README "Output"; `crate::output` writes them).
+//! list (docs/cli.md, "Output"; `crate::output` writes them).
 //!
 //! A series is one of four kinds, told apart by what its files hold:
 //! - **material points**: vertex cells with a `volume` field (MPM domains);
