@@ -201,7 +201,12 @@ impl Assembler {
         self.rotations.rotate_blocks(&mut self.matrices, &mut self.vectors);
         if !self.friction.is_empty() {
             let matrices = input.with_tangent.then_some(self.matrices.as_slice());
-            self.friction.after_assembly(&input.state.u, &input.committed.u, matrices, input.stiffness);
+            self.friction.after_assembly(
+                (&input.state.u, &input.committed.u),
+                (input.time, input.time_step),
+                matrices,
+                input.stiffness,
+            );
         }
         Ok(())
     }

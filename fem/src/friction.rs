@@ -22,7 +22,9 @@
 //! contact problems prone to Newton like solution methods", CMAME 92,
 //! doi:10.1016/0045-7825(91)90022-X; Wriggers 2006, *Computational Contact Mechanics*, §10):
 //! a sliding node keeps sliding while `g · m > 0`; otherwise it sticks if `|R_t| ≤ μ N`, and
-//! starts to slide along `m = −R_t/|R_t|` if not. The tangent is the exact derivative of
+//! starts to slide along `m = −R_t/|R_t|` if not; a node that changes state more than
+//! [`MAX_SWITCHES`] times in a step holds for the rest of it (an active set can cycle at a
+//! node whose force sits on the cone). The tangent is the exact derivative of
 //! the branch taken:
 //! `∂(μ N m)/∂ũ = −μ m ⊗ ∂R_n/∂ũ + μ N (I − m ⊗ m)/|g| ∂g/∂ũ` while the direction follows
 //! the slip, and `−μ m ⊗ ∂R_n/∂ũ − μ N (I − m ⊗ m)/|R_t| ∂R_t/∂ũ` as the node starts to slide
@@ -32,6 +34,9 @@
 //! tangential rows of every block that holds the node before the gather.
 
 use crate::assembly::BlockLayout;
+
+/// Changes between stick and slip that a node may make in one step before it holds.
+const MAX_SWITCHES: u32 = 4;
 
 /// Largest element block the friction rewrites (DOFs): hex8 u–p blocks have 32, the 3 × 3
 /// supports of the smooth MPM bases 27 in 2D u–p.
@@ -64,9 +69,11 @@ struct FrictionNode {
     /// Tangential force `R_t` of the last residual before friction: the force the boundary
     /// exerts on the node at equilibrium (its tangential reaction).
     holding: [f64; 2],
-    /// Scale `k` of the stick equations (0 until the first tangent).
+    /// Scale `k` of the stick equations (0 until the first tangent of the step).
     stick_scale: f64,
     state: State,
+    /// Changes between stick and slip in this step.
+    switches: u32,
 }
 
 /// Friction forces and their tangent on the frictional slip nodes of one sparsity pattern
@@ -81,6 +88,8 @@ pub struct NodalFriction {
     /// Whether the last assembly was of the equilibrium equations (not the initial
     /// acceleration's mass system), so that friction acts.
     active: bool,
+    /// The step `(t_{n+1}, Δt)` of the last assembly, as bits.
+    step: Option<(u64, u64)>,
 }
 
 impl NodalFriction {
@@ -97,6 +106,7 @@ impl NodalFriction {
                 holding: [0.0; 2],
                 stick_scale: 0.0,
                 state: State::Stick,
+                switches: 0,
             })
             .collect();
         let mut occurrences = Vec::new();
@@ -112,7 +122,7 @@ impl NodalFriction {
                 }
             }
         }
-        Self { dim, nodes, occurrences, active: false }
+        Self { dim, nodes, occurrences, active: false, step: None }
     }
 
     /// Whether there is any frictional node.
@@ -120,10 +130,27 @@ impl NodalFriction {
         self.nodes.is_empty()
     }
 
-    /// After an assembly: the slips `g = Qᵀ (u − u_n)` of the iterate and, at the first
-    /// assembly with matrices, the stick scales from the (rotated) blocks' diagonals.
-    pub fn after_assembly(&mut self, u: &[f64], u_committed: &[f64], matrices: Option<&[f64]>, active: bool) {
+    /// After an assembly of the step to `time` with length `time_step`: the slips
+    /// `g = Qᵀ (u − u_n)` of the iterate and, at the step's first assembly with matrices, the
+    /// stick scales from the (rotated) blocks' diagonals. What a step decides depends on the
+    /// step alone (not on when the pattern was built), so that a resumed run repeats the
+    /// uninterrupted one bit for bit.
+    pub fn after_assembly(
+        &mut self,
+        (u, u_committed): (&[f64], &[f64]),
+        (time, time_step): (f64, f64),
+        matrices: Option<&[f64]>,
+        active: bool,
+    ) {
         self.active = active;
+        let step = Some((time.to_bits(), time_step.to_bits()));
+        if self.step != step {
+            self.step = step;
+            for n in &mut self.nodes {
+                n.stick_scale = 0.0;
+                n.switches = 0;
+            }
+        }
         let dim = self.dim;
         for n in &mut self.nodes {
             let d: [f64; 3] =
@@ -169,13 +196,19 @@ impl NodalFriction {
                 State::Slip { direction, .. } => dot(&direction[..tangents], &n.slip[..tangents]) > 0.0,
                 State::Stick => false,
             };
-            n.state = if keeps_sliding {
+            let state = if keeps_sliding {
                 State::Slip { direction: n.slip.map(|g| g / slip_norm), follows_slip: true }
             } else if holding_norm <= n.coefficient * normal_force {
                 State::Stick
             } else {
                 State::Slip { direction: holding.map(|r| -r / holding_norm), follows_slip: false }
             };
+            if (state == State::Stick) != (n.state == State::Stick) {
+                n.switches += 1;
+            }
+            // an active set can cycle at a node whose force sits on the cone: after
+            // MAX_SWITCHES changes in a step the node holds (the dissipative choice)
+            n.state = if n.switches > MAX_SWITCHES { State::Stick } else { state };
             n.normal_force = normal_force;
             n.holding = holding;
             match n.state {
