@@ -34,7 +34,7 @@ const RUNOUT_TOLERANCE: f64 = 0.05;
 /// RMS of the vertical distance between the final surface and the experiment's, over the 23
 /// digitised points from the wall to x = 0.44 m (m). 4 mm: the digitising error (a few mm)
 /// plus the 2 mm that the same case moved between adaptive and small steps (measured on the
-/// frictional base: quad 2.91 mm, tri 2.54 mm); pure FLIP, still creeping at 2 s, lies inside
+/// frictional base: quad 2.74 mm, tri 2.53 mm); pure FLIP, still creeping at 2 s, lies inside
 /// it on the frictional base (3.24 mm) and lay outside on the rough base (4.39 mm).
 const SURFACE_RMS_TOLERANCE: f64 = 0.004;
 /// Failure line inclination (degrees). The experiment's line is 9 digitised points from
@@ -186,8 +186,8 @@ fn collapse(case_name: &str) {
 }
 
 /// Quadrilateral grid h = 5 mm, 4 points per cell, frictional base μ_b = tan φ = 0.36
-/// (`cases/collapse_bui2008_quad.json`). Measured: at rest at 0.71 s, runout 0.4328 m
-/// (+3.05 %), surface 2.91 mm RMS, failure line 34.5°. (The rough base of
+/// (`cases/collapse_bui2008_quad.json`). Measured: at rest at 0.71 s, runout 0.4334 m
+/// (+3.19 %), surface 2.74 mm RMS, failure line 34.5°. (The rough base of
 /// `collapse_bui2008_quad_rough.json` ends at 0.3946 m, −6.0 %, outside the tolerance; docs/validation.md,
 /// granular flow.)
 #[test]
@@ -196,8 +196,8 @@ fn bui2008_collapse_quadrilateral_grid() {
 }
 
 /// Triangular grid: the 5 mm squares halved, 3 points per triangle, frictional base
-/// (`cases/collapse_bui2008_tri.json`). Measured: at rest at 0.75 s, runout 0.4345 m
-/// (+3.44 %), surface 2.54 mm RMS, failure line 28.1°. (With a rough base: 0.4765 m, +13.5 %.)
+/// (`cases/collapse_bui2008_tri.json`). Measured: at rest at 0.75 s, runout 0.4346 m
+/// (+3.47 %), surface 2.53 mm RMS, failure line 28.1°. (With a rough base: 0.4765 m, +13.5 %.)
 #[test]
 fn bui2008_collapse_triangular_grid() {
     collapse("collapse_bui2008_tri.json");
