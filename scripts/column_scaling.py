@@ -25,6 +25,9 @@ Fits (normalised runout R = (L_inf - L0)/L0, final height at the wall H_inf/L0):
       R = 1.8 a (a < 3), 2.3 a^(2/3) (a > 3)  -- coefficients as compiled by Lagree, Staron
       & Popinet 2011 (J. Fluid Mech. 686, Eq. 3.1); see docs/granular_scaling.md for how
       far they could be checked.
+  For comparison (same material class as Bui et al. 2008): true-2D aluminium-rod columns,
+  arXiv:1512.05180: R = 3.25 a^0.96 (0.65 < a < 1.5), 3.80 a^0.73 (a > 1.5);
+  H0/H_inf = 1.42 a^(2/3) (a > 0.65).
 """
 import csv
 import json
@@ -72,6 +75,20 @@ def lube_height(a):
 def lajeunesse_runout(a):
     """Lajeunesse et al. 2005 (Phys. Fluids 17, 103302), channel: (L_inf - L0)/L0."""
     return 1.8 * a if a < 3.0 else 2.3 * a ** (2.0 / 3.0)
+
+
+def rods_runout(a):
+    """True-2D aluminium rods (arXiv:1512.05180, 'Failure mechanism of true 2D granular
+    flows'; the Bui et al. 2008 material class): (L_inf - L0)/L0 = 3.25 a^0.96 for
+    0.65 < a < 1.5, 3.80 a^0.73 for a > 1.5; not given below a = 0.65."""
+    if a <= 0.65:
+        return None
+    return 3.25 * a**0.96 if a < 1.5 else 3.80 * a**0.73
+
+
+def rods_height(a):
+    """The same: H_inf = H0 for a < 0.65, H0/H_inf = 1.42 a^(2/3) beyond; as H_inf/L0."""
+    return a if a < 0.65 else a / (1.42 * a ** (2.0 / 3.0))
 
 
 # --- cases -----------------------------------------------------------------------------
@@ -266,6 +283,14 @@ def summary(d):
     return s, wall
 
 
+def runout_drops(L, size=0.0025):
+    """How often the 2 mm runout falls back between two steps by more than a point's side
+    (`size`; the thin sheet of single points at the front sinking below the threshold),
+    and the largest fall (m)."""
+    falls = [a - b for a, b in zip(L, L[1:]) if a - b > size]
+    return len(falls), max(falls, default=0.0)
+
+
 def table(args):
     root, args = pop_root(args)
     rows = []
@@ -275,6 +300,10 @@ def table(args):
             if not (d / "summary.json").exists():
                 continue
             s, wall = summary(d)
+            if not s.get("end"):
+                print(f"{d}: still running, left out")
+                continue
+            drops, big = runout_drops(read_monitors(d)["runout"])
             m = s["monitors"]
             L, H = m["runout"], m["height_at_wall"]
             L5 = m.get("runout_5mm")
@@ -298,7 +327,11 @@ def table(args):
                     "lube_runout_norm": lo,
                     "lajeunesse_runout_norm": la,
                     "lube_H_inf_over_L0": lube_height(a),
+                    "rods_runout_norm": rods_runout(a),
+                    "rods_H_inf_over_L0": rods_height(a),
                     "inside_band": min(lo, la) <= R <= max(lo, la),
+                    "runout_drops": drops,
+                    "largest_drop_m": big,
                 }
             )
     out = ROOT / "column_scaling.csv"
@@ -313,7 +346,8 @@ def table(args):
             f"a={r['a']:g} h={r['h_mm']:g}mm L={r['runout_m']:.4f} R={r['runout_norm']:.3f} "
             f"(Lube {r['lube_runout_norm']:.2f}, Lajeunesse {r['lajeunesse_runout_norm']:.2f}, inside {r['inside_band']}) "
             f"R5={r['runout_5mm_norm'] if r['runout_5mm_norm'] is None else round(r['runout_5mm_norm'], 3)} "
-            f"H/L0={r['H_inf_over_L0']:.3f} (Lube {r['lube_H_inf_over_L0']:.2f}) steps={r['steps']} wall={r['wall_time_s']:.0f}s"
+            f"H/L0={r['H_inf_over_L0']:.3f} (Lube {r['lube_H_inf_over_L0']:.2f}) steps={r['steps']} wall={r['wall_time_s']:.0f}s "
+            f"drops={r['runout_drops']} (largest {r['largest_drop_m'] * 1000:.1f} mm)"
         )
     svg(rows, ROOT / "docs" / "img" / "granular" / "column_scaling.svg")
 
@@ -352,13 +386,16 @@ def svg(rows, path):
     for f, colour, label in [
         (lube_runout, "#1f77b4", "Lube et al. 2005 (1.2a; 1.9a^2/3)"),
         (lajeunesse_runout, "#2ca02c", "Lajeunesse et al. 2005 (1.8a; 2.3a^2/3)"),
+        (rods_runout, "#7f7f7f", "true-2D aluminium rods"),
     ]:
         pts = []
         n = 200
         for i in range(n + 1):
             a = 10 ** (ax0 + (ax1 - ax0) * i / n)
-            pts.append(f"{X(a):.1f},{Y(f(a)):.1f}")
-        e.append(f'<polyline points="{" ".join(pts)}" fill="none" stroke="{colour}" stroke-width="1.5"/>')
+            if f(a) is not None:
+                pts.append(f"{X(a):.1f},{Y(f(a)):.1f}")
+        dash = ' stroke-dasharray="5,3"' if f is rods_runout else ""
+        e.append(f'<polyline points="{" ".join(pts)}" fill="none" stroke="{colour}" stroke-width="1.5"{dash}/>')
     markers = {5.0: ("#d62728", "Loam, h = 5 mm"), 10.0: ("#ff7f0e", "Loam, h = 10 mm")}
     for hmm, (colour, _) in markers.items():
         for r in rows:
@@ -378,6 +415,7 @@ def svg(rows, path):
     legend = [
         ("line", "#1f77b4", "Lube et al. 2005: 1.2a (a ≲ 2.3), 1.9a^(2/3)"),
         ("line", "#2ca02c", "Lajeunesse et al. 2005: 1.8a (a < 3), 2.3a^(2/3)"),
+        ("dash", "#7f7f7f", "Al rods, true 2D (arXiv:1512.05180): 3.25a^0.96; 3.80a^0.73"),
         ("dot", "#d62728", "Loam h = 5 mm, 2 mm threshold"),
         ("ring", "#d62728", "Loam h = 5 mm, 5 mm threshold"),
     ]
@@ -386,8 +424,9 @@ def svg(rows, path):
     for i, (kind, colour, text) in enumerate(legend):
         y = mt + 16 + 17 * i
         x = ml + 12
-        if kind == "line":
-            e.append(f'<line x1="{x}" y1="{y - 4}" x2="{x + 20}" y2="{y - 4}" stroke="{colour}" stroke-width="1.5"/>')
+        if kind in ("line", "dash"):
+            dash = ' stroke-dasharray="5,3"' if kind == "dash" else ""
+            e.append(f'<line x1="{x}" y1="{y - 4}" x2="{x + 20}" y2="{y - 4}" stroke="{colour}" stroke-width="1.5"{dash}/>')
         elif kind == "dot":
             e.append(f'<circle cx="{x + 10}" cy="{y - 4}" r="4.5" fill="{colour}"/>')
         elif kind == "ring":
