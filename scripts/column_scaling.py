@@ -37,6 +37,7 @@ import pathlib
 import subprocess
 import sys
 import time
+from xml.sax.saxutils import escape
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 LOAM = ROOT / "target" / "release" / "loam"
@@ -291,6 +292,37 @@ def runout_drops(L, size=0.0025):
     return len(falls), max(falls, default=0.0)
 
 
+def final_points(d):
+    """(x, y, volume) of the material points in the last .vtu of `d` (inline base64 binary,
+    UInt64 length header, uncompressed, as Loam writes them)."""
+    import base64
+    import struct
+    import xml.etree.ElementTree as ET
+
+    vtus = sorted(d.glob("soil_*.vtu"))
+    if not vtus:
+        return []
+    arrays = {}
+    for da in ET.parse(vtus[-1]).getroot().iter("DataArray"):
+        if da.get("Name") in ("Points", "volume"):
+            raw = base64.b64decode("".join(da.text.split()))
+            n = struct.unpack("<Q", raw[:8])[0] // 8
+            arrays[da.get("Name")] = struct.unpack(f"<{n}d", raw[8 : 8 + 8 * n])
+    pts, vol = arrays["Points"], arrays["volume"]
+    return [(pts[3 * i], pts[3 * i + 1], vol[i]) for i in range(len(vol))]
+
+
+def detached(d, runout):
+    """Farthest material (x + half a point's side) in the final output, and the share of the
+    points lying beyond the monitored runout (the detached sheet or clumps)."""
+    pts = final_points(d)
+    if not pts:
+        return None, None
+    front = max(x + 0.5 * math.sqrt(v) for x, _, v in pts)
+    beyond = sum(1 for x, _, _ in pts if x > runout) / len(pts)
+    return front, beyond
+
+
 def table(args):
     root, args = pop_root(args)
     rows = []
@@ -304,6 +336,7 @@ def table(args):
                 print(f"{d}: still running, left out")
                 continue
             drops, big = runout_drops(read_monitors(d)["runout"])
+            front, beyond = detached(d, s["monitors"]["runout"])
             m = s["monitors"]
             L, H = m["runout"], m["height_at_wall"]
             L5 = m.get("runout_5mm")
@@ -330,6 +363,8 @@ def table(args):
                     "rods_runout_norm": rods_runout(a),
                     "rods_H_inf_over_L0": rods_height(a),
                     "inside_band": min(lo, la) <= R <= max(lo, la),
+                    "farthest_point_m": front,
+                    "points_beyond_runout": beyond,
                     "runout_drops": drops,
                     "largest_drop_m": big,
                 }
@@ -347,7 +382,8 @@ def table(args):
             f"(Lube {r['lube_runout_norm']:.2f}, Lajeunesse {r['lajeunesse_runout_norm']:.2f}, inside {r['inside_band']}) "
             f"R5={r['runout_5mm_norm'] if r['runout_5mm_norm'] is None else round(r['runout_5mm_norm'], 3)} "
             f"H/L0={r['H_inf_over_L0']:.3f} (Lube {r['lube_H_inf_over_L0']:.2f}) steps={r['steps']} wall={r['wall_time_s']:.0f}s "
-            f"drops={r['runout_drops']} (largest {r['largest_drop_m'] * 1000:.1f} mm)"
+            f"drops={r['runout_drops']} (largest {r['largest_drop_m'] * 1000:.1f} mm) "
+            f"farthest point {r['farthest_point_m']:.3f} m, {r['points_beyond_runout']:.2%} of the points beyond the runout"
         )
     svg(rows, ROOT / "docs" / "img" / "granular" / "column_scaling.svg")
 
@@ -433,7 +469,7 @@ def svg(rows, path):
             e.append(f'<circle cx="{x + 10}" cy="{y - 4}" r="4" fill="none" stroke="{colour}" stroke-width="1.2"/>')
         else:
             e.append(f'<rect x="{x + 6}" y="{y - 8}" width="8" height="8" fill="none" stroke="{colour}" stroke-width="1.5"/>')
-        e.append(f'<text x="{x + 28}" y="{y}">{text}</text>')
+        e.append(f'<text x="{x + 28}" y="{y}">{escape(text)}</text>')
     e.append("</svg>")
     path.write_text("\n".join(e) + "\n")
     print(path.relative_to(ROOT))
