@@ -325,9 +325,10 @@ def detached(d, runout):
 
 def deposit_top(d):
     """Highest point of the final deposit (y + half a point's side, m). The monitor
-    `height_at_wall` takes only the points within 0.6 of their side of x = 0; in the tall
-    columns the yielded points above the dead zone end 4-6 mm from the wall, so it reports
-    the dead zone's top instead."""
+    `height_at_wall` takes only the points whose centres lie within 0.6 of their side of
+    x = 0; in the tall columns the yielded points above the dead wedge end with centres
+    1.6-2 mm (and higher up 4-6 mm) from the wall, just outside it, so it reports the
+    wedge's top instead."""
     pts = final_points(d)
     return max((y + 0.5 * math.sqrt(v) for _, y, v in pts), default=None)
 
