@@ -82,9 +82,9 @@ struct FrictionNode {
 pub struct NodalFriction {
     dim: usize,
     nodes: Vec<FrictionNode>,
-    /// (friction node, matrix offset, block DOFs, local node) per block that holds a node;
-    /// a node's first occurrence carries its diagonal terms.
-    occurrences: Vec<(usize, usize, usize, usize)>,
+    /// (friction node, matrix offset, block DOFs, local node, first) per block that holds a
+    /// node; a node's first occurrence carries its diagonal terms.
+    occurrences: Vec<(usize, usize, usize, usize, bool)>,
     /// Whether the last assembly was of the equilibrium equations (not the initial
     /// acceleration's mass system), so that friction acts.
     active: bool,
@@ -113,11 +113,13 @@ impl NodalFriction {
         if !nodes.is_empty() {
             let index: std::collections::HashMap<usize, usize> =
                 nodes.iter().enumerate().map(|(k, n)| (n.node, k)).collect();
+            let mut seen = vec![false; nodes.len()];
             for b in 0..layout.num_blocks() {
                 let dofs = &layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]];
                 for (a, chunk) in dofs.chunks(dim).enumerate() {
                     if let Some(&k) = index.get(&(chunk[0] / dim)) {
-                        occurrences.push((k, layout.matrix_offset[b], dofs.len(), a));
+                        let first = !std::mem::replace(&mut seen[k], true);
+                        occurrences.push((k, layout.matrix_offset[b], dofs.len(), a, first));
                     }
                 }
             }
@@ -166,7 +168,7 @@ impl NodalFriction {
             return;
         }
         let mut diagonal = vec![0.0; self.nodes.len()];
-        for &(k, mo, nd, a) in &self.occurrences {
+        for &(k, mo, nd, a, _) in &self.occurrences {
             let r = a * dim + 1;
             diagonal[k] += matrices[mo + r * nd + r];
         }
@@ -236,12 +238,10 @@ impl NodalFriction {
         }
         let dim = self.dim;
         let tangents = dim - 1;
-        let mut first = vec![true; self.nodes.len()];
-        for &(k, mo, nd, a) in &self.occurrences {
+        for &(k, mo, nd, a, is_first) in &self.occurrences {
             let n = &self.nodes[k];
             assert!(nd <= MAX_BLOCK_DOFS, "element block of {nd} DOFs beyond the friction's {MAX_BLOCK_DOFS}");
             let block = &mut matrices[mo..mo + nd * nd];
-            let is_first = std::mem::replace(&mut first[k], false);
             match n.state {
                 State::Stick => {
                     for t in 1..dim {

@@ -376,13 +376,9 @@ const MAX_FRICTION: f64 = 10.0;
 /// centroid of that part's boundary nodes (the parts that carry slip boundaries, grids and
 /// meshes, are convex where a boundary is straight enough to slide on).
 fn outward(normal: [f64; 3], nodes: &[usize], coords: &[[f64; 3]], parts: &[Part]) -> [f64; 3] {
-    use loam_fem::domain::Domain;
     let Some(&first) = nodes.first() else { return normal };
     for p in parts {
-        let facets = match p {
-            Part::Fem(_, d) => d.boundary_facets(),
-            Part::Grid(g) => g.domain.boundary_facets(),
-        };
+        let facets = boundary_facets(p);
         if !facets.iter().any(|f| f.contains(&first)) {
             continue;
         }
@@ -409,13 +405,16 @@ fn mean(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
     sum.map(|v| v / count.max(1.0))
 }
 
-fn part_facets(parts: &[Part]) -> Vec<Vec<usize>> {
+/// The boundary facets of one part (its FEM mesh or its grid).
+fn boundary_facets(part: &Part) -> Vec<Vec<usize>> {
     use loam_fem::domain::Domain;
-    parts
-        .iter()
-        .flat_map(|p| match p {
-            Part::Fem(_, d) => d.boundary_facets(),
-            Part::Grid(g) => g.domain.boundary_facets(),
-        })
-        .collect()
+    match part {
+        Part::Fem(_, d) => d.boundary_facets(),
+        Part::Grid(g) => g.domain.boundary_facets(),
+    }
+}
+
+/// The boundary facets of every part.
+fn part_facets(parts: &[Part]) -> Vec<Vec<usize>> {
+    parts.iter().flat_map(boundary_facets).collect()
 }
