@@ -6,7 +6,9 @@ MPM | FEM (material points clamped), the load in 4 and in 20 static steps; besid
 MPM-only and the FEM-only beam at each h. Prints the tip deflection against Timoshenko's
 -0.67806 m and against the FEM-only beam of the same h.
 
-    scripts/beam_split_study.py [--h 0.2,0.1] [--steps 4] [--loam target/release/loam]
+    scripts/beam_split_study.py [--h 0.2,0.1] [--steps 4] [--basis bspline2] [--loam target/release/loam]
+
+--basis sets the MPM grid's shape functions (linear, gimp, bspline2; default bspline2).
 
 The long test `coupling::beam_split_placement_and_refinement_study` asserts the same runs."""
 import argparse, json, os, subprocess, sys, tempfile
@@ -26,7 +28,7 @@ def rect(x0, x1, h):
     return {"rectangle": {"origin": [x0, 0.0], "size": [x1 - x0, 1.0], "cells": [round((x1 - x0) / h), round(1 / h)], "element": "quad4"}}
 
 
-def case(kind, h, steps, split=None):
+def case(kind, h, steps, split=None, basis="bspline2"):
     """kind: 'fem', 'mpm', 'fem_mpm' (FEM clamped) or 'mpm_fem' (MPM clamped)."""
     y0, y1, x_end = -1.2, 1.6, 8.6
     mpm_range = {"mpm": (0.0, 8.0), "fem_mpm": (split, 8.0), "mpm_fem": (0.0, split)}.get(kind)
@@ -39,7 +41,7 @@ def case(kind, h, steps, split=None):
         gx1 = split if kind == "mpm_fem" else x_end
         domains.append({
             "name": "beam_mpm", "type": "mpm", "material": "beam",
-            "grid": {"origin": [gx0, y0], "size": [gx1 - gx0, y1 - y0], "cells": [round((gx1 - gx0) / h), round((y1 - y0) / h)], "element": "quad4"},
+            "grid": {"origin": [gx0, y0], "size": [gx1 - gx0, y1 - y0], "cells": [round((gx1 - gx0) / h), round((y1 - y0) / h)], "element": "quad4", "basis": basis},
             "material_points": {"cells": {"mesh": rect(*mpm_range, h), "points_per_cell": 4}},
         })
     tip_on_mpm = kind in ("mpm", "fem_mpm")
@@ -90,6 +92,7 @@ def main():
     ap.add_argument("--h", default="0.2,0.1,0.05,0.025")
     ap.add_argument("--steps", default="4,20")
     ap.add_argument("--splits", default="2,4,6")
+    ap.add_argument("--basis", default="bspline2")
     ap.add_argument("--loam", default=os.path.join(os.path.dirname(__file__), "..", "target", "release", "loam"))
     a = ap.parse_args()
     hs = [float(v) for v in a.h.split(",")]
@@ -104,7 +107,7 @@ def main():
             rows = [("FEM only", fem, "fem", None), ("MPM only", None, "mpm", None)]
             rows += [(f"{k.upper().replace('_', ' | ')} x = {s:g}", None, k, s) for s in splits for k in ("fem_mpm", "mpm_fem")]
             for label, _, kind, split in rows:
-                c, x_tip = case(kind, h, n, split)
+                c, x_tip = case(kind, h, n, split, a.basis)
                 tip, q = (tip_fem, []) if kind == "fem" else run(a.loam, c, work, f"{kind}_{split}_{h}_{n}")
                 if tip is None:
                     print(f"{label:28s} {h:6g} {n:5d}  FAILED: {q}")

@@ -432,13 +432,19 @@ fn smooth_basis_where_it_cannot_act_is_refused_naming_the_key() {
         &["domains[0].grid.basis", "cubic"],
     );
     expect_bad(
-        "gimp on a coupled grid",
-        check("basis-coupled", "coupled_beam_split.json", &|j| {
+        "gimp on a grid that a structure holes",
+        check("basis-coupled", "coupled_collapse_rubber.json", &|j| {
             let k = j["domains"].as_array().unwrap().iter().position(|d| d["type"] == "mpm").unwrap();
             j["domains"][k]["grid"]["basis"] = json!("gimp");
         }),
-        &["interfaces[0].soil", "gimp"],
+        &["domains[0].grid.basis", "gimp", "whole lattice"],
     );
+    // a structure on the grid's edge keeps the lattice whole: accepted
+    let edge = check("basis-edge", "coupled_beam_split.json", &|j| {
+        let k = j["domains"].as_array().unwrap().iter().position(|d| d["type"] == "mpm").unwrap();
+        j["domains"][k]["grid"]["basis"] = json!("bspline2");
+    });
+    assert_eq!(edge.0, 0, "a smooth grid with an interface on its edge: {}", edge.1);
     expect_bad(
         "filled_cells on a smooth grid",
         check("basis-filled", "cantilever_mpm.json", &|j| {

@@ -36,6 +36,18 @@
 //! (`N_0 = 1 − r`, `N_1 = r`). A displacement fixed at the edge's nodes therefore holds on the
 //! whole edge, as with the linear basis; Dirichlet and slip conditions act on grid nodes
 //! unchanged.
+//!
+//! **A lattice that moves with a structure** (a grid coupled to an FEM structure by shared
+//! interface nodes on its edge, moved each step by the mesh motion): the functions stay those
+//! of the lattice coordinates `s`, and the lattice's position is mapped by the same functions,
+//! `x(s) = Σ_I N_I(s) x_I` over the nodes' current positions (isoparametric, as in
+//! isogeometric analysis: Hughes, Cottrell & Bazilevs 2005, "Isogeometric analysis", CMAME
+//! 194:4135–4195; GIMP maps by its `l = 0` functions, the cells' bilinear map). A point's `s`
+//! is the inverse of that map (Newton from its cell's bilinear map,
+//! [`crate::grid::Grid::point_functions`]) and `∂N/∂x = (∂x/∂s)⁻ᵀ ∂N/∂s`, so the functions
+//! reproduce the moved configuration's linear fields exactly and stay C¹. On the fixed
+//! lattice the map is `x_0 + h s` and nothing changes. A lattice with cells removed (a
+//! structure inside the grid) is refused: its supports would miss nodes.
 
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
@@ -87,7 +99,9 @@ impl Basis {
             Self::Gimp | Self::Linear => {
                 let l = if self == Self::Gimp { half_length.clamp(0.0, 0.5) } else { 0.0 };
                 if l == 0.0 {
-                    return if a < 1.0 { (1.0 - a, -sign) } else { (0.0, 0.0) };
+                    // the hat, its slope taken from the right at the kinks (so that the
+                    // slopes of a point on a node sum to zero)
+                    return if (-1.0..1.0).contains(&r) { (1.0 - a, -sign) } else { (0.0, 0.0) };
                 }
                 if a < l {
                     (1.0 - (r * r + l * l) / (2.0 * l), -r / l)
@@ -165,6 +179,11 @@ impl SmoothLattice {
         Self { basis, origin, spacing, cells, nodes }
     }
 
+    /// The lattice's cell size per direction (reference configuration).
+    pub fn spacing(&self) -> [f64; 2] {
+        self.spacing
+    }
+
     /// The basis.
     pub fn basis(&self) -> Basis {
         self.basis
@@ -180,8 +199,8 @@ impl SmoothLattice {
         &self.nodes[s * SUPPORT_NODES..(s + 1) * SUPPORT_NODES]
     }
 
-    /// Lattice coordinates `(x − x_0)/h` of `x`, or `None` outside the lattice.
-    fn lattice_coordinates(&self, x: &[f64; 3]) -> Option<[f64; 2]> {
+    /// Lattice coordinates `(x − x_0)/h` of `x` on the fixed lattice, or `None` outside it.
+    pub fn lattice_coordinates(&self, x: &[f64; 3]) -> Option<[f64; 2]> {
         let mut s = [0.0; 2];
         for d in 0..2 {
             s[d] = (x[d] - self.origin[d]) / self.spacing[d];
@@ -194,10 +213,34 @@ impl SmoothLattice {
         Some(s)
     }
 
-    /// The support of a point at `x` whose domain has the half lengths `half_size` along the
-    /// axes (GIMP's `l_p,d`) and its functions there: shape values, gradients `∂N/∂x`, and
-    /// the radius `Σ N_I x_I` in axisymmetry (weight 0: the caller's). `None` outside the
-    /// lattice.
+    /// Lattice coordinates of a position `x` of the reference (fixed) lattice, clamped to it.
+    pub fn clamped_coordinates(&self, x: [f64; 2]) -> [f64; 2] {
+        std::array::from_fn(|d| ((x[d] - self.origin[d]) / self.spacing[d]).clamp(0.0, self.cells[d] as f64))
+    }
+
+    /// Lattice coordinates clamped to the lattice.
+    pub fn clamp(&self, s: [f64; 2]) -> [f64; 2] {
+        std::array::from_fn(|d| s[d].clamp(0.0, self.cells[d] as f64))
+    }
+
+    /// The support holding lattice coordinates `s` and, per node of it, `(N, ∂N/∂s_x,
+    /// ∂N/∂s_y)` with the derivatives per lattice cell; `half_cells` is GIMP's `l_p,d / h_d`.
+    pub fn functions_at(&self, s: [f64; 2], half_cells: [f64; 2]) -> (usize, [[f64; 3]; SUPPORT_NODES]) {
+        let (wx, fx) = self.basis.window_1d(s[0], self.cells[0], half_cells[0]);
+        let (wy, fy) = self.basis.window_1d(s[1], self.cells[1], half_cells[1]);
+        let mut values = [[0.0; 3]; SUPPORT_NODES];
+        for ky in 0..3 {
+            for kx in 0..3 {
+                values[3 * ky + kx] = [fx[kx].0 * fy[ky].0, fx[kx].1 * fy[ky].0, fx[kx].0 * fy[ky].1];
+            }
+        }
+        (wy * (self.cells[0] - 1) + wx, values)
+    }
+
+    /// The support of a point at `x` of the fixed lattice whose domain has the half lengths
+    /// `half_size` along the axes (GIMP's `l_p,d`) and its functions there: shape values,
+    /// gradients `∂N/∂x`, and the radius `Σ N_I x_I` in axisymmetry (weight 0: the caller's).
+    /// `None` outside the lattice.
     pub fn evaluate(
         &self,
         x: &[f64; 3],
@@ -205,21 +248,24 @@ impl SmoothLattice {
         formulation: Formulation,
     ) -> Option<(usize, PointGeometry)> {
         let s = self.lattice_coordinates(x)?;
-        let (wx, fx) = self.basis.window_1d(s[0], self.cells[0], half_size[0] / self.spacing[0]);
-        let (wy, fy) = self.basis.window_1d(s[1], self.cells[1], half_size[1] / self.spacing[1]);
+        Some(self.evaluate_at(s, half_size, formulation))
+    }
+
+    /// [`SmoothLattice::evaluate`] at lattice coordinates `s` of the fixed lattice.
+    fn evaluate_at(&self, s: [f64; 2], half_size: [f64; 3], formulation: Formulation) -> (usize, PointGeometry) {
+        let half_cells = [half_size[0] / self.spacing[0], half_size[1] / self.spacing[1]];
+        let (support, values) = self.functions_at(s, half_cells);
         let mut g =
             PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
-        for ky in 0..3 {
-            for kx in 0..3 {
-                let a = 3 * ky + kx;
-                g.shape[a] = fx[kx].0 * fy[ky].0;
-                g.gradient[a] = [fx[kx].1 * fy[ky].0 / self.spacing[0], fx[kx].0 * fy[ky].1 / self.spacing[1], 0.0];
+        let wx = support % (self.cells[0] - 1);
+        for (a, v) in values.iter().enumerate() {
+            g.shape[a] = v[0];
+            g.gradient[a] = [v[1] / self.spacing[0], v[2] / self.spacing[1], 0.0];
+            if formulation == Formulation::Axisymmetric {
+                g.radius += v[0] * (self.origin[0] + (wx + a % 3) as f64 * self.spacing[0]);
             }
         }
-        if formulation == Formulation::Axisymmetric {
-            g.radius = (0..3).map(|kx| fx[kx].0 * (self.origin[0] + (wx + kx) as f64 * self.spacing[0])).sum();
-        }
-        Some((wy * (self.cells[0] - 1) + wx, g))
+        (support, g)
     }
 
     /// The region of the lattice whose points fall into support `s`: per direction the
@@ -235,30 +281,37 @@ impl SmoothLattice {
         })
     }
 
-    /// A 3 × 3 Gauss rule over the region of support `s` (weights: the region's volume with
-    /// the formulation's thickness or `2πR`), with the basis's functions at its points
-    /// (GIMP with `l = 0`): the rule on which a u–p support integrates its pressure
-    /// projection ([`loam_fem::mixed_kernel`]). Writes 9 points into `rule`.
-    pub fn projection_rule(&self, s: usize, formulation: Formulation, thickness: f64, rule: &mut [PointGeometry]) {
+    /// A 3 × 3 Gauss rule over the region of support `s` in lattice coordinates: per point
+    /// its lattice coordinates and its weight in lattice cells (`Σ = ` the region's area in
+    /// cells).
+    pub fn projection_points(&self, s: usize) -> [([f64; 2], f64); SUPPORT_NODES] {
         const XI: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
         const W: [f64; 3] = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
         let region = self.region(s);
-        let mut q = 0;
-        for (ty, wy) in XI.iter().zip(W) {
-            for (tx, wx) in XI.iter().zip(W) {
-                let t = [*tx, *ty];
-                let mut x = [0.0; 3];
-                let mut jacobian = 1.0;
-                for d in 0..2 {
-                    let [lo, hi] = region[d];
-                    x[d] = self.origin[d] + self.spacing[d] * (0.5 * (lo + hi) + 0.5 * (hi - lo) * t[d]);
-                    jacobian *= 0.5 * (hi - lo) * self.spacing[d];
-                }
-                let (_, mut g) = self.evaluate(&x, [0.0; 3], formulation).expect("the rule lies in the lattice");
-                g.weight = wx * wy * jacobian * formulation.measure_factor(thickness, g.radius);
-                rule[q] = g;
-                q += 1;
+        std::array::from_fn(|q| {
+            let (kx, ky) = (q % 3, q / 3);
+            let t = [XI[kx], XI[ky]];
+            let mut point = [0.0; 2];
+            let mut weight = W[kx] * W[ky];
+            for d in 0..2 {
+                let [lo, hi] = region[d];
+                point[d] = 0.5 * (lo + hi) + 0.5 * (hi - lo) * t[d];
+                weight *= 0.5 * (hi - lo);
             }
+            (point, weight)
+        })
+    }
+
+    /// A 3 × 3 Gauss rule over the region of support `s` of the fixed lattice (weights: the
+    /// region's volume with the formulation's thickness or `2πR`), with the basis's functions
+    /// at its points (GIMP with `l = 0`): the rule on which a u–p support integrates its
+    /// pressure projection ([`loam_fem::mixed_kernel`]). Writes 9 points into `rule`.
+    pub fn projection_rule(&self, s: usize, formulation: Formulation, thickness: f64, rule: &mut [PointGeometry]) {
+        for (g, (point, weight)) in rule.iter_mut().zip(self.projection_points(s)) {
+            let (_, mut geometry) = self.evaluate_at(point, [0.0; 3], formulation);
+            geometry.weight =
+                weight * self.spacing[0] * self.spacing[1] * formulation.measure_factor(thickness, geometry.radius);
+            *g = geometry;
         }
     }
 
@@ -380,8 +433,8 @@ mod tests {
     /// strain and axisymmetry, `F0 ≠ I`, Neo-Hookean and Mohr–Coulomb on its yield surface:
     /// the support at the lattice's corner holds a point next to the edge nodes (folded
     /// functions), one straddling a cell edge (its GIMP domain on both sides) and one near a
-    /// half-cell breakpoint of the B-splines. (A point near a structure interface does not
-    /// arise: a smooth grid cannot be attached to a structure, `grid::BasisError::NotFixed`.)
+    /// half-cell breakpoint of the B-splines; on the fixed lattice and on the lattice moved by
+    /// a structure on its edge (points next to the interface).
     #[test]
     fn smooth_support_tangents_match_finite_differences() {
         use loam_fem::element::ElementType;
@@ -395,22 +448,38 @@ mod tests {
         let nh = NeoHookean::new(1000.0, 1.0e6, 0.3);
         let mc = MohrCoulomb::new(1000.0, 1.0e6, 0.3, 25f64.to_radians(), 2.0e3, 0.0);
         let laws: [&dyn ConstitutiveLaw; 2] = [&nh, &mc];
-        for basis in BASES {
-            let lattice = SmoothLattice::new(basis, [0.2, 0.0], [0.5, 0.4], [4, 4]);
-            // lattice coordinates (0.08, 0.3), (1.02, 0.9), (0.55, 1.45): all in support 0
+        for (basis, moved) in BASES.iter().flat_map(|&b| [(b, false), (b, true)]) {
+            // the lattice fixed, or moved as a structure on its edge x = 0.2 moves it (the
+            // edge's nodes down and turned, the motion decaying into the grid): the points
+            // then lie next to the interface
+            let mut grid = crate::grid::Grid::new([0.2, 0.0, 0.0], [2.0, 1.6, 0.0], [4, 4, 1], ElementType::Quad4);
+            grid.set_basis(basis).unwrap();
+            if moved {
+                let motion: Vec<[f64; 3]> = grid
+                    .reference_coords()
+                    .iter()
+                    .map(|x| {
+                        let decay = (1.0 - (x[0] - 0.2) / 2.0).powi(2);
+                        [-0.05 * (x[1] - 0.8) * decay, -0.08 * decay, 0.0]
+                    })
+                    .collect();
+                grid.move_nodes(&motion).unwrap();
+            }
+            // lattice coordinates near (0.08, 0.3), (1.02, 0.9), (0.55, 1.45): all in support 0
             let xs = [[0.24, 0.12, 0.0], [0.71, 0.36, 0.0], [0.475, 0.58, 0.0]];
             for formulation in [Formulation::PlaneStrain, Formulation::Axisymmetric] {
                 let geometry: Vec<PointGeometry> = xs
                     .iter()
                     .map(|x| {
-                        let (s, mut g) = lattice.evaluate(x, [0.125, 0.1, 0.0], formulation).unwrap();
+                        let x = if moved { [x[0] - 0.05 * (x[1] - 0.8), x[1] - 0.08, 0.0] } else { *x };
+                        let (s, mut g) = grid.point_functions(&x, [0.125, 0.1, 0.0], formulation, 1.0).unwrap();
                         assert_eq!(s, 0, "the points share the corner support");
                         g.weight = 0.02 * formulation.measure_factor(1.0, g.radius);
                         g
                     })
                     .collect();
                 let mut rule = [geometry[0]; MAX_NODES];
-                lattice.projection_rule(0, formulation, 1.0, &mut rule);
+                grid.projection_rule(0, formulation, 1.0, &mut rule).unwrap();
                 let f0 = vec![Matrix3::new(1.05, 0.03, 0.0, -0.02, 0.97, 0.0, 0.0, 0.0, 1.02); 3];
                 for law in laws {
                     let ctx = KernelContext { element: ElementType::Quad4, formulation, law, time_step: 0.0 };
@@ -485,7 +554,8 @@ mod tests {
                             }
                         }
                         println!(
-                            "{basis:?} {formulation:?} {}{}: 9-node support tangent vs central FD, relative error {err:.2e} (tolerance 1e-6)",
+                            "{basis:?}{} {formulation:?} {}{}: 9-node support tangent vs central FD, relative error {err:.2e} (tolerance 1e-6)",
+                            if moved { " (moved by a structure)" } else { "" },
                             law.name(),
                             if mixed { " u–p" } else { "" }
                         );

@@ -35,6 +35,10 @@ use nalgebra::Vector3;
 pub const NO_GEOMETRY: PointGeometry =
     PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
 
+/// Newton iterations that invert the map of a moved smooth lattice (it converges in 2–4
+/// where the motion is smooth; one where the cells are parallelograms).
+const MAP_INVERSION_ITERATIONS: usize = 12;
+
 /// Marker of a lattice cell without a grid cell (removed: inside a structure).
 const NO_CELL: u32 = u32::MAX;
 
@@ -172,9 +176,9 @@ pub enum BasisError {
     /// The lattice is rotated.
     #[error("a smooth basis needs a grid whose cell edges follow x and y (not rotated)")]
     Rotated,
-    /// Cells were removed or the grid moves with a structure.
-    #[error("a smooth basis needs a fixed grid without holes: a grid attached to a structure by shared interface nodes moves and loses the cells inside the structure, and the functions reaching over neighbouring cells are defined on the fixed lattice only")]
-    NotFixed,
+    /// Cells were removed (a structure inside the grid).
+    #[error("a smooth basis needs the whole lattice: cells removed from it (a structure inside the grid) would leave supports with missing nodes; let the grid end at the structure's boundary (an interface on the grid's edge) or use \"linear\"")]
+    Holes,
     /// Fewer than two cells in a direction.
     #[error("a smooth basis needs two or more cells in each direction")]
     TooFewCells,
@@ -247,8 +251,8 @@ impl Grid {
         if *rotation != (1.0, 0.0) {
             return Err(BasisError::Rotated);
         }
-        if cell_index.is_some() || self.has_moved() {
-            return Err(BasisError::NotFixed);
+        if cell_index.is_some() {
+            return Err(BasisError::Holes);
         }
         if cells[0] < 2 || cells[1] < 2 {
             return Err(BasisError::TooFewCells);
@@ -305,7 +309,12 @@ impl Grid {
         thickness: f64,
     ) -> Option<(usize, PointGeometry)> {
         if let Some(lattice) = &self.smooth {
-            return lattice.evaluate(x, half_size, formulation);
+            if !self.has_moved() {
+                return lattice.evaluate(x, half_size, formulation);
+            }
+            let s = self.moved_lattice_coordinates(lattice, x)?;
+            let half_cells = [half_size[0] / lattice.spacing()[0], half_size[1] / lattice.spacing()[1]];
+            return Some(self.moved_lattice_functions(lattice, s, half_cells, formulation));
         }
         let (cell, xi) = self.locate(x)?;
         let element = self.mesh.element;
@@ -335,10 +344,98 @@ impl Grid {
         rule: &mut [PointGeometry; MAX_NODES],
     ) -> Result<usize, KernelError> {
         if let Some(lattice) = &self.smooth {
-            lattice.projection_rule(s, formulation, thickness, rule);
+            if !self.has_moved() {
+                lattice.projection_rule(s, formulation, thickness, rule);
+            } else {
+                for (g, (point, weight)) in rule.iter_mut().zip(lattice.projection_points(s)) {
+                    let (_, mut geometry) = self.moved_lattice_functions(lattice, point, [0.0; 2], formulation);
+                    let (_, jacobian) = self.lattice_map(lattice, point);
+                    let det = jacobian[0][0] * jacobian[1][1] - jacobian[0][1] * jacobian[1][0];
+                    geometry.weight = weight * det * formulation.measure_factor(thickness, geometry.radius);
+                    *g = geometry;
+                }
+            }
             return Ok(SUPPORT_NODES);
         }
         self.cell_rule(s, formulation, thickness, rule)
+    }
+
+    /// The map of a smooth lattice in the step's configuration, `x(s) = Σ_I M_I(s) x_I`, at
+    /// lattice coordinates `s`, with `∂x/∂s` (`[i][d] = ∂x_i/∂s_d`, per lattice cell): `M_I`
+    /// are the basis's own functions (GIMP's with `l = 0`, the cells' bilinear map), so that
+    /// a moved grid stays isoparametric (module doc of [`crate::basis`]).
+    fn lattice_map(&self, lattice: &SmoothLattice, s: [f64; 2]) -> ([f64; 2], [[f64; 2]; 2]) {
+        let (support, values) = lattice.functions_at(s, [0.0; 2]);
+        let mut x = [0.0; 2];
+        let mut jacobian = [[0.0; 2]; 2];
+        for (v, &a) in values.iter().zip(lattice.support(support)) {
+            let xa = self.mesh.coords[a];
+            for i in 0..2 {
+                x[i] += v[0] * xa[i];
+                jacobian[i][0] += v[1] * xa[i];
+                jacobian[i][1] += v[2] * xa[i];
+            }
+        }
+        (x, jacobian)
+    }
+
+    /// Lattice coordinates of `x` on a smooth lattice that has moved: the inverse of
+    /// [`Grid::lattice_map`] by Newton's method, started from the reference position of `x`'s
+    /// local coordinates in the (bilinear) cell that holds it. `None` outside the grid.
+    fn moved_lattice_coordinates(&self, lattice: &SmoothLattice, x: &[f64; 3]) -> Option<[f64; 2]> {
+        let (cell, xi) = self.locate(x)?;
+        let element = self.mesh.element;
+        let mut n = [0.0; MAX_NODES];
+        element.shape_functions(&xi, &mut n);
+        let mut reference = [0.0; 2];
+        for (k, &a) in self.mesh.cell(cell).iter().enumerate() {
+            for d in 0..2 {
+                reference[d] += n[k] * self.reference[a][d];
+            }
+        }
+        let mut s = lattice.clamped_coordinates(reference);
+        for _ in 0..MAP_INVERSION_ITERATIONS {
+            let (mapped, j) = self.lattice_map(lattice, s);
+            let r = [x[0] - mapped[0], x[1] - mapped[1]];
+            let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+            if det.is_nan() || det <= 0.0 {
+                break;
+            }
+            let ds = [(j[1][1] * r[0] - j[0][1] * r[1]) / det, (j[0][0] * r[1] - j[1][0] * r[0]) / det];
+            s = lattice.clamp([s[0] + ds[0], s[1] + ds[1]]);
+            if ds[0].abs().max(ds[1].abs()) < 1e-13 {
+                break;
+            }
+        }
+        Some(s)
+    }
+
+    /// The functions of a moved smooth lattice at lattice coordinates `s`: shape values,
+    /// gradients `∂N/∂x = (∂x/∂s)⁻ᵀ ∂N/∂s`, and the radius `Σ N_I x_I`.
+    fn moved_lattice_functions(
+        &self,
+        lattice: &SmoothLattice,
+        s: [f64; 2],
+        half_cells: [f64; 2],
+        formulation: Formulation,
+    ) -> (usize, PointGeometry) {
+        let (support, values) = lattice.functions_at(s, half_cells);
+        let (_, j) = self.lattice_map(lattice, s);
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        // ∂s/∂x = (∂x/∂s)⁻¹
+        let inverse = [[j[1][1] / det, -j[0][1] / det], [-j[1][0] / det, j[0][0] / det]];
+        let mut g =
+            PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
+        for (a, (v, &node)) in values.iter().zip(lattice.support(support)).enumerate() {
+            g.shape[a] = v[0];
+            for i in 0..2 {
+                g.gradient[a][i] = v[1] * inverse[0][i] + v[2] * inverse[1][i];
+            }
+            if formulation == Formulation::Axisymmetric {
+                g.radius += v[0] * self.mesh.coords[node][0];
+            }
+        }
+        (support, g)
     }
 
     /// The Gauss rule [`ElementType::gauss_points_mixed`] of `cell` in the step's
@@ -373,6 +470,10 @@ impl Grid {
     /// that node in `self`. The reference configuration is kept (a grid that has moved
     /// returns to it).
     pub fn without_cells(&self, remove: &[bool]) -> (Grid, Vec<usize>) {
+        if !remove.iter().any(|&r| r) && !self.has_moved() {
+            // nothing to remove: the same grid (its basis included)
+            return (self.clone(), (0..self.reference.len()).collect());
+        }
         let element = self.mesh.element;
         let nn = element.num_nodes();
         let mut new_cell = vec![NO_CELL; self.mesh.num_cells()];
@@ -720,6 +821,134 @@ mod tests {
                 }
                 let simplex = matches!(element, ElementType::Tri3 | ElementType::Tet4);
                 assert_eq!(g.cell_map(cell).is_some(), simplex, "{element:?} cell {cell}");
+            }
+        }
+    }
+
+    /// A smooth lattice that moves with a structure (issue 23, coupled grids): the inverse of
+    /// its map recovers the lattice coordinates, the functions are a partition of unity that
+    /// reproduces the linear fields of the moved configuration exactly (`Σ N_I x_I = x`,
+    /// `Σ x_I ⊗ ∇N_I = 1`: the map is isoparametric), their gradients match central
+    /// differences of the shape values, and an affine motion gives the fixed lattice's
+    /// functions with the gradients mapped.
+    #[test]
+    fn a_moved_smooth_lattice_stays_isoparametric() {
+        for basis in [Basis::Bspline2, Basis::Gimp] {
+            let mut g = Grid::new([0.0; 3], [2.0, 1.0, 0.0], [8, 4, 1], ElementType::Quad4);
+            g.set_basis(basis).unwrap();
+            let fixed = g.clone();
+            // a bending-like motion of the edge x = 0 decaying into the grid, as the mesh
+            // motion of an interface on that edge gives
+            let motion: Vec<[f64; 3]> = g
+                .reference_coords()
+                .iter()
+                .map(|x| {
+                    let decay = (1.0 - x[0] / 2.0).powi(2);
+                    [-0.04 * (x[1] - 0.5) * decay, -0.06 * decay + 0.01 * x[0] * x[1], 0.0]
+                })
+                .collect();
+            g.move_nodes(&motion).unwrap();
+            let lattice = g.smooth.clone().unwrap();
+            for k in 0..200 {
+                let s = [8.0 * ((k as f64 * 0.618_034).fract()), 4.0 * ((k as f64 * 0.381_966 + 0.1).fract())];
+                let (x2, _) = g.lattice_map(&lattice, s);
+                let x = [x2[0], x2[1], 0.0];
+                let recovered = g.moved_lattice_coordinates(&lattice, &x).expect("inside the moved grid");
+                assert!(
+                    (recovered[0] - s[0]).abs() < 1e-10 && (recovered[1] - s[1]).abs() < 1e-10,
+                    "{s:?} → {recovered:?}"
+                );
+                let (support, f) = g.point_functions(&x, [0.0; 3], Formulation::PlaneStrain, 1.0).unwrap();
+                let nodes = lattice.support(support);
+                let (mut sum, mut xs, mut grad) = (0.0, [0.0; 2], [[0.0; 2]; 2]);
+                for a in 0..SUPPORT_NODES {
+                    let xa = g.mesh.coords[nodes[a]];
+                    sum += f.shape[a];
+                    for i in 0..2 {
+                        xs[i] += f.shape[a] * xa[i];
+                        for j in 0..2 {
+                            grad[i][j] += xa[i] * f.gradient[a][j];
+                        }
+                    }
+                }
+                assert!((sum - 1.0).abs() < 1e-12, "{basis:?}: Σ N = {sum}");
+                assert!(
+                    (xs[0] - x[0]).abs() < 1e-10 && (xs[1] - x[1]).abs() < 1e-10,
+                    "{basis:?}: Σ N x = {xs:?} at {x:?}"
+                );
+                for i in 0..2 {
+                    for j in 0..2 {
+                        let identity = if i == j { 1.0 } else { 0.0 };
+                        assert!((grad[i][j] - identity).abs() < 1e-9, "{basis:?}: Σ x ⊗ ∇N = {grad:?}");
+                    }
+                }
+                // gradients against central differences of the shape values (same support)
+                let h = 1e-6;
+                for i in 0..2 {
+                    let (mut p, mut m) = (x, x);
+                    p[i] += h;
+                    m[i] -= h;
+                    let (Some((sp, fp)), Some((sm, fm))) = (
+                        g.point_functions(&p, [0.0; 3], Formulation::PlaneStrain, 1.0),
+                        g.point_functions(&m, [0.0; 3], Formulation::PlaneStrain, 1.0),
+                    ) else {
+                        continue;
+                    };
+                    if sp != support || sm != support {
+                        continue;
+                    }
+                    for a in 0..SUPPORT_NODES {
+                        let fd = (fp.shape[a] - fm.shape[a]) / (2.0 * h);
+                        assert!(
+                            (fd - f.gradient[a][i]).abs() < 1e-5,
+                            "{basis:?}: ∂N_{a}/∂x_{i} {} vs FD {fd}",
+                            f.gradient[a][i]
+                        );
+                    }
+                }
+            }
+            // an affine motion: the fixed lattice's functions, gradients through the map
+            let stretch = [[1.1, 0.2], [-0.05, 0.9]];
+            let affine: Vec<[f64; 3]> = fixed
+                .reference_coords()
+                .iter()
+                .map(|x| {
+                    [
+                        (stretch[0][0] - 1.0) * x[0] + stretch[0][1] * x[1],
+                        stretch[1][0] * x[0] + (stretch[1][1] - 1.0) * x[1],
+                        0.0,
+                    ]
+                })
+                .collect();
+            let mut a = fixed.clone();
+            a.move_nodes(&affine).unwrap();
+            for reference in [[0.13, 0.07], [1.0, 0.5], [1.93, 0.99], [0.62, 0.31]] {
+                let x = [
+                    stretch[0][0] * reference[0] + stretch[0][1] * reference[1],
+                    stretch[1][0] * reference[0] + stretch[1][1] * reference[1],
+                    0.0,
+                ];
+                let (s_moved, f_moved) = a.point_functions(&x, [0.0; 3], Formulation::PlaneStrain, 1.0).unwrap();
+                let (s_fixed, f_fixed) = fixed
+                    .point_functions(&[reference[0], reference[1], 0.0], [0.0; 3], Formulation::PlaneStrain, 1.0)
+                    .unwrap();
+                assert_eq!(s_moved, s_fixed);
+                let det = stretch[0][0] * stretch[1][1] - stretch[0][1] * stretch[1][0];
+                for k in 0..SUPPORT_NODES {
+                    assert!((f_moved.shape[k] - f_fixed.shape[k]).abs() < 1e-12);
+                    // ∇_x N = F⁻ᵀ ∇_X N
+                    let gx = [
+                        (stretch[1][1] * f_fixed.gradient[k][0] - stretch[1][0] * f_fixed.gradient[k][1]) / det,
+                        (-stretch[0][1] * f_fixed.gradient[k][0] + stretch[0][0] * f_fixed.gradient[k][1]) / det,
+                    ];
+                    for i in 0..2 {
+                        assert!(
+                            (f_moved.gradient[k][i] - gx[i]).abs() < 1e-10,
+                            "{basis:?}: {:?} vs {gx:?}",
+                            f_moved.gradient[k]
+                        );
+                    }
+                }
             }
         }
     }

@@ -421,7 +421,18 @@ impl MpmDomain {
                     zone[c] = true;
                 }
                 if self.grid.basis().is_smooth() {
-                    ghost.rebuild(&self.grid, &self.grid.dilate(&zone_cells), zone);
+                    // the faces' cells: those around the zone whose nodes are all unknowns of
+                    // the pattern's supports (a node outside them would be an equation
+                    // without a row)
+                    let mut in_pattern = vec![false; self.grid.mesh.coords.len()];
+                    for &s in &cb.pattern {
+                        for &a in self.grid.support(s) {
+                            in_pattern[a] = true;
+                        }
+                    }
+                    let mut cells = self.grid.dilate(&zone_cells);
+                    cells.retain(|&c| self.grid.mesh.cell(c).iter().all(|&a| in_pattern[a]));
+                    ghost.rebuild(&self.grid, &cells, zone);
                 } else {
                     ghost.rebuild(&self.grid, &cb.pattern, zone);
                 }

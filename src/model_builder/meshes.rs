@@ -777,16 +777,14 @@ fn couple_grids(
                 Some(i) => CaseError::new(format!("interfaces[{}]", requests[g][i].0), e.message),
                 None => CaseError::new("interfaces", e.message),
             };
-            if group.grid.basis().is_smooth() {
+            let coupled = coupling::couple(soil, &group.grid, &views, &reqs).map_err(at)?;
+            if group.grid.basis() != coupled.grid.basis() {
+                // the structure removed cells of a smooth lattice
                 return Err(CaseError::new(
-                    format!("interfaces[{}].soil", requests[g][0].0),
-                    format!(
-                        "the grid of '{soil}' has the smooth basis \"{}\": shared interface nodes move the grid with the structure and remove its cells inside it, and the smooth functions are defined on the fixed lattice only (use \"basis\": \"linear\" for a coupled grid)",
-                        group.grid.basis().name()
-                    ),
+                    format!("domains[{}].grid.basis", group.bodies[0].0),
+                    format!("\"{}\": {}", group.grid.basis().name(), loam_mpm::grid::BasisError::Holes),
                 ));
             }
-            let coupled = coupling::couple(soil, &group.grid, &views, &reqs).map_err(at)?;
             for (k, points) in &group.bodies {
                 coupling::check_points_outside(&case.domains[*k].name, &points.position, &views)
                     .map_err(|e| CaseError::new(format!("domains[{k}].material_points"), e.message))?;
