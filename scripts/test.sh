@@ -4,16 +4,18 @@
 #   scripts/test.sh               the default suite (12–14 minutes on 2 cores)
 #   LOAM_LONG=1 scripts/test.sh   also the long validation runs: every test marked
 #                                 #[ignore = "long ..."] (about 25 minutes in all)
-# The Rust part needs no Python: the one Rust test that reads VTK files with meshio is
-# #[ignore]d there and run in the Python part, with the .venv's interpreter.
+# The Rust part needs no Python: the Rust tests that need the .venv (the meshio reading of VTK
+# files, the FMU tutorial's fmpy loop) are #[ignore]d there and run in the Python part, with
+# the .venv's interpreter.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 # one (release) build serves the tests, the CLI and the FMU library
 echo "== Rust: cargo test --release (workspace)"
 if [ "${LOAM_LONG:-0}" = "1" ]; then
-  # the meshio test runs below with the .venv
-  cargo test --release --workspace -- --include-ignored --skip meshio_reads_mesh_and_cloud
+  # the meshio and FMU-tutorial tests run below with the .venv
+  cargo test --release --workspace -- --include-ignored --skip meshio_reads_mesh_and_cloud \
+    --skip tutorial_6_fmu_python
 else
   cargo test --release --workspace
 fi
@@ -39,6 +41,10 @@ echo "== C: fmu/src/ffi.rs types compiled against the FMI 3.0 headers (fmpy's)"
 echo "== Python: FMI 3.0 FMUs run by fmpy (loam fmu, tests/fmu)"
 cargo build --release --quiet -p loam -p loam-fmu
 .venv/bin/python tests/fmu/test_fmu.py
+
+echo "== Python: tutorial 6, a case as an FMU in a Python loop (docs/tutorial/fmu_python)"
+LOAM_PYTHON="$PWD/.venv/bin/python" cargo test --release --quiet --test tutorials \
+  tutorial_6_fmu_python -- --ignored --exact
 
 echo "== Python: FMU robustness (reset, 100 instantiations, NaN/inf, bad steps, failing steps)"
 .venv/bin/python tests/fmu/test_fmu_robustness.py
