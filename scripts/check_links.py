@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
 """Checks the relative links of Loam's documentation (standard library only).
 
-For README.md, docs/*.md and laws/README.md (or the files given as arguments): every
-markdown link `[text](target)`, image `![alt](target)` and HTML `src="target"` whose target
-is a relative path must name a file or directory that exists, and every `#anchor` into a
-markdown file (or into the file itself) must match one of its headings under GitHub's rules
-(lowercase; characters other than letters, digits, `_`, `-` and spaces removed; spaces to
-`-`; a repeated heading gets `-1`, `-2`, ...). Links inside fenced code blocks and inline
+For README.md, docs/**/*.md (the tutorials in docs/tutorial/ too) and laws/README.md (or the
+files given as arguments): every markdown link `[text](target)`, image `![alt](target)` and
+HTML `src="target"` whose target is a relative path must name a file or directory that
+exists, and every `#anchor` into a markdown file (or into the file itself) must match one of
+its headings under GitHub's rules (lowercase; characters other than letters, digits, `_`, `-`
+and spaces removed; spaces to `-`; a repeated heading gets `-1`, `-2`, ...). Links inside fenced code blocks and inline
 code are ignored, as GitHub does not render them. Prints each broken link with its file and
 line and exits 1 if there is any; otherwise prints a one-line summary.
 
@@ -98,7 +98,7 @@ def check(path):
 
 def main(args):
     files = [Path(a).resolve() for a in args] or (
-        [ROOT / "README.md"] + sorted((ROOT / "docs").glob("*.md")) + [ROOT / "laws" / "README.md"]
+        [ROOT / "README.md"] + sorted((ROOT / "docs").rglob("*.md")) + [ROOT / "laws" / "README.md"]
     )
     problems = []
     checked = 0
