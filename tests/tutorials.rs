@@ -63,7 +63,8 @@ fn column(cols: &[(String, Vec<f64>)], name: &str) -> Vec<f64> {
 /// Prints measured vs reference and asserts the relative difference is within `tolerance`.
 fn check(what: &str, measured: f64, reference: f64, tolerance: f64) {
     let rel = (measured - reference) / reference.abs();
-    let tol = if tolerance >= 1e-3 { format!("{:.1} %", 100.0 * tolerance) } else { format!("{tolerance:.0e} relative") };
+    let tol =
+        if tolerance >= 1e-3 { format!("{:.1} %", 100.0 * tolerance) } else { format!("{tolerance:.0e} relative") };
     println!("{what}: {measured:.6} vs reference {reference:.6} ({:+.2} %, tolerance {tol})", 100.0 * rel);
     assert!(rel.abs() <= tolerance, "{what}: {measured} is {:+.2} % from {reference}", 100.0 * rel);
 }
@@ -77,7 +78,12 @@ fn tutorial_1_cantilever() {
     let tip = *column(&cols, "tip_uy").last().unwrap();
     check("tutorial 1: tip deflection (m) vs Timoshenko", tip, -0.39897, 0.02);
     let reaction = *column(&cols, "clamp_reaction_y").last().unwrap();
-    check("tutorial 1: clamp reaction (N) vs the beam's weight 7 m × 1 m × 1000 kg/m³ × 9.81 m/s²", reaction, 68_670.0, 1e-9);
+    check(
+        "tutorial 1: clamp reaction (N) vs the beam's weight 7 m × 1 m × 1000 kg/m³ × 9.81 m/s²",
+        reaction,
+        68_670.0,
+        1e-9,
+    );
 }
 
 /// Tutorial 2: the Bui et al. (2008) column collapse, h = 10 mm on B-splines, to 0.6 s;
@@ -102,7 +108,12 @@ fn tutorial_3_footing_undrained() {
     let end = *s.last().unwrap();
     let tail: Vec<f64> = q.iter().zip(&s).filter(|(_, &s)| s >= 0.8 * end - 1e-12).map(|(&q, _)| q).collect();
     let plateau = tail.iter().sum::<f64>() / tail.len() as f64;
-    check("tutorial 3: q/s_u over the last 20 % of the settlement vs Prandtl 2 + π", plateau, 2.0 + std::f64::consts::PI, 0.05);
+    check(
+        "tutorial 3: q/s_u over the last 20 % of the settlement vs Prandtl 2 + π",
+        plateau,
+        2.0 + std::f64::consts::PI,
+        0.05,
+    );
 }
 
 /// Tutorial 4: the Bui column onto a rubber plate (MPM soil, FEM plate, one Newton system),
@@ -153,7 +164,11 @@ fn tutorial_6_fmu_python() {
     let python = std::env::var_os("LOAM_PYTHON").map(PathBuf::from).unwrap_or_else(|| root().join(".venv/bin/python"));
     let available =
         Command::new(&python).args(["-c", "import fmpy"]).output().map(|o| o.status.success()).unwrap_or(false);
-    assert!(available, "{} cannot import fmpy: run scripts/test.sh (it sets up .venv) or set LOAM_PYTHON", python.display());
+    assert!(
+        available,
+        "{} cannot import fmpy: run scripts/test.sh (it sets up .venv) or set LOAM_PYTHON",
+        python.display()
+    );
     let out = temp_dir("fmu");
     let start = Instant::now();
     let output = Command::new(&python)
