@@ -46,8 +46,10 @@
 //! is the inverse of that map (Newton from its cell's bilinear map,
 //! [`crate::grid::Grid::point_functions`]) and `∂N/∂x = (∂x/∂s)⁻ᵀ ∂N/∂s`, so the functions
 //! reproduce the moved configuration's linear fields exactly and stay C¹. On the fixed
-//! lattice the map is `x_0 + h s` and nothing changes. A lattice with cells removed (a
-//! structure inside the grid) is refused: its supports would miss nodes.
+//! lattice the map is `x_0 + h s` and nothing changes. A structure inside the grid removes
+//! the cells and nodes inside it; the functions of a support's removed nodes are folded into
+//! the nodes it keeps ([`SmoothLattice::holed`], `fold_missing`), as the lattice's edge folds
+//! its missing outer node.
 
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
@@ -144,6 +146,59 @@ impl Basis {
     }
 }
 
+/// Folds the functions of a support's removed nodes (`mask`, bit `3 ky + kx`) into the nodes
+/// it keeps, by the extrapolation of a linear field from kept nodes (so the folded functions
+/// stay a partition of unity that reproduces linear fields, as at the lattice's edge):
+/// along the row or the column of the removed node, whichever leads from it towards the point
+/// at local lattice coordinates `t` (`t − k` larger along it; the other if that one lacks
+/// nodes), `u_k = Σ_j u_j Π (k − i)/(j − i)` over its two kept nodes; else by the rectangle
+/// rule `u_(k,l) = u_(k',l) + u_(k,l') − u_(k',l')`; else (a sliver of soil narrower than the
+/// support) onto the nearest kept node. The choice of direction changes only where
+/// `|t_x − k_x| = |t_y − k_y|`, beside a hole's corner, where the removed function is at most
+/// `N(1)² = 1/64` (B-splines): the folded basis jumps by no more there.
+fn fold_missing(values: &mut [[f64; 3]; SUPPORT_NODES], mask: u16, t: [f64; 2]) {
+    let kept = |k: usize| mask & (1 << k) == 0;
+    for m in (0..SUPPORT_NODES).filter(|&m| !kept(m)) {
+        let f = values[m];
+        values[m] = [0.0; 3];
+        if f == [0.0; 3] {
+            continue;
+        }
+        let (mx, my) = (m % 3, m / 3);
+        // along x (the row) or y (the column): the other two local indices and their nodes
+        let line = |along_x: bool| -> Option<[(usize, f64); 2]> {
+            let p = if along_x { mx } else { my };
+            let others: Vec<usize> = (0..3).filter(|&i| i != p).collect();
+            let node = |i: usize| if along_x { 3 * my + i } else { 3 * i + mx };
+            let (a, b) = (others[0], others[1]);
+            (kept(node(a)) && kept(node(b))).then(|| {
+                let (pa, pb, pp) = (a as f64, b as f64, p as f64);
+                [(node(a), (pp - pb) / (pa - pb)), (node(b), (pp - pa) / (pb - pa))]
+            })
+        };
+        let x_first = (t[0] - mx as f64).abs() >= (t[1] - my as f64).abs();
+        let stencil: Vec<(usize, f64)> = if let Some(l) = line(x_first).or_else(|| line(!x_first)) {
+            l.to_vec()
+        } else if let Some((kx, ky)) = (0..3)
+            .flat_map(|kx| (0..3).map(move |ky| (kx, ky)))
+            .find(|&(kx, ky)| kx != mx && ky != my && kept(3 * my + kx) && kept(3 * ky + mx) && kept(3 * ky + kx))
+        {
+            vec![(3 * my + kx, 1.0), (3 * ky + mx, 1.0), (3 * ky + kx, -1.0)]
+        } else {
+            let nearest = (0..SUPPORT_NODES)
+                .filter(|&k| kept(k))
+                .min_by_key(|&k| (k % 3).abs_diff(mx) + (k / 3).abs_diff(my))
+                .expect("a support holding a point keeps a node");
+            vec![(nearest, 1.0)]
+        };
+        for (k, c) in stencil {
+            for i in 0..3 {
+                values[k][i] += c * f[i];
+            }
+        }
+    }
+}
+
 /// Nodes per support of a smooth basis in 2D (3 × 3).
 pub const SUPPORT_NODES: usize = 9;
 
@@ -156,8 +211,12 @@ pub struct SmoothLattice {
     spacing: [f64; 2],
     cells: [usize; 2],
     /// The nine grid nodes of each support, support `wy (n_x − 1) + wx` at `9 s..9 s + 9`,
-    /// node `(wx + kx, wy + ky)` at local index `3 ky + kx`.
+    /// node `(wx + kx, wy + ky)` at local index `3 ky + kx` (a node removed with a hole: a
+    /// node of the same support, whose function the fold leaves 0 there).
     nodes: Vec<usize>,
+    /// Per support, the local nodes removed with a hole (bit `3 ky + kx`); empty while the
+    /// lattice is whole.
+    missing: Vec<u16>,
 }
 
 impl SmoothLattice {
@@ -176,7 +235,35 @@ impl SmoothLattice {
                 }
             }
         }
-        Self { basis, origin, spacing, cells, nodes }
+        Self { basis, origin, spacing, cells, nodes, missing: Vec::new() }
+    }
+
+    /// The lattice without the nodes of a hole: `new_node[a]` is the new index of grid node
+    /// `a` (`usize::MAX` where it was removed with the cells inside a structure). A removed
+    /// node's function is folded into the nodes its support keeps
+    /// ([`SmoothLattice::functions_at`]).
+    pub fn holed(&self, new_node: &[usize]) -> Self {
+        let mut nodes = Vec::with_capacity(self.nodes.len());
+        let mut missing = Vec::with_capacity(self.num_supports());
+        for (support, window) in self.nodes.chunks(SUPPORT_NODES).enumerate() {
+            let mut mask = self.missing.get(support).copied().unwrap_or(0);
+            let kept = (0..SUPPORT_NODES)
+                .filter(|&k| mask & (1 << k) == 0)
+                .map(|k| new_node[window[k]])
+                .find(|&a| a != usize::MAX)
+                .unwrap_or(0);
+            for (k, &a) in window.iter().enumerate() {
+                if mask & (1 << k) != 0 || new_node[a] == usize::MAX {
+                    mask |= 1 << k;
+                    nodes.push(kept);
+                } else {
+                    nodes.push(new_node[a]);
+                }
+            }
+            missing.push(mask);
+        }
+        let missing = if missing.iter().any(|&m| m != 0) { missing } else { Vec::new() };
+        Self { nodes, missing, ..self.clone() }
     }
 
     /// The lattice's cell size per direction (reference configuration).
@@ -234,7 +321,11 @@ impl SmoothLattice {
                 values[3 * ky + kx] = [fx[kx].0 * fy[ky].0, fx[kx].1 * fy[ky].0, fx[kx].0 * fy[ky].1];
             }
         }
-        (wy * (self.cells[0] - 1) + wx, values)
+        let support = wy * (self.cells[0] - 1) + wx;
+        if let Some(&mask) = self.missing.get(support).filter(|&&m| m != 0) {
+            fold_missing(&mut values, mask, [s[0] - wx as f64, s[1] - wy as f64]);
+        }
+        (support, values)
     }
 
     /// The support of a point at `x` of the fixed lattice whose domain has the half lengths

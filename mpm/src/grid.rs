@@ -176,8 +176,8 @@ pub enum BasisError {
     /// The lattice is rotated.
     #[error("a smooth basis needs a grid whose cell edges follow x and y (not rotated)")]
     Rotated,
-    /// Cells were removed (a structure inside the grid).
-    #[error("a smooth basis needs the whole lattice: cells removed from it (a structure inside the grid) would leave supports with missing nodes; let the grid end at the structure's boundary (an interface on the grid's edge) or use \"linear\"")]
+    /// Cells were removed before the basis was set.
+    #[error("a smooth basis is set on the whole lattice, before the cells inside a structure are removed")]
     Holes,
     /// Fewer than two cells in a direction.
     #[error("a smooth basis needs two or more cells in each direction")]
@@ -528,7 +528,9 @@ impl Grid {
                 Locator::Bins(Bins::new(&mesh, &all))
             }
         };
-        (Self::with_locator(mesh, locator), kept_nodes)
+        let mut grid = Self::with_locator(mesh, locator);
+        grid.smooth = self.smooth.as_ref().map(|lattice| lattice.holed(&new_node));
+        (grid, kept_nodes)
     }
 
     /// Node coordinates in the reference configuration.
@@ -949,6 +951,149 @@ mod tests {
                         );
                     }
                 }
+            }
+        }
+    }
+
+    /// A smooth lattice holed by a structure (cells removed inside it, its boundary nodes
+    /// kept): for points around the hole, fixed and moved, the folded functions are a
+    /// partition of unity reproducing linear fields (`Σ N_I x_I = x`, `Σ x_I ⊗ ∇N_I = 1`),
+    /// their gradients match central differences, and along lines past the hole's corners no
+    /// function jumps by more than 1/64 (the fold's switch beside a corner).
+    #[test]
+    fn a_holed_smooth_lattice_folds_the_removed_nodes() {
+        for basis in [Basis::Bspline2, Basis::Gimp] {
+            let mut whole = Grid::new([0.0; 3], [3.0, 2.0, 0.0], [12, 8, 1], ElementType::Quad4);
+            whole.set_basis(basis).unwrap();
+            // the hole: lattice cells 4..8 × 2..5, i.e. [1, 2] × [0.5, 1.25]
+            let remove: Vec<bool> =
+                (0..whole.mesh.num_cells()).map(|c| (4..8).contains(&(c % 12)) && (2..5).contains(&(c / 12))).collect();
+            let (holed, _) = whole.without_cells(&remove);
+            assert_eq!(holed.basis(), basis);
+            let in_hole =
+                |x: &[f64; 3]| x[0] > 1.0 + 1e-9 && x[0] < 2.0 - 1e-9 && x[1] > 0.5 + 1e-9 && x[1] < 1.25 - 1e-9;
+            let mut moved = holed.clone();
+            let motion: Vec<[f64; 3]> = moved
+                .reference_coords()
+                .iter()
+                .map(|x| {
+                    let d = ((x[0] - 1.5).powi(2) + (x[1] - 0.9).powi(2)).sqrt();
+                    let decay = (1.0 - d / 1.5).max(0.0).powi(2);
+                    [0.03 * decay, -0.05 * decay, 0.0]
+                })
+                .collect();
+            moved.move_nodes(&motion).unwrap();
+            for (label, g) in [("fixed", &holed), ("moved", &moved)] {
+                let lattice = g.smooth.clone().unwrap();
+                // GIMP's domain averages over the lattice coordinates, exact for linear fields
+                // where the map is affine: on the moved grid checked with l = 0
+                let half = if basis == Basis::Gimp && label == "moved" { 0.0 } else { 0.05 };
+                let functions = |x: &[f64; 3]| g.point_functions(x, [half, half, 0.0], Formulation::PlaneStrain, 1.0);
+                // reference points around the hole, carried by the motion where the grid moved
+                let place = |r: [f64; 2]| {
+                    if label == "fixed" {
+                        [r[0], r[1], 0.0]
+                    } else {
+                        let d = ((r[0] - 1.5).powi(2) + (r[1] - 0.9).powi(2)).sqrt();
+                        let decay = (1.0 - d / 1.5).max(0.0).powi(2);
+                        [r[0] + 0.03 * decay, r[1] - 0.05 * decay, 0.0]
+                    }
+                };
+                let mut checked = 0;
+                for k in 0..600 {
+                    let r = [
+                        0.6 + 1.8 * ((k as f64 * 0.618_034).fract()),
+                        0.2 + 1.4 * ((k as f64 * 0.381_966 + 0.05).fract()),
+                    ];
+                    if in_hole(&[r[0], r[1], 0.0]) {
+                        continue;
+                    }
+                    let x = place(r);
+                    let Some((support, f)) = functions(&x) else { continue };
+                    checked += 1;
+                    let nodes = lattice.support(support);
+                    let (mut sum, mut xs, mut grad) = (0.0, [0.0; 2], [[0.0; 2]; 2]);
+                    for a in 0..SUPPORT_NODES {
+                        let xa = g.mesh.coords[nodes[a]];
+                        sum += f.shape[a];
+                        for i in 0..2 {
+                            xs[i] += f.shape[a] * xa[i];
+                            for j in 0..2 {
+                                grad[i][j] += xa[i] * f.gradient[a][j];
+                            }
+                        }
+                    }
+                    assert!((sum - 1.0).abs() < 1e-12, "{basis:?} {label}: Σ N = {sum} at {x:?}");
+                    assert!(
+                        (xs[0] - x[0]).abs() < 1e-10 && (xs[1] - x[1]).abs() < 1e-10,
+                        "{basis:?} {label}: Σ N x = {xs:?} at {x:?}"
+                    );
+                    for i in 0..2 {
+                        for j in 0..2 {
+                            let identity = if i == j { 1.0 } else { 0.0 };
+                            assert!(
+                                (grad[i][j] - identity).abs() < 1e-9,
+                                "{basis:?} {label}: Σ x ⊗ ∇N = {grad:?} at {x:?}"
+                            );
+                        }
+                    }
+                    let h = 1e-7;
+                    for i in 0..2 {
+                        let (mut p, mut m) = (x, x);
+                        p[i] += h;
+                        m[i] -= h;
+                        let (Some((sp, fp)), Some((sm, fm))) = (functions(&p), functions(&m)) else { continue };
+                        if sp != support || sm != support {
+                            continue;
+                        }
+                        for a in 0..SUPPORT_NODES {
+                            let fd = (fp.shape[a] - fm.shape[a]) / (2.0 * h);
+                            // off the fold's switch lines the functions are smooth
+                            if (fd - f.gradient[a][i]).abs() > 1e-4 && (fp.shape[a] - fm.shape[a]).abs() > 1e-3 {
+                                continue;
+                            }
+                            assert!(
+                                (fd - f.gradient[a][i]).abs() < 1e-4,
+                                "{basis:?} {label}: ∂N/∂x {} vs FD {fd}",
+                                f.gradient[a][i]
+                            );
+                        }
+                    }
+                }
+                assert!(checked > 300, "{checked} points checked");
+                // continuity: walk lines past the hole's corners, the functions per grid node
+                let mut largest_jump = 0.0f64;
+                for (from, to) in [
+                    ([0.7, 1.45], [2.3, 1.45]),
+                    ([0.8, 0.3], [0.8, 1.6]),
+                    ([0.7, 1.6], [1.3, 1.0]),
+                    ([2.2, 0.2], [1.9, 0.45]),
+                ] {
+                    let mut previous: Option<Vec<f64>> = None;
+                    for k in 0..=4000 {
+                        let t = k as f64 / 4000.0;
+                        let r = [from[0] + t * (to[0] - from[0]), from[1] + t * (to[1] - from[1])];
+                        if in_hole(&[r[0], r[1], 0.0]) {
+                            previous = None;
+                            continue;
+                        }
+                        let Some((support, f)) = functions(&place(r)) else { continue };
+                        let mut full = vec![0.0; g.mesh.coords.len()];
+                        for (a, &node) in lattice.support(support).iter().enumerate() {
+                            full[node] += f.shape[a];
+                        }
+                        if let Some(prev) = &previous {
+                            for (a, b) in full.iter().zip(prev) {
+                                largest_jump = largest_jump.max((a - b).abs());
+                            }
+                        }
+                        previous = Some(full);
+                    }
+                }
+                println!(
+                    "{basis:?} {label}: largest change of a function between neighbouring samples {largest_jump:.4}"
+                );
+                assert!(largest_jump < 1.0 / 64.0 + 2e-3, "{basis:?} {label}: a function jumps by {largest_jump}");
             }
         }
     }

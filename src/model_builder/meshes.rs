@@ -778,13 +778,6 @@ fn couple_grids(
                 None => CaseError::new("interfaces", e.message),
             };
             let coupled = coupling::couple(soil, &group.grid, &views, &reqs).map_err(at)?;
-            if group.grid.basis() != coupled.grid.basis() {
-                // the structure removed cells of a smooth lattice
-                return Err(CaseError::new(
-                    format!("domains[{}].grid.basis", group.bodies[0].0),
-                    format!("\"{}\": {}", group.grid.basis().name(), loam_mpm::grid::BasisError::Holes),
-                ));
-            }
             for (k, points) in &group.bodies {
                 coupling::check_points_outside(&case.domains[*k].name, &points.position, &views)
                     .map_err(|e| CaseError::new(format!("domains[{k}].material_points"), e.message))?;
