@@ -468,9 +468,8 @@ fn collapse_onto_rubber_and_concrete_plates() {
 /// so its cells and the nodes between its faces are removed and the supports next to it fold
 /// their functions (`loam_mpm::basis`). At rest the plate is in equilibrium between the soil's
 /// force and its clamp (1 %), and the rubber plate bends by millimetres as on the linear grid
-/// (at least 0.5 mm). About a minute: `LOAM_LONG=1 scripts/test.sh`.
+/// (at least 0.5 mm). About 15 s.
 #[test]
-#[ignore = "long: a collapse to rest on B-splines (about a minute); LOAM_LONG=1 scripts/test.sh runs it"]
 fn collapse_onto_rubber_plate_on_bsplines() {
     let mut c = case("coupled_collapse_rubber.json");
     for d in &mut c.domains {
