@@ -827,6 +827,37 @@ mod tests {
         }
     }
 
+    /// Asserts that a point's smooth functions are a partition of unity reproducing the
+    /// grid's current linear fields: `Σ N_I = 1`, `Σ N_I x_I = x`, `Σ x_I ⊗ ∇N_I = 1`.
+    fn assert_reproduces_linear_fields(
+        g: &Grid,
+        lattice: &SmoothLattice,
+        support: usize,
+        f: &PointGeometry,
+        x: &[f64; 3],
+        what: &str,
+    ) {
+        let (mut sum, mut xs, mut grad) = (0.0, [0.0; 2], [[0.0; 2]; 2]);
+        for (a, &node) in lattice.support(support).iter().enumerate() {
+            let xa = g.mesh.coords[node];
+            sum += f.shape[a];
+            for i in 0..2 {
+                xs[i] += f.shape[a] * xa[i];
+                for j in 0..2 {
+                    grad[i][j] += xa[i] * f.gradient[a][j];
+                }
+            }
+        }
+        assert!((sum - 1.0).abs() < 1e-12, "{what}: Σ N = {sum} at {x:?}");
+        assert!((xs[0] - x[0]).abs() < 1e-10 && (xs[1] - x[1]).abs() < 1e-10, "{what}: Σ N x = {xs:?} at {x:?}");
+        for (i, row) in grad.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                let identity = if i == j { 1.0 } else { 0.0 };
+                assert!((v - identity).abs() < 1e-9, "{what}: Σ x ⊗ ∇N = {grad:?} at {x:?}");
+            }
+        }
+    }
+
     /// A smooth lattice that moves with a structure (issue 23, coupled grids): the inverse of
     /// its map recovers the lattice coordinates, the functions are a partition of unity that
     /// reproduces the linear fields of the moved configuration exactly (`Σ N_I x_I = x`,
@@ -861,29 +892,7 @@ mod tests {
                     "{s:?} → {recovered:?}"
                 );
                 let (support, f) = g.point_functions(&x, [0.0; 3], Formulation::PlaneStrain, 1.0).unwrap();
-                let nodes = lattice.support(support);
-                let (mut sum, mut xs, mut grad) = (0.0, [0.0; 2], [[0.0; 2]; 2]);
-                for a in 0..SUPPORT_NODES {
-                    let xa = g.mesh.coords[nodes[a]];
-                    sum += f.shape[a];
-                    for i in 0..2 {
-                        xs[i] += f.shape[a] * xa[i];
-                        for j in 0..2 {
-                            grad[i][j] += xa[i] * f.gradient[a][j];
-                        }
-                    }
-                }
-                assert!((sum - 1.0).abs() < 1e-12, "{basis:?}: Σ N = {sum}");
-                assert!(
-                    (xs[0] - x[0]).abs() < 1e-10 && (xs[1] - x[1]).abs() < 1e-10,
-                    "{basis:?}: Σ N x = {xs:?} at {x:?}"
-                );
-                for i in 0..2 {
-                    for j in 0..2 {
-                        let identity = if i == j { 1.0 } else { 0.0 };
-                        assert!((grad[i][j] - identity).abs() < 1e-9, "{basis:?}: Σ x ⊗ ∇N = {grad:?}");
-                    }
-                }
+                assert_reproduces_linear_fields(&g, &lattice, support, &f, &x, &format!("{basis:?}"));
                 // gradients against central differences of the shape values (same support)
                 let h = 1e-6;
                 for i in 0..2 {
@@ -1011,32 +1020,7 @@ mod tests {
                     let x = place(r);
                     let Some((support, f)) = functions(&x) else { continue };
                     checked += 1;
-                    let nodes = lattice.support(support);
-                    let (mut sum, mut xs, mut grad) = (0.0, [0.0; 2], [[0.0; 2]; 2]);
-                    for a in 0..SUPPORT_NODES {
-                        let xa = g.mesh.coords[nodes[a]];
-                        sum += f.shape[a];
-                        for i in 0..2 {
-                            xs[i] += f.shape[a] * xa[i];
-                            for j in 0..2 {
-                                grad[i][j] += xa[i] * f.gradient[a][j];
-                            }
-                        }
-                    }
-                    assert!((sum - 1.0).abs() < 1e-12, "{basis:?} {label}: Σ N = {sum} at {x:?}");
-                    assert!(
-                        (xs[0] - x[0]).abs() < 1e-10 && (xs[1] - x[1]).abs() < 1e-10,
-                        "{basis:?} {label}: Σ N x = {xs:?} at {x:?}"
-                    );
-                    for i in 0..2 {
-                        for j in 0..2 {
-                            let identity = if i == j { 1.0 } else { 0.0 };
-                            assert!(
-                                (grad[i][j] - identity).abs() < 1e-9,
-                                "{basis:?} {label}: Σ x ⊗ ∇N = {grad:?} at {x:?}"
-                            );
-                        }
-                    }
+                    assert_reproduces_linear_fields(g, &lattice, support, &f, &x, &format!("{basis:?} {label}"));
                     let h = 1e-7;
                     for i in 0..2 {
                         let (mut p, mut m) = (x, x);
