@@ -454,3 +454,80 @@ fn smooth_basis_where_it_cannot_act_is_refused_naming_the_key() {
         &["domains[0].quadrature"],
     );
 }
+
+/// Issue 28: `loam --version` names the version and the build's cargo features.
+#[test]
+fn version_names_the_features() {
+    let out = loam().arg("--version").output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout).trim().to_string();
+    println!("{text}");
+    assert!(text.starts_with(&format!("loam {} (features: ", env!("CARGO_PKG_VERSION"))), "{text}");
+    assert!(text.ends_with(')'), "{text}");
+}
+
+/// Issue 28: `loam run --trace-newton` prints every Newton iteration on stderr (the former
+/// environment variable LOAM_NEWTON_TRACE, now a flag); without it nothing is printed.
+#[test]
+fn trace_newton_prints_every_iteration() {
+    let case = write_case("trace", &bundled("cantilever_fem", |_| {}));
+    let run = |trace: bool| {
+        let mut cmd = loam();
+        cmd.arg("run").arg(&case).arg("--quiet").arg("--out").arg(case.with_file_name("out"));
+        if trace {
+            cmd.arg("--trace-newton");
+        }
+        let out = cmd.output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let traced = run(true);
+    let lines: Vec<&str> = traced.lines().filter(|l| l.starts_with("newton t=")).collect();
+    println!("{} Newton lines, first: {}", lines.len(), lines.first().copied().unwrap_or(""));
+    assert!(lines.len() >= 2, "{traced}");
+    assert!(lines[0].contains(" it=0 ") && lines[0].contains("|r|="), "{}", lines[0]);
+    assert!(!run(false).contains("newton t="));
+    let help = loam().args(["run", "--help"]).output().unwrap();
+    assert!(String::from_utf8_lossy(&help.stdout).contains("--trace-newton"));
+}
+
+/// Issue 28: the solver settings that were environment variables (LOAM_CHOLESKY,
+/// LOAM_MPM_PATTERN_RINGS) are case keys: accepted, and a bad value refused in one line
+/// naming its JSON path and what is expected.
+#[test]
+fn former_environment_knobs_are_case_keys() {
+    use serde_json::json;
+    let mpm = bundled("cantilever_mpm", |j| {
+        j["solver"]["cholesky_factorisation"] = json!("simplicial");
+        j["solver"]["mpm_pattern_rings"] = json!(0);
+    });
+    let (code, msg) = check_file(&write_case("knobs-ok", &mpm));
+    assert_eq!(code, 0, "{msg}");
+    expect_bad(
+        "unknown factorisation",
+        check_edited("knobs-chol", |j| j["solver"]["cholesky_factorisation"] = json!("multifrontal")),
+        &["solver.cholesky_factorisation", "supernodal", "simplicial"],
+    );
+    expect_bad(
+        "too many rings",
+        check_edited("knobs-rings", |j| j["solver"]["mpm_pattern_rings"] = json!(1000)),
+        &["solver.mpm_pattern_rings", "at most 100"],
+    );
+    expect_bad(
+        "negative rings",
+        check_edited("knobs-rings-neg", |j| j["solver"]["mpm_pattern_rings"] = json!(-1)),
+        &["solver.mpm_pattern_rings"],
+    );
+    // the same MPM run with the pattern rebuilt at every change gives the same answer
+    let out = |rings: u64| {
+        let case = write_case(
+            &format!("knobs-run-{rings}"),
+            &bundled("cantilever_mpm", |j| j["solver"]["mpm_pattern_rings"] = json!(rings)),
+        );
+        let (code, msg) = run_file(&case);
+        assert_eq!(code, 0, "{msg}");
+        last_monitor(&case.with_file_name("out").join("monitors.csv"), "tip_uy")
+    };
+    let (a, b) = (out(0), out(1));
+    assert!((a - b).abs() <= 1e-9 * a.abs(), "{a} vs {b}");
+}

@@ -1026,6 +1026,7 @@ fn grid_domain(
                     Quadrature::FilledCells => PointQuadrature::FilledCells,
                 });
                 first_domain.set_ghost_penalty(alpha);
+                first_domain.set_pattern_rings(case.solver.mpm_pattern_rings);
                 domain = Some(first_domain);
             }
         }
