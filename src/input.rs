@@ -221,7 +221,60 @@ fn locate(value: &Value, segments: &[Segment], message: &str) -> CaseError {
     if let Some(rest) = message.strip_prefix("data did not match any variant of untagged enum Amplitude") {
         message = format!("expected a number or a table [[t, f], ...] of increasing times{rest}");
     }
+    let key = path.iter().rev().find_map(|s| match s {
+        Segment::Key(k) => Some(k.as_str()),
+        Segment::Index(_) => None,
+    });
+    let message = teach(&message, here, key.unwrap_or(""));
     CaseError::new(path_string(&path), compact_numbers(&message))
+}
+
+/// Serde's `message` about the value `here` at `key` made to teach (issue 28): the valid
+/// name nearest to an unknown one (`did you mean "young_modulus"?`), plain words for types
+/// (`a number`, not `f64`), and an example of what is expected.
+fn teach(message: &str, here: Option<&Value>, key: &str) -> String {
+    use crate::hints::{did_you_mean, example_value, example_vector};
+    for (head, noun) in [("unknown field `", "unknown field `"), ("unknown variant `", "unknown value `")] {
+        if let Some((name, tail)) = message.strip_prefix(head).and_then(|rest| rest.split_once('`')) {
+            let names: Vec<&str> = tail.split('`').skip(1).step_by(2).collect();
+            let hint = did_you_mean(name, names);
+            return format!("{noun}{name}`, {hint}{}", tail.trim_start_matches(", "));
+        }
+    }
+    if let Some(name) = message.strip_prefix("missing field `").and_then(|rest| rest.strip_suffix('`')) {
+        return match example_value(name) {
+            Some(example) => format!("{message}, e.g. \"{name}\": {example}"),
+            None => message.to_string(),
+        };
+    }
+    if let Some((_, n)) =
+        message.strip_prefix("invalid length ").and_then(|r| r.split_once(", expected an array of length "))
+    {
+        if let Ok(n) = n.parse::<usize>() {
+            let (what, example) = example_vector(key, n);
+            let got = here.map(|v| format!(", got {}", v.to_string().replace(',', ", "))).unwrap_or_default();
+            return format!("{message} ({what}), e.g. {example}{got}");
+        }
+    }
+    let Some((head, expected)) = message.split_once(", expected ") else { return message.to_string() };
+    if !(head.starts_with("invalid type: ") || head.starts_with("invalid value: ")) {
+        return message.to_string();
+    }
+    let (words, fallback) = match expected {
+        "f64" | "f32" => ("a number", "1.0"),
+        "usize" | "u64" | "u32" | "u16" | "u8" => ("a whole number ≥ 0", "4"),
+        "a boolean" => ("true or false", "true"),
+        "a string" | "path string" => ("a name in quotes", "\"beam\""),
+        _ => return message.to_string(),
+    };
+    let unquoted = match here {
+        Some(Value::String(s)) if words != "a name in quotes" && s.trim().parse::<f64>().is_ok() => Some(s.trim()),
+        _ => None,
+    };
+    match unquoted {
+        Some(number) => format!("{head}, expected {words}, e.g. {number} (without the quotes)"),
+        None => format!("{head}, expected {words}, e.g. {}", example_value(key).unwrap_or(fallback)),
+    }
 }
 
 /// Where inside `node` the value that `message` complains about lies: the first (in the
@@ -503,10 +556,10 @@ mod tests {
     fn errors_inside_tagged_enums_name_the_value() {
         assert_eq!(
             err(r#"{"items": [{"type": "a", "name": "x", "value": "1000"}]}"#),
-            "items[0].value: invalid type: string \"1000\", expected f64"
+            "items[0].value: invalid type: string \"1000\", expected a number, e.g. 1000 (without the quotes)"
         );
         assert!(err(r#"{"items": [{"type": "b", "point": [1], "zz": 1}]}"#).starts_with("items[0].zz: unknown field"));
-        assert!(err(r#"{"items": [{"type": "c"}]}"#).starts_with("items[0].type: unknown variant `c`"));
+        assert!(err(r#"{"items": [{"type": "c"}]}"#).starts_with("items[0].type: unknown value `c`"));
         // two candidates: the object's path is kept
         assert!(err(r#"{"items": [{"type": "b", "point": ["1", "1"]}]}"#).starts_with("items[0]: invalid type"));
         assert_eq!(err(r#"{"items": [], "size": [1, 2, 3]}"#), "size: invalid length 3, expected fewer entries");

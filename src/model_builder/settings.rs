@@ -21,8 +21,14 @@ pub(super) const MAX_MPM_PATTERN_RINGS: usize = 100;
 /// Checks the case's scalar settings and returns its time scheme.
 pub(super) fn check(case: &Case) -> Result<TimeScheme, CaseError> {
     check_positive("thickness", case.thickness)?;
-    check_positive("analysis.time_step", case.analysis.time_step)?;
     check_positive("analysis.end_time", case.analysis.end_time)?;
+    let dt = case.analysis.time_step;
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(CaseError::new(
+            "analysis.time_step",
+            format!("must be > 0 (s), e.g. {} (end_time / 100), got {dt}", case.analysis.end_time / 100.0),
+        ));
+    }
     if case.analysis.time_step > case.analysis.end_time * (1.0 + 1e-12) {
         return Err(CaseError::new("analysis.time_step", "is longer than analysis.end_time"));
     }
