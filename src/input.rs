@@ -145,8 +145,41 @@ pub fn from_value<T: DeserializeOwned>(value: &Value) -> Result<T, CaseError> {
             })
             .collect();
         let message = strip_position(&e.into_inner().to_string());
-        locate(value, &segments, &message)
+        locate(value, &segments, &message, &|at| names_at::<T>(value, at))
     })
+}
+
+/// The names (enumerated values, kinds) that `T` accepts at `at` inside `value`, asked of
+/// serde itself: the value there replaced by an impossible name makes the derived
+/// `Deserialize` list them (`unknown variant ..., expected one of ...`); and whether the
+/// first one is a value of its own (`"static"`) rather than the key of an object
+/// (`{"rectangle": ...}`). `None` where any string is accepted.
+fn names_at<T: DeserializeOwned>(value: &Value, at: &[Segment]) -> Option<Names> {
+    const PROBE: &str = "\u{1}";
+    let answer_with = |name: &str| {
+        let mut probe = value.clone();
+        let node = at.iter().try_fold(&mut probe, |v, s| match (s, v) {
+            (Segment::Key(k), Value::Object(m)) => m.get_mut(k),
+            (Segment::Index(i), Value::Array(a)) => a.get_mut(*i),
+            _ => None,
+        })?;
+        *node = Value::String(name.to_string());
+        Some(serde_json::from_value::<T>(probe).err().map(|e| e.to_string()).unwrap_or_default())
+    };
+    let answer = answer_with(PROBE)?;
+    let (_, list) = answer.split_once(&format!("unknown variant `{PROBE}`"))?;
+    let names: Vec<String> = list.split('`').skip(1).step_by(2).map(str::to_string).collect();
+    let first = answer_with(names.first()?)?;
+    let alone = !(first.contains("unit value") || first.contains("unit variant"));
+    Some(Names { names, alone })
+}
+
+/// The names a value may take ([`names_at`]).
+struct Names {
+    names: Vec<String>,
+    /// Whether the first name is a value of its own (`"static"`), else the key of an object
+    /// (`{"rectangle": ...}`).
+    alone: bool,
 }
 
 /// One step of a JSON path.
@@ -175,7 +208,12 @@ fn path_string(segments: &[Segment]) -> String {
 
 /// The error `message` that serde gave at `segments`, located as precisely as `value`
 /// allows and reworded where serde's words mislead.
-fn locate(value: &Value, segments: &[Segment], message: &str) -> CaseError {
+fn locate(
+    value: &Value,
+    segments: &[Segment],
+    message: &str,
+    names_at: &dyn Fn(&[Segment]) -> Option<Names>,
+) -> CaseError {
     // descend as far as the value follows the path
     let mut node = value;
     let mut path: Vec<Segment> = Vec::new();
@@ -225,14 +263,21 @@ fn locate(value: &Value, segments: &[Segment], message: &str) -> CaseError {
         Segment::Key(k) => Some(k.as_str()),
         Segment::Index(_) => None,
     });
-    let message = teach(&message, here, key.unwrap_or(""));
+    let names = if message.contains(", expected a name in quotes") || message.contains(", expected the name of a kind")
+    {
+        names_at(&path)
+    } else {
+        None
+    };
+    let message = teach(&message, here, key.unwrap_or(""), names);
     CaseError::new(path_string(&path), compact_numbers(&message))
 }
 
 /// Serde's `message` about the value `here` at `key` made to teach (issue 28): the valid
 /// name nearest to an unknown one (`did you mean "young_modulus"?`), plain words for types
-/// (`a number`, not `f64`), and an example of what is expected.
-fn teach(message: &str, here: Option<&Value>, key: &str) -> String {
+/// (`a number`, not `f64`), and an example of what is expected; `names` are the names the
+/// value may take, where it is one of a list.
+fn teach(message: &str, here: Option<&Value>, key: &str, names: Option<Names>) -> String {
     use crate::hints::{did_you_mean, example_value, example_vector};
     for (head, noun) in [("unknown field `", "unknown field `"), ("unknown variant `", "unknown value `")] {
         if let Some((name, tail)) = message.strip_prefix(head).and_then(|rest| rest.split_once('`')) {
@@ -242,7 +287,16 @@ fn teach(message: &str, here: Option<&Value>, key: &str) -> String {
         }
     }
     if let Some(name) = message.strip_prefix("missing field `").and_then(|rest| rest.strip_suffix('`')) {
-        return match example_value(name) {
+        let example = match (name, key) {
+            ("type", "analysis") => Some("\"static\""),
+            ("type", "monitors") => Some("\"displacement\""),
+            ("type", "loads") => Some("\"nodal_force\""),
+            ("origin" | "size" | "cells" | "point" | "acceleration" | "from" | "to" | "min" | "max", _) => {
+                Some(example_vector(name, 2).1)
+            }
+            _ => example_value(name),
+        };
+        return match example {
             Some(example) => format!("{message}, e.g. \"{name}\": {example}"),
             None => message.to_string(),
         };
@@ -257,6 +311,15 @@ fn teach(message: &str, here: Option<&Value>, key: &str) -> String {
         }
     }
     let Some((head, expected)) = message.split_once(", expected ") else { return message.to_string() };
+    if let Some(Names { names, alone }) = names {
+        let listed: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
+        let (words, example) = if alone {
+            ("the name of a kind in quotes", format!("\"{}\"", names[0]))
+        } else {
+            ("an object with one key naming its kind", format!("{{\"{}\": ...}}", names[0]))
+        };
+        return format!("{head}, expected {words}, one of {}, e.g. {example}", listed.join(", "));
+    }
     if !(head.starts_with("invalid type: ") || head.starts_with("invalid value: ")) {
         return message.to_string();
     }
@@ -560,6 +623,11 @@ mod tests {
         );
         assert!(err(r#"{"items": [{"type": "b", "point": [1], "zz": 1}]}"#).starts_with("items[0].zz: unknown field"));
         assert!(err(r#"{"items": [{"type": "c"}]}"#).starts_with("items[0].type: unknown value `c`"));
+        // a number where a name is expected: the names, asked of serde, with an example
+        assert_eq!(
+            err(r#"{"items": [{"type": 3}]}"#),
+            "items[0].type: invalid type: integer `3`, expected the name of a kind in quotes, one of `a`, `b`, e.g. \"a\""
+        );
         // two candidates: the object's path is kept
         assert!(err(r#"{"items": [{"type": "b", "point": ["1", "1"]}]}"#).starts_with("items[0]: invalid type"));
         assert_eq!(err(r#"{"items": [], "size": [1, 2, 3]}"#), "size: invalid length 3, expected fewer entries");
