@@ -116,7 +116,15 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
 fn materials(case: &Case) -> Result<BTreeMap<&str, Arc<dyn ConstitutiveLaw>>, CaseError> {
     let mut laws: BTreeMap<&str, Arc<dyn ConstitutiveLaw>> = BTreeMap::new();
     for (name, spec) in &case.materials {
-        let law = spec.build().map_err(|e| CaseError::new(format!("materials.{name}.{}", e.parameter), e.problem))?;
+        let law = spec.build().map_err(|e| {
+            // a sign error gets an example of the parameter, as check_positive gives
+            let example = crate::hints::example_value(e.parameter);
+            let problem = match (e.problem.strip_prefix("must be > 0, got "), example) {
+                (Some(got), Some(example)) => format!("must be > 0, e.g. {example}, got {got}"),
+                _ => e.problem,
+            };
+            CaseError::new(format!("materials.{name}.{}", e.parameter), problem)
+        })?;
         laws.insert(name, Arc::from(law));
     }
     Ok(laws)
