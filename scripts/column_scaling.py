@@ -12,9 +12,9 @@ three phases of each run (collapse, spreading, settling). Python 3 standard libr
     python3 scripts/column_scaling.py table            # column_scaling.csv + the SVG plot
     python3 scripts/column_scaling.py phases [A ...]   # per-phase steps / wall time
 
-`run` sets LOAM_NEWTON_TRACE=1 and stamps every Newton line the run prints on stderr with
-the wall clock (trace.log in the result directory): that gives the wall time of every step,
-which monitors.csv (one row per step, simulation time only) does not. `table` and `phases`
+`run` passes --trace-newton to `loam run` and stamps every Newton line the run prints on
+stderr with the wall clock (trace.log in the result directory): that gives the wall time of
+every step, which monitors.csv (one row per step, simulation time only) does not. `table` and `phases`
 only read finished result directories (--root DIR, default out/column_scaling), so they
 can be rerun without rerunning the cases.
 
@@ -206,14 +206,12 @@ def run_case(case, out):
     """Runs `case` into `out` with the Newton trace on, stamping each stderr line with the
     wall time since the start (trace.log: `wall_s<TAB>line`)."""
     out.mkdir(parents=True, exist_ok=True)
-    env = dict(os.environ, LOAM_NEWTON_TRACE="1")
     start = time.monotonic()
     with open(out / "trace.log", "w") as log:
         proc = subprocess.Popen(
-            [str(LOAM), "run", str(case), "--out", str(out), "--quiet"],
+            [str(LOAM), "run", str(case), "--out", str(out), "--quiet", "--trace-newton"],
             stderr=subprocess.PIPE,
             stdout=subprocess.DEVNULL,
-            env=env,
             bufsize=0,
         )
         # raw reads: a buffered line iterator would stamp the lines up to 8 KB late

@@ -28,7 +28,7 @@ fi
 
 echo "== Python: VTK output read by meshio"
 cargo build --release --quiet
-LOAM_PYTHON="$PWD/.venv/bin/python" cargo test --release --quiet -p loam --lib \
+cargo test --release --quiet -p loam --lib \
   output::vtk::tests::meshio_reads_mesh_and_cloud -- --ignored --exact
 .venv/bin/python scripts/check_vtk.py
 

@@ -145,8 +145,41 @@ pub fn from_value<T: DeserializeOwned>(value: &Value) -> Result<T, CaseError> {
             })
             .collect();
         let message = strip_position(&e.into_inner().to_string());
-        locate(value, &segments, &message)
+        locate(value, &segments, &message, &|at| names_at::<T>(value, at))
     })
+}
+
+/// The names (enumerated values, kinds) that `T` accepts at `at` inside `value`, asked of
+/// serde itself: the value there replaced by an impossible name makes the derived
+/// `Deserialize` list them (`unknown variant ..., expected one of ...`); and whether the
+/// first one is a value of its own (`"static"`) rather than the key of an object
+/// (`{"rectangle": ...}`). `None` where any string is accepted.
+fn names_at<T: DeserializeOwned>(value: &Value, at: &[Segment]) -> Option<Names> {
+    const PROBE: &str = "\u{1}";
+    let answer_with = |name: &str| {
+        let mut probe = value.clone();
+        let node = at.iter().try_fold(&mut probe, |v, s| match (s, v) {
+            (Segment::Key(k), Value::Object(m)) => m.get_mut(k),
+            (Segment::Index(i), Value::Array(a)) => a.get_mut(*i),
+            _ => None,
+        })?;
+        *node = Value::String(name.to_string());
+        Some(serde_json::from_value::<T>(probe).err().map(|e| e.to_string()).unwrap_or_default())
+    };
+    let answer = answer_with(PROBE)?;
+    let (_, list) = answer.split_once(&format!("unknown variant `{PROBE}`"))?;
+    let names: Vec<String> = list.split('`').skip(1).step_by(2).map(str::to_string).collect();
+    let first = answer_with(names.first()?)?;
+    let alone = !(first.contains("unit value") || first.contains("unit variant"));
+    Some(Names { names, alone })
+}
+
+/// The names a value may take ([`names_at`]).
+struct Names {
+    names: Vec<String>,
+    /// Whether the first name is a value of its own (`"static"`), else the key of an object
+    /// (`{"rectangle": ...}`).
+    alone: bool,
 }
 
 /// One step of a JSON path.
@@ -175,7 +208,12 @@ fn path_string(segments: &[Segment]) -> String {
 
 /// The error `message` that serde gave at `segments`, located as precisely as `value`
 /// allows and reworded where serde's words mislead.
-fn locate(value: &Value, segments: &[Segment], message: &str) -> CaseError {
+fn locate(
+    value: &Value,
+    segments: &[Segment],
+    message: &str,
+    names_at: &dyn Fn(&[Segment]) -> Option<Names>,
+) -> CaseError {
     // descend as far as the value follows the path
     let mut node = value;
     let mut path: Vec<Segment> = Vec::new();
@@ -221,7 +259,85 @@ fn locate(value: &Value, segments: &[Segment], message: &str) -> CaseError {
     if let Some(rest) = message.strip_prefix("data did not match any variant of untagged enum Amplitude") {
         message = format!("expected a number or a table [[t, f], ...] of increasing times{rest}");
     }
+    let key = path.iter().rev().find_map(|s| match s {
+        Segment::Key(k) => Some(k.as_str()),
+        Segment::Index(_) => None,
+    });
+    let names = if message.contains(", expected a name in quotes") || message.contains(", expected the name of a kind")
+    {
+        names_at(&path)
+    } else {
+        None
+    };
+    let message = teach(&message, here, key.unwrap_or(""), names);
     CaseError::new(path_string(&path), compact_numbers(&message))
+}
+
+/// Serde's `message` about the value `here` at `key` made to teach (issue 28): the valid
+/// name nearest to an unknown one (`did you mean "young_modulus"?`), plain words for types
+/// (`a number`, not `f64`), and an example of what is expected; `names` are the names the
+/// value may take, where it is one of a list.
+fn teach(message: &str, here: Option<&Value>, key: &str, names: Option<Names>) -> String {
+    use crate::hints::{did_you_mean, example_value, example_vector};
+    for (head, noun) in [("unknown field `", "unknown field `"), ("unknown variant `", "unknown value `")] {
+        if let Some((name, tail)) = message.strip_prefix(head).and_then(|rest| rest.split_once('`')) {
+            let names: Vec<&str> = tail.split('`').skip(1).step_by(2).collect();
+            let hint = did_you_mean(name, names);
+            return format!("{noun}{name}`, {hint}{}", tail.trim_start_matches(", "));
+        }
+    }
+    if let Some(name) = message.strip_prefix("missing field `").and_then(|rest| rest.strip_suffix('`')) {
+        let example = match (name, key) {
+            ("type", "analysis") => Some("\"static\""),
+            ("type", "monitors") => Some("\"displacement\""),
+            ("type", "loads") => Some("\"nodal_force\""),
+            ("origin" | "size" | "cells" | "point" | "acceleration" | "from" | "to" | "min" | "max", _) => {
+                Some(example_vector(name, 2).1)
+            }
+            _ => example_value(name),
+        };
+        return match example {
+            Some(example) => format!("{message}, e.g. \"{name}\": {example}"),
+            None => message.to_string(),
+        };
+    }
+    if let Some((_, n)) =
+        message.strip_prefix("invalid length ").and_then(|r| r.split_once(", expected an array of length "))
+    {
+        if let Ok(n) = n.parse::<usize>() {
+            let (what, example) = example_vector(key, n);
+            let got = here.map(|v| format!(", got {}", v.to_string().replace(',', ", "))).unwrap_or_default();
+            return format!("{message} ({what}), e.g. {example}{got}");
+        }
+    }
+    let Some((head, expected)) = message.split_once(", expected ") else { return message.to_string() };
+    if let Some(Names { names, alone }) = names {
+        let listed: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
+        let (words, example) = if alone {
+            ("the name of a kind in quotes", format!("\"{}\"", names[0]))
+        } else {
+            ("an object with one key naming its kind", format!("{{\"{}\": ...}}", names[0]))
+        };
+        return format!("{head}, expected {words}, one of {}, e.g. {example}", listed.join(", "));
+    }
+    if !(head.starts_with("invalid type: ") || head.starts_with("invalid value: ")) {
+        return message.to_string();
+    }
+    let (words, fallback) = match expected {
+        "f64" | "f32" => ("a number", "1.0"),
+        "usize" | "u64" | "u32" | "u16" | "u8" => ("a whole number ≥ 0", "4"),
+        "a boolean" => ("true or false", "true"),
+        "a string" | "path string" => ("a name in quotes", "\"beam\""),
+        _ => return message.to_string(),
+    };
+    let unquoted = match here {
+        Some(Value::String(s)) if words != "a name in quotes" && s.trim().parse::<f64>().is_ok() => Some(s.trim()),
+        _ => None,
+    };
+    match unquoted {
+        Some(number) => format!("{head}, expected {words}, e.g. {number} (without the quotes)"),
+        None => format!("{head}, expected {words}, e.g. {}", example_value(key).unwrap_or(fallback)),
+    }
 }
 
 /// Where inside `node` the value that `message` complains about lies: the first (in the
@@ -503,10 +619,15 @@ mod tests {
     fn errors_inside_tagged_enums_name_the_value() {
         assert_eq!(
             err(r#"{"items": [{"type": "a", "name": "x", "value": "1000"}]}"#),
-            "items[0].value: invalid type: string \"1000\", expected f64"
+            "items[0].value: invalid type: string \"1000\", expected a number, e.g. 1000 (without the quotes)"
         );
         assert!(err(r#"{"items": [{"type": "b", "point": [1], "zz": 1}]}"#).starts_with("items[0].zz: unknown field"));
-        assert!(err(r#"{"items": [{"type": "c"}]}"#).starts_with("items[0].type: unknown variant `c`"));
+        assert!(err(r#"{"items": [{"type": "c"}]}"#).starts_with("items[0].type: unknown value `c`"));
+        // a number where a name is expected: the names, asked of serde, with an example
+        assert_eq!(
+            err(r#"{"items": [{"type": 3}]}"#),
+            "items[0].type: invalid type: integer `3`, expected the name of a kind in quotes, one of `a`, `b`, e.g. \"a\""
+        );
         // two candidates: the object's path is kept
         assert!(err(r#"{"items": [{"type": "b", "point": ["1", "1"]}]}"#).starts_with("items[0]: invalid type"));
         assert_eq!(err(r#"{"items": [], "size": [1, 2, 3]}"#), "size: invalid length 3, expected fewer entries");

@@ -11,9 +11,12 @@ use loam::interrupt::Interrupt;
 use loam::run::{default_out_dir, run, RunEnd, RunOptions};
 use loam::simulation::Simulation;
 
+/// `loam --version`: the version and the cargo features of this build (build.rs).
+const VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), " (features: ", env!("LOAM_BUILD_FEATURES"), ")");
+
 /// Implicit MPM and Lagrangian FEM for large-deformation solid and soil mechanics.
 #[derive(Parser)]
-#[command(name = "loam", version, about)]
+#[command(name = "loam", version = VERSION, about)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -49,6 +52,10 @@ enum Command {
         /// DIR/checkpoints (results in DIR continue without duplicate or missing rows).
         #[arg(long, value_name = "CHECKPOINT", num_args = 0..=1)]
         resume: Option<Option<PathBuf>>,
+        /// Print every Newton iteration on stderr: time, step, iteration, residual norm (per
+        /// block of a coupled system), correction norms, line-search backtracks.
+        #[arg(long)]
+        trace_newton: bool,
     },
     /// Check a case file (parse, parameters, mesh, regions) without running it.
     Check {
@@ -245,7 +252,7 @@ fn main() -> ExitCode {
             }
             Err(e) => bad_input(&e),
         },
-        Command::Run { case, out, threads, quiet, resume } => {
+        Command::Run { case, out, threads, quiet, resume, trace_newton } => {
             if let Err(problem) = check_threads(threads) {
                 eprintln!("error: --threads: {problem}");
                 return ExitCode::from(2);
@@ -254,7 +261,7 @@ fn main() -> ExitCode {
             // run there, without waking a worker and sleeping on every call (which cost about
             // 1 ms per step at 448 material points)
             match rayon::ThreadPoolBuilder::new().num_threads(threads.unwrap_or(0)).build() {
-                Ok(pool) => pool.install(|| run_case(&case, out, quiet, resume)),
+                Ok(pool) => pool.install(|| run_case(&case, out, quiet, resume, trace_newton)),
                 Err(e) => {
                     eprintln!("error: thread pool: {e}");
                     ExitCode::from(1)
@@ -388,9 +395,20 @@ fn interrupt_handler() -> Option<Arc<Interrupt>> {
 }
 
 /// `loam run`: builds the case (and restores a checkpoint with `--resume`), runs it with
-/// output to `out` and prints the summary line.
-fn run_case(case: &std::path::Path, out: Option<PathBuf>, quiet: bool, resume: Option<Option<PathBuf>>) -> ExitCode {
-    let mut sim = match Simulation::from_file(case) {
+/// output to `out` (every Newton iteration on stderr with `trace_newton`) and prints the
+/// summary line.
+fn run_case(
+    case: &std::path::Path,
+    out: Option<PathBuf>,
+    quiet: bool,
+    resume: Option<Option<PathBuf>>,
+    trace_newton: bool,
+) -> ExitCode {
+    let built = loam::case::Case::load(case).and_then(|mut c| {
+        c.solver.trace = trace_newton;
+        Simulation::new(c)
+    });
+    let mut sim = match built {
         Ok(s) => s,
         Err(e) => return bad_input(&e),
     };

@@ -451,3 +451,167 @@ fn smooth_basis_where_it_cannot_act_is_refused_naming_the_key() {
         &["domains[0].quadrature"],
     );
 }
+
+/// Issue 28: `loam --version` names the version and the build's cargo features.
+#[test]
+fn version_names_the_features() {
+    let out = loam().arg("--version").output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout).trim().to_string();
+    println!("{text}");
+    assert!(text.starts_with(&format!("loam {} (features: ", env!("CARGO_PKG_VERSION"))), "{text}");
+    assert!(text.ends_with(')'), "{text}");
+}
+
+/// Issue 28: `loam run --trace-newton` prints every Newton iteration on stderr (the former
+/// environment variable LOAM_NEWTON_TRACE, now a flag); without it nothing is printed.
+#[test]
+fn trace_newton_prints_every_iteration() {
+    let case = write_case("trace", &bundled("cantilever_fem", |_| {}));
+    let run = |trace: bool| {
+        let mut cmd = loam();
+        cmd.arg("run").arg(&case).arg("--quiet").arg("--out").arg(case.with_file_name("out"));
+        if trace {
+            cmd.arg("--trace-newton");
+        }
+        let out = cmd.output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let traced = run(true);
+    let lines: Vec<&str> = traced.lines().filter(|l| l.starts_with("newton t=")).collect();
+    println!("{} Newton lines, first: {}", lines.len(), lines.first().copied().unwrap_or(""));
+    assert!(lines.len() >= 2, "{traced}");
+    assert!(lines[0].contains(" it=0 ") && lines[0].contains("|r|="), "{}", lines[0]);
+    assert!(!run(false).contains("newton t="));
+    let help = loam().args(["run", "--help"]).output().unwrap();
+    assert!(String::from_utf8_lossy(&help.stdout).contains("--trace-newton"));
+}
+
+/// Issue 28: the solver settings that were environment variables (LOAM_CHOLESKY,
+/// LOAM_MPM_PATTERN_RINGS) are case keys: accepted, and a bad value refused in one line
+/// naming its JSON path and what is expected.
+#[test]
+fn former_environment_knobs_are_case_keys() {
+    use serde_json::json;
+    let mpm = bundled("cantilever_mpm", |j| {
+        j["solver"]["cholesky_factorisation"] = json!("simplicial");
+        j["solver"]["mpm_pattern_rings"] = json!(0);
+    });
+    let (code, msg) = check_file(&write_case("knobs-ok", &mpm));
+    assert_eq!(code, 0, "{msg}");
+    expect_bad(
+        "unknown factorisation",
+        check_edited("knobs-chol", |j| j["solver"]["cholesky_factorisation"] = json!("multifrontal")),
+        &["solver.cholesky_factorisation", "supernodal", "simplicial"],
+    );
+    expect_bad(
+        "too many rings",
+        check_edited("knobs-rings", |j| j["solver"]["mpm_pattern_rings"] = json!(1000)),
+        &["solver.mpm_pattern_rings", "at most 100"],
+    );
+    expect_bad(
+        "negative rings",
+        check_edited("knobs-rings-neg", |j| j["solver"]["mpm_pattern_rings"] = json!(-1)),
+        &["solver.mpm_pattern_rings"],
+    );
+    // the same MPM run with the pattern rebuilt at every change gives the same answer
+    let out = |rings: u64| {
+        let case = write_case(
+            &format!("knobs-run-{rings}"),
+            &bundled("cantilever_mpm", |j| j["solver"]["mpm_pattern_rings"] = json!(rings)),
+        );
+        let (code, msg) = run_file(&case);
+        assert_eq!(code, 0, "{msg}");
+        last_monitor(&case.with_file_name("out").join("monitors.csv"), "tip_uy")
+    };
+    let (a, b) = (out(0), out(1));
+    assert!((a - b).abs() <= 1e-9 * a.abs(), "{a} vs {b}");
+}
+
+/// Issue 28 item C: the ten commonest mistakes in a case file (edits of the bundled
+/// cantilevers) are refused in one line (exit 2) that names the JSON path, says what is
+/// expected and gives an example value or the name that was probably meant.
+#[test]
+fn common_mistakes_say_what_is_expected_with_an_example() {
+    use serde_json::json;
+    let mpm = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        check_file(&write_case(name, &bundled("cantilever_mpm", |j| edit(j))))
+    };
+    // 1. wrong array length: a grid's cells (checked by the model builder) and a mesh's
+    //    cells (a fixed-size array, refused by the parser)
+    expect_bad(
+        "grid cells of the wrong length",
+        mpm("mistake-grid-cells", &|j| j["domains"][0]["grid"]["cells"] = json!([64])),
+        &[
+            "domains[0].grid.cells: expected 2 entries",
+            "whole numbers of cells per direction",
+            "e.g. [64, 24]",
+            "got [64]",
+        ],
+    );
+    expect_bad(
+        "mesh cells of the wrong length",
+        check_edited("mistake-mesh-cells", |j| j["domains"][0]["mesh"]["rectangle"]["cells"] = json!([56])),
+        &["domains[0].mesh.rectangle.cells:", "expected an array of length 2", "e.g. [64, 24]", "got [56]"],
+    );
+    // 2. unknown law name
+    expect_bad(
+        "unknown law",
+        check_edited("mistake-law", |j| j["materials"]["beam"]["law"] = json!("neohookean")),
+        &["materials.beam.law:", "unknown value `neohookean`", "did you mean \"neo_hookean\"?", "expected one of"],
+    );
+    // 3. misspelt key
+    expect_bad(
+        "misspelt key",
+        check_edited("mistake-key", |j| {
+            let e = j["materials"]["beam"].as_object_mut().unwrap().remove("young_modulus").unwrap();
+            j["materials"]["beam"]["youngs_modulus"] = e;
+        }),
+        &["materials.beam.youngs_modulus:", "did you mean \"young_modulus\"?", "expected one of `density`"],
+    );
+    // 4. missing material property
+    expect_bad(
+        "missing property",
+        check_edited("mistake-missing", |j| {
+            j["materials"]["beam"].as_object_mut().unwrap().remove("poisson_ratio");
+        }),
+        &["materials.beam:", "missing field `poisson_ratio`", "e.g. \"poisson_ratio\": 0.3"],
+    );
+    // 5. a region that selects nothing
+    expect_bad(
+        "empty region",
+        mpm("mistake-region", &|j| j["regions"]["clamp"] = json!({"x": -1.0})),
+        &["regions.clamp:", "selects no node", "x in [0, 8], y in [-1.5, 1.5]", "e.g. {\"x\": 0}"],
+    );
+    // 6. wrong element name
+    expect_bad(
+        "wrong element",
+        mpm("mistake-element", &|j| j["domains"][0]["grid"]["element"] = json!("quad")),
+        &["domains[0].grid.element:", "did you mean \"quad4\"?", "expected one of `tri3`, `quad4`"],
+    );
+    // 7. negative time step
+    expect_bad(
+        "negative time step",
+        check_edited("mistake-dt", |j| j["analysis"]["time_step"] = json!(-1.0)),
+        &["analysis.time_step:", "must be > 0", "e.g. 0.01", "got -1"],
+    );
+    // 8. unknown monitor type
+    expect_bad(
+        "unknown monitor type",
+        check_edited("mistake-monitor", |j| j["monitors"][0]["type"] = json!("displacment")),
+        &["monitors[0].type:", "did you mean \"displacement\"?", "expected one of"],
+    );
+    // 9. a string where a number is expected
+    expect_bad(
+        "string for a number",
+        check_edited("mistake-string", |j| j["materials"]["beam"]["density"] = json!("1000")),
+        &["materials.beam.density:", "expected a number", "e.g. 1000 (without the quotes)"],
+    );
+    // 10. a boundary condition naming an unknown region
+    expect_bad(
+        "unknown region",
+        check_edited("mistake-bc-region", |j| j["boundary_conditions"][0]["region"] = json!("clmap")),
+        &["boundary_conditions[0].region:", "no region named 'clmap'", "did you mean \"clamp\"?", "expected one of"],
+    );
+}

@@ -32,7 +32,7 @@ use crate::convergence::BlockNorms;
 use crate::dofs::{Block, DofMap, DofTie, NodeRole, CONSTRAINED};
 use crate::domain::{AssemblyInput, Domain, DomainError};
 use crate::friction::NodalFriction;
-use crate::linear_solver::{LinearSolver, LinearSolverError, LinearSolverKind, SolverTimings};
+use crate::linear_solver::{CholeskyFactorisation, LinearSolver, LinearSolverError, LinearSolverKind, SolverTimings};
 use crate::slip::{Slip, SlipRotations};
 
 /// What decides the equations of a model: nodes, roles, constraints and ties.
@@ -55,6 +55,8 @@ pub struct SystemLayout<'a> {
     pub pressure_scales: &'a [f64],
     /// Linear solver.
     pub solver: LinearSolverKind,
+    /// How its Cholesky-type factorisations are organised.
+    pub cholesky: CholeskyFactorisation,
 }
 
 /// The global system of one sparsity pattern (see the module doc).
@@ -125,7 +127,7 @@ impl Assembler {
                 }
             }
         }
-        let mut solver = LinearSolver::new(system.solver);
+        let mut solver = LinearSolver::new(system.solver, system.cholesky);
         if !scale.is_empty() {
             let mut signs = vec![1i8; n_eq];
             for (g, &e) in dofs.equations().iter().enumerate() {

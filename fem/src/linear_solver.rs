@@ -88,6 +88,33 @@ pub enum LinearSolverKind {
     SymmetricPartGmres,
 }
 
+/// How the Cholesky-type factorisations (`L Lᵀ`, `L D Lᵀ`, `L B Lᵀ`) are organised: the
+/// case file's `solver.cholesky_factorisation`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CholeskyFactorisation {
+    /// Supernodal (dense blocks of columns with the same structure): 1.4–2.3× faster than
+    /// the simplicial one on these 2D FEM/MPM matrices from about 1 000 equations on
+    /// (docs/performance.md).
+    #[default]
+    Supernodal,
+    /// Simplicial (column by column).
+    Simplicial,
+    /// faer's flop-ratio heuristic, which picks the simplicial one for these matrices.
+    Auto,
+}
+
+impl CholeskyFactorisation {
+    /// faer's threshold that forces (or leaves to its heuristic) this choice.
+    fn threshold(self) -> SupernodalThreshold {
+        match self {
+            CholeskyFactorisation::Supernodal => SupernodalThreshold::FORCE_SUPERNODAL,
+            CholeskyFactorisation::Simplicial => SupernodalThreshold::FORCE_SIMPLICIAL,
+            CholeskyFactorisation::Auto => SupernodalThreshold::AUTO,
+        }
+    }
+}
+
 /// Failure of the linear solve.
 #[derive(Debug, Clone, thiserror::Error, PartialEq)]
 pub enum LinearSolverError {
@@ -204,6 +231,7 @@ pub struct SolverMemory {
 #[derive(Debug)]
 pub struct LinearSolver {
     kind: LinearSolverKind,
+    factorisation: CholeskyFactorisation,
     lu: Option<LuState>,
     llt: Option<CholeskyState>,
     ldlt: Option<LdltState>,
@@ -226,10 +254,12 @@ pub struct LinearSolver {
 }
 
 impl LinearSolver {
-    /// A solver of the given kind; symbolic analyses happen at the first solve.
-    pub fn new(kind: LinearSolverKind) -> Self {
+    /// A solver of the given kind whose Cholesky-type factorisations are organised as
+    /// `factorisation`; symbolic analyses happen at the first solve.
+    pub fn new(kind: LinearSolverKind, factorisation: CholeskyFactorisation) -> Self {
         Self {
             kind,
+            factorisation,
             lu: None,
             llt: None,
             ldlt: None,
@@ -422,7 +452,7 @@ impl LinearSolver {
         let par = faer::get_global_parallelism();
         if self.ldlt.is_none() {
             let t = Instant::now();
-            let symbolic = symbolic_cholesky(&a)?;
+            let symbolic = symbolic_cholesky(&a, self.factorisation)?;
             let scratch = buffer(StackReq::any_of(&[
                 symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
                 symbolic.factorize_numeric_intranode_lblt_scratch::<f64>(par, Default::default()),
@@ -540,7 +570,7 @@ impl LinearSolver {
         let par = faer::get_global_parallelism();
         if self.llt.is_none() {
             let t = Instant::now();
-            let symbolic = symbolic_cholesky(&a)?;
+            let symbolic = symbolic_cholesky(&a, self.factorisation)?;
             let scratch = buffer(StackReq::any_of(&[
                 symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
                 symbolic.solve_in_place_scratch::<f64>(1, par),
@@ -575,7 +605,7 @@ pub struct CholeskyFactor {
 impl CholeskyFactor {
     /// Factorises the matrix with nonzeros `values` on `pattern` (its lower triangle is read).
     pub fn new(pattern: &AssemblyPattern, values: &[f64]) -> Result<Self, LinearSolverError> {
-        let mut solver = LinearSolver::new(LinearSolverKind::Cholesky);
+        let mut solver = LinearSolver::new(LinearSolverKind::Cholesky, CholeskyFactorisation::default());
         if pattern.num_equations() == 0 {
             return Err(LinearSolverError::Factorisation("no equation".into()));
         }
@@ -599,21 +629,13 @@ impl std::fmt::Debug for CholeskyFactor {
 
 /// The symbolic Cholesky analysis (AMD ordering, elimination tree, supernodes) of the
 /// lower triangle of `a`, shared by the `L Lᵀ`, `L D Lᵀ` and Bunch–Kaufman factorisations.
-fn symbolic_cholesky(a: &SparseColMatRef<'_, usize, f64>) -> Result<SymbolicCholesky<usize>, LinearSolverError> {
-    let params = CholeskySymbolicParams { supernodal_flop_ratio_threshold: cholesky_threshold(), ..Default::default() };
+fn symbolic_cholesky(
+    a: &SparseColMatRef<'_, usize, f64>,
+    factorisation: CholeskyFactorisation,
+) -> Result<SymbolicCholesky<usize>, LinearSolverError> {
+    let params =
+        CholeskySymbolicParams { supernodal_flop_ratio_threshold: factorisation.threshold(), ..Default::default() };
     factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), params).map_err(factorisation_error)
-}
-
-/// Supernodal Cholesky unless `LOAM_CHOLESKY=simplicial` (or `auto`: faer's flop-ratio
-/// heuristic). faer's heuristic picks the simplicial factorisation for these 2D FEM/MPM
-/// matrices, which was 1.4–2.3× slower than the supernodal one from about 1 000
-/// equations on (docs/performance.md).
-fn cholesky_threshold() -> SupernodalThreshold {
-    match std::env::var("LOAM_CHOLESKY").as_deref() {
-        Ok("simplicial") => SupernodalThreshold::FORCE_SIMPLICIAL,
-        Ok("auto") => SupernodalThreshold::AUTO,
-        _ => SupernodalThreshold::FORCE_SUPERNODAL,
-    }
 }
 
 fn norm2(x: &[f64]) -> f64 {

@@ -398,6 +398,7 @@ impl Model {
             pressure_nodes: &self.pressure_nodes,
             pressure_scales: &self.pressure_scales,
             solver: self.settings.linear_solver,
+            cholesky: self.settings.cholesky_factorisation,
         };
         let mut assembler = Assembler::new(&system, &self.domains);
         if let Some(memory) = self.restored_solver_memory.take() {

@@ -12,7 +12,8 @@
 //!    `u ← u + δu`.
 //!
 //! The residual and correction norms of every iteration, per block of the monolithic system,
-//! go into the [`StepReport`]; `LOAM_NEWTON_TRACE=1` prints them on stderr.
+//! go into the [`StepReport`]; with [`NewtonSettings::trace`] (`loam run --trace-newton`)
+//! every iteration also prints them on stderr.
 
 use std::time::Instant;
 
@@ -21,7 +22,7 @@ use serde::Deserialize;
 use crate::assembler::Assembler;
 use crate::convergence::{Convergence, ConvergenceCriterion};
 use crate::domain::{AssemblyInput, Domain, NodalState};
-use crate::linear_solver::LinearSolverKind;
+use crate::linear_solver::{CholeskyFactorisation, LinearSolverKind};
 use crate::model::{StepError, StepReport};
 use crate::scheme::TimeScheme;
 
@@ -48,7 +49,22 @@ pub struct NewtonSettings {
     pub line_search: bool,
     /// Halvings tried per iteration by the line search (default 4).
     pub line_search_max_cuts: u32,
+    /// How the Cholesky-type factorisations (`L Lᵀ`, `L D Lᵀ`, `L B Lᵀ`) are organised
+    /// (default supernodal).
+    pub cholesky_factorisation: CholeskyFactorisation,
+    /// Rings of inactive cells an MPM grid keeps in the sparsity pattern around its active
+    /// ones (default [`DEFAULT_MPM_PATTERN_RINGS`]): the pattern, its symbolic factorisation
+    /// included, is rebuilt only when the material leaves them; 0 rebuilds it at every
+    /// change of the active cells.
+    pub mpm_pattern_rings: usize,
+    /// Print every iteration's residual and correction norms on stderr (not a case key:
+    /// `loam run --trace-newton` sets it).
+    #[serde(skip)]
+    pub trace: bool,
 }
+
+/// Default of [`NewtonSettings::mpm_pattern_rings`].
+pub const DEFAULT_MPM_PATTERN_RINGS: usize = 1;
 
 impl Default for NewtonSettings {
     fn default() -> Self {
@@ -62,6 +78,9 @@ impl Default for NewtonSettings {
             linear_solver: LinearSolverKind::Auto,
             line_search: false,
             line_search_max_cuts: 4,
+            cholesky_factorisation: CholeskyFactorisation::Supernodal,
+            mpm_pattern_rings: DEFAULT_MPM_PATTERN_RINGS,
+            trace: false,
         }
     }
 }
@@ -189,7 +208,7 @@ impl NewtonStrategy {
             };
             report.residuals.push(r_norm);
             report.block_residuals.push(problem.assembler.block_norms());
-            if trace_newton() {
+            if settings.trace {
                 let b = problem.assembler.block_norms();
                 eprintln!(
                     "newton t={:.6e} dt={:.3e} it={it} |r|={r_norm:.3e} (soil {:.3e} interface {:.3e} structure {:.3e}) |du|={last_du:.3e} |Du|={:.3e} backtracks={backtracks} tangent={with_tangent}",
@@ -248,10 +267,4 @@ impl NewtonStrategy {
         report.timings.assembly += t.elapsed().as_secs_f64();
         Ok(r)
     }
-}
-
-/// Whether `LOAM_NEWTON_TRACE` asks for every Newton iteration's norms on stderr.
-fn trace_newton() -> bool {
-    static TRACE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *TRACE.get_or_init(|| std::env::var_os("LOAM_NEWTON_TRACE").is_some())
 }

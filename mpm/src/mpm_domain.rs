@@ -35,6 +35,7 @@ use loam_fem::domain::{
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
 use loam_fem::kernel::KernelContext;
+use loam_fem::newton::DEFAULT_MPM_PATTERN_RINGS;
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 
@@ -50,12 +51,6 @@ const NONE: u8 = u8::MAX;
 
 /// Largest element block (hex8 in 3D, u–p): 32 DOFs.
 const MAX_BLOCK: usize = loam_fem::mixed_kernel::MAX_MIXED_DOFS;
-
-/// Rings of inactive cells kept in the sparsity pattern around the active ones (default 1;
-/// `LOAM_MPM_PATTERN_RINGS=0` rebuilds the pattern at every change of the active set).
-fn pattern_rings() -> usize {
-    std::env::var("LOAM_MPM_PATTERN_RINGS").ok().and_then(|v| v.parse().ok()).unwrap_or(1)
-}
 
 /// Young's modulus `E = μ (3λ + 2μ)/(λ + μ)` of small-strain constants `(λ, μ)` (`3μ` for
 /// an incompressible material, `λ = ∞`).
@@ -145,7 +140,7 @@ impl MpmDomain {
             attachment: None,
             start: vec![[0.0; 3]; nodes],
             sums: GridSums::default(),
-            blocks: CellBlocks { rings: pattern_rings(), ..Default::default() },
+            blocks: CellBlocks { rings: DEFAULT_MPM_PATTERN_RINGS, ..Default::default() },
             pressure_dofs: None,
             quadrature: PointQuadrature::MaterialPoints,
             ghost: None,
@@ -165,6 +160,13 @@ impl MpmDomain {
     /// ([`crate::ghost_penalty`]; 0 switches it off).
     pub fn set_ghost_penalty(&mut self, alpha: f64) {
         self.ghost = (alpha > 0.0).then(|| GhostPenalty::new(alpha));
+    }
+
+    /// Rings of inactive cells kept in the sparsity pattern around the active ones (default
+    /// [`DEFAULT_MPM_PATTERN_RINGS`], the case file's `solver.mpm_pattern_rings`; 0 rebuilds
+    /// the pattern at every change of the active cells).
+    pub fn set_pattern_rings(&mut self, rings: usize) {
+        self.blocks.rings = rings;
     }
 
     /// How the grid's cells integrate over their points ([`crate::quadrature`]).

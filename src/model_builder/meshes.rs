@@ -27,7 +27,7 @@ use loam_mpm::quadrature::PointQuadrature;
 use nalgebra::Matrix3;
 
 use super::regions::{line_tolerance, select_region};
-use super::{check_len, check_positive};
+use super::{check_len, check_positive, unknown_name};
 use crate::case::{
     AnalysisType, BodySpec, Case, CaseError, DomainKind, ElementFormulation, GridSpec, InitialStressSpec,
     InitialVelocity, MassMatrix, MeshSpec, Quadrature, DEFAULT_GHOST_PENALTY,
@@ -609,7 +609,7 @@ pub(super) fn discretise(
         if !laws.contains_key(d.material.as_str()) {
             return Err(CaseError::new(
                 format!("domains[{k}].material"),
-                format!("no material named '{}' in materials", d.material),
+                unknown_name("material", &d.material, "materials", laws.keys().copied()),
             ));
         }
         check_keys(case, k)?;
@@ -739,7 +739,10 @@ fn couple_grids(
             ));
         };
         let region_spec = case.regions.get(&spec.region).ok_or_else(|| {
-            CaseError::new(format!("{loc}.region"), format!("no region named '{}' in regions", spec.region))
+            CaseError::new(
+                format!("{loc}.region"),
+                unknown_name("region", &spec.region, "regions", case.regions.keys().map(String::as_str)),
+            )
         })?;
         let tol = line_tolerance(&mesh.coords);
         let nodes =
@@ -1019,6 +1022,7 @@ fn grid_domain(
                     Quadrature::FilledCells => PointQuadrature::FilledCells,
                 });
                 first_domain.set_ghost_penalty(alpha);
+                first_domain.set_pattern_rings(case.solver.mpm_pattern_rings);
                 domain = Some(first_domain);
             }
         }

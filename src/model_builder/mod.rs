@@ -116,7 +116,15 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
 fn materials(case: &Case) -> Result<BTreeMap<&str, Arc<dyn ConstitutiveLaw>>, CaseError> {
     let mut laws: BTreeMap<&str, Arc<dyn ConstitutiveLaw>> = BTreeMap::new();
     for (name, spec) in &case.materials {
-        let law = spec.build().map_err(|e| CaseError::new(format!("materials.{name}.{}", e.parameter), e.problem))?;
+        let law = spec.build().map_err(|e| {
+            // a sign error gets an example of the parameter, as check_positive gives
+            let example = crate::hints::example_value(e.parameter);
+            let problem = match (e.problem.strip_prefix("must be > 0, got "), example) {
+                (Some(got), Some(example)) => format!("must be > 0, e.g. {example}, got {got}"),
+                _ => e.problem,
+            };
+            CaseError::new(format!("materials.{name}.{}", e.parameter), problem)
+        })?;
         laws.insert(name, Arc::from(law));
     }
     Ok(laws)
@@ -190,20 +198,51 @@ fn within(n: f64, limit: usize) -> bool {
     n.is_finite() && n <= limit as f64
 }
 
+/// The last key of the JSON path `location` (`cells` of `domains[0].grid.cells`).
+fn last_key(location: &str) -> &str {
+    let key = location.rsplit('.').next().unwrap_or(location);
+    key.split('[').next().unwrap_or(key)
+}
+
+/// `value` must be finite and > 0; the message gives an example where one is known
+/// ([`crate::hints::example_value`]).
 fn check_positive(location: &str, value: f64) -> Result<(), CaseError> {
     if value > 0.0 && value.is_finite() {
         Ok(())
     } else {
-        Err(CaseError::new(location, format!("must be > 0, got {value}")))
+        let example =
+            crate::hints::example_value(last_key(location)).map(|e| format!(", e.g. {e}")).unwrap_or_default();
+        Err(CaseError::new(location, format!("must be > 0{example}, got {value}")))
     }
 }
 
-fn check_len(location: &str, v: &[impl Sized], dim: usize) -> Result<(), CaseError> {
+/// `v` must have one entry per coordinate (`dim`); the message says what the entries are,
+/// gives an example and the value found: `expected 2 entries (whole numbers of cells per
+/// direction, one per coordinate of this 2D model), e.g. [64, 24], got [64]`.
+fn check_len<T: serde::Serialize>(location: &str, v: &[T], dim: usize) -> Result<(), CaseError> {
     if v.len() == dim {
         Ok(())
     } else {
-        Err(CaseError::new(location, format!("needs {dim} components (one per coordinate), got {}", v.len())))
+        let (what, example) = crate::hints::example_vector(last_key(location), dim);
+        let got = serde_json::to_string(v).unwrap_or_default().replace(',', ", ");
+        Err(CaseError::new(
+            location,
+            format!(
+                "expected {dim} entries ({what}, one per coordinate of this {dim}D model), e.g. {example}, got {got}"
+            ),
+        ))
     }
+}
+
+/// The message for a name that `names` (the keys of `section`, e.g. `regions`) lacks: the
+/// nearest one if it looks misspelt, and those that exist.
+fn unknown_name<'a>(what: &str, name: &str, section: &str, names: impl Iterator<Item = &'a str> + Clone) -> String {
+    let listed: Vec<String> = names.clone().map(|n| format!("\"{n}\"")).collect();
+    if listed.is_empty() {
+        return format!("no {what} named '{name}': the case has no {section}");
+    }
+    let hint = crate::hints::did_you_mean(name, names);
+    format!("no {what} named '{name}' in {section}; {hint}expected one of {}", listed.join(", "))
 }
 
 fn component_index(location: &str, c: Component, dim: usize) -> Result<Option<usize>, CaseError> {

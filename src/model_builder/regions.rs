@@ -4,7 +4,7 @@ use std::collections::BTreeMap;
 
 use loam_fem::model::Model;
 
-use super::check_len;
+use super::{check_len, unknown_name};
 use crate::case::{Case, CaseError, PointBox, RegionSpec};
 
 /// Every region of the case, selected among `coords` (the global nodes).
@@ -40,7 +40,9 @@ pub(super) fn region<'a>(
     loc: String,
     name: &str,
 ) -> Result<&'a Vec<usize>, CaseError> {
-    regions.get(name).ok_or_else(|| CaseError::new(loc, format!("no region named '{name}' in regions")))
+    regions
+        .get(name)
+        .ok_or_else(|| CaseError::new(loc, unknown_name("region", name, "regions", regions.keys().map(String::as_str))))
 }
 
 /// Distance from `c` to the segment `[a, b]` (first `dim` coordinates).
@@ -103,9 +105,41 @@ pub(super) fn select_region(
         RegionSpec::All(false) => Vec::new(),
     };
     if nodes.is_empty() {
-        return Err(CaseError::new(loc, "selects no node (check the coordinates against the mesh)"));
+        return Err(CaseError::new(loc, format!("selects no node: {}", where_nodes_are(spec, coords, dim))));
     }
     Ok(nodes)
+}
+
+/// Where the nodes are, for a selection that found none: the span of their coordinates, and
+/// for a coordinate plane (`{"x": v}`) the nearest coordinate a node has, as an example.
+fn where_nodes_are(spec: &RegionSpec, coords: &[[f64; 3]], dim: usize) -> String {
+    let axes = ["x", "y", "z"];
+    let span: Vec<String> = (0..dim)
+        .map(|d| {
+            let (lo, hi) =
+                coords.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), c| (l.min(c[d]), h.max(c[d])));
+            format!("{} in [{lo}, {hi}]", axes[d])
+        })
+        .collect();
+    let plane = match spec {
+        RegionSpec::X(v) => Some((0, *v)),
+        RegionSpec::Y(v) => Some((1, *v)),
+        RegionSpec::Z(v) => Some((2, *v)),
+        _ => None,
+    };
+    let nearest = plane.and_then(|(d, v)| {
+        let c = coords.iter().map(|c| c[d]).min_by(|a, b| (a - v).abs().total_cmp(&(b - v).abs()))?;
+        Some((axes[d], v, c))
+    });
+    match nearest {
+        Some((axis, v, c)) => {
+            format!(
+                "no node has {axis} = {v} (the nodes lie at {}), e.g. {{\"{axis}\": {c}}} (the nearest)",
+                span.join(", ")
+            )
+        }
+        None => format!("the nodes lie at {}; check the coordinates against the mesh", span.join(", ")),
+    }
 }
 
 /// Material points (domain index, id) selected at `loc` by `point` (the nearest one) or

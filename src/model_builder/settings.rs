@@ -13,11 +13,22 @@ pub(super) const MAX_STEP_CUTS: u32 = 50;
 /// not converged in a thousand iterations will not.
 pub(super) const MAX_NEWTON_ITERATIONS: usize = 1000;
 
+/// Most rings of inactive cells in an MPM grid's sparsity pattern
+/// (`solver.mpm_pattern_rings`): each ring is a pass over the grid's cells at every rebuild
+/// of the pattern, and a few rings already hold a flow for many steps.
+pub(super) const MAX_MPM_PATTERN_RINGS: usize = 100;
+
 /// Checks the case's scalar settings and returns its time scheme.
 pub(super) fn check(case: &Case) -> Result<TimeScheme, CaseError> {
     check_positive("thickness", case.thickness)?;
-    check_positive("analysis.time_step", case.analysis.time_step)?;
     check_positive("analysis.end_time", case.analysis.end_time)?;
+    let dt = case.analysis.time_step;
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(CaseError::new(
+            "analysis.time_step",
+            format!("must be > 0 (s), e.g. {} (end_time / 100), got {dt}", case.analysis.end_time / 100.0),
+        ));
+    }
     if case.analysis.time_step > case.analysis.end_time * (1.0 + 1e-12) {
         return Err(CaseError::new("analysis.time_step", "is longer than analysis.end_time"));
     }
@@ -44,6 +55,15 @@ pub(super) fn check(case: &Case) -> Result<TimeScheme, CaseError> {
         return Err(CaseError::new(
             "solver.max_iterations",
             format!("must be at most {MAX_NEWTON_ITERATIONS}, got {}", case.solver.max_iterations),
+        ));
+    }
+    if case.solver.mpm_pattern_rings > MAX_MPM_PATTERN_RINGS {
+        return Err(CaseError::new(
+            "solver.mpm_pattern_rings",
+            format!(
+                "must be at most {MAX_MPM_PATTERN_RINGS} (rings of inactive grid cells, e.g. 1), got {}",
+                case.solver.mpm_pattern_rings
+            ),
         ));
     }
     check_limits(case)?;

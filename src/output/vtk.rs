@@ -335,25 +335,19 @@ mod tests {
     }
 
     /// meshio (what Python users read results with) reads both files with the same numbers.
-    /// Needs a Python with meshio: `LOAM_PYTHON`, or the `.venv` that `scripts/test.sh`
-    /// creates, which runs this test explicitly once the environment is set up; ignored in a
-    /// plain `cargo test`, so that it shows as not run rather than passing without Python.
+    /// Needs the `.venv` with meshio that `scripts/test.sh` creates, which runs this test
+    /// explicitly once the environment is set up; ignored in a plain `cargo test`, so that
+    /// it shows as not run rather than passing without Python.
     #[test]
     #[ignore = "needs Python with meshio: run by scripts/test.sh after it sets up .venv"]
     fn meshio_reads_mesh_and_cloud() {
-        let python = std::env::var_os("LOAM_PYTHON")
-            .map(std::path::PathBuf::from)
-            .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
+        let python = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python");
         let available = std::process::Command::new(&python)
             .args(["-c", "import meshio"])
             .output()
             .map(|o| o.status.success())
             .unwrap_or(false);
-        assert!(
-            available,
-            "{} cannot import meshio: run scripts/test.sh (it sets up .venv) or set LOAM_PYTHON",
-            python.display()
-        );
+        assert!(available, "{} cannot import meshio: run scripts/test.sh (it sets up .venv)", python.display());
         let dir = temp_dir("meshio");
         let m = two_quads();
         write_two_quads(&dir.join("mesh.vtu"), &m).unwrap();
