@@ -7,6 +7,7 @@
 
 pub mod case;
 pub mod checkpoint;
+pub mod cli;
 pub mod fmu_package;
 pub mod hints;
 pub mod input;

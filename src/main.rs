@@ -1,15 +1,11 @@
-//! `loam`: run, check and explore Loam case files.
+//! `loam`: run, check and explore Loam case files. This file parses the command line; the
+//! commands themselves are [`loam::cli`].
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::Arc;
 
 use clap::{Parser, Subcommand};
-use loam::case::CaseError;
-use loam::checkpoint;
-use loam::interrupt::Interrupt;
-use loam::run::{default_out_dir, run, RunEnd, RunOptions};
-use loam::simulation::Simulation;
+use loam::cli;
 
 /// `loam --version`: the version and the cargo features of this build (build.rs).
 const VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), " (features: ", env!("LOAM_BUILD_FEATURES"), ")");
@@ -161,9 +157,9 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     }
 }
 
-/// `loam plot`: draws, prints what it wrote, and maps errors to exit codes.
-fn plot_results(a: PlotArgs) -> ExitCode {
-    use loam::plot::{plot, PlotOptions, TimeSelection};
+/// The options of `loam plot` from its arguments.
+fn plot_options(a: PlotArgs) -> (PathBuf, loam::plot::PlotOptions) {
+    use loam::plot::{PlotOptions, TimeSelection};
     let times = match (a.times, a.every, a.last) {
         (Some(t), _, _) => TimeSelection::Times(t),
         (_, Some(n), _) => TimeSelection::Every(n),
@@ -189,320 +185,22 @@ fn plot_results(a: PlotArgs) -> ExitCode {
         frames: !a.no_frames,
         monitor_plots: !a.no_monitors,
     };
-    match plot(&a.dir, &options) {
-        Ok(report) => {
-            for note in &report.notes {
-                eprintln!("note: {note}");
-            }
-            for (file, time) in &report.files {
-                match time {
-                    Some(t) => println!("loam: wrote {} (t = {t} s)", file.display()),
-                    None => println!("loam: wrote {}", file.display()),
-                }
-            }
-            if let Some((field, min, max, unit)) = &report.field {
-                println!(
-                    "loam: {field} from {min:.4e} to {max:.4e}{}; {:.3} s per frame",
-                    if unit.is_empty() || unit == "1" { String::new() } else { format!(" {unit}") },
-                    report.seconds_per_frame
-                );
-            }
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(e.exit_code())
-        }
-    }
-}
-
-fn bad_input(e: &CaseError) -> ExitCode {
-    eprintln!("error: {e}");
-    ExitCode::from(2)
+    (a.dir, options)
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     faer::set_global_parallelism(faer::Par::Seq);
     match cli.command {
-        Command::Check { case } => match Simulation::from_file(&case) {
-            Ok(sim) => {
-                println!(
-                    "{}: ok — {} nodes, {} domains, {} DOFs, {} steps, monitors: {}",
-                    case.display(),
-                    sim.model.coords.len(),
-                    sim.model.domains.len(),
-                    sim.model.num_dofs(),
-                    sim.total_steps(),
-                    sim.monitor_names().join(", ")
-                );
-                let measure = if sim.model.dim == 2 { ("length", "m") } else { ("area", "m²") };
-                for i in &sim.interfaces {
-                    println!(
-                        "  interface '{}': {}, {} nodes, {} {:.6} {}",
-                        i.name,
-                        if i.slip { "frictionless slip" } else { "tied" },
-                        i.nodes,
-                        measure.0,
-                        i.measure,
-                        measure.1
-                    );
-                }
-                ExitCode::SUCCESS
-            }
-            Err(e) => bad_input(&e),
-        },
+        Command::Check { case } => cli::check::check_command(&case),
         Command::Run { case, out, threads, quiet, resume, trace_newton } => {
-            if let Err(problem) = check_threads(threads) {
-                eprintln!("error: --threads: {problem}");
-                return ExitCode::from(2);
-            }
-            // the whole run inside the pool: parallel loops called from one of its threads
-            // run there, without waking a worker and sleeping on every call (which cost about
-            // 1 ms per step at 448 material points)
-            match rayon::ThreadPoolBuilder::new().num_threads(threads.unwrap_or(0)).build() {
-                Ok(pool) => pool.install(|| run_case(&case, out, quiet, resume, trace_newton)),
-                Err(e) => {
-                    eprintln!("error: thread pool: {e}");
-                    ExitCode::from(1)
-                }
-            }
+            cli::run::run_command(cli::run::RunArgs { case, out, threads, quiet, resume, trace_newton })
         }
-        Command::Fmu { case, output, library } => {
-            use loam::fmu_package::{default_library_path, package, PackageError};
-            let output = output.unwrap_or_else(|| {
-                PathBuf::from(format!("{}.fmu", case.file_stem().unwrap_or_default().to_string_lossy()))
-            });
-            match package(&case, &output, &library.unwrap_or_else(default_library_path)) {
-                Ok(s) => {
-                    println!(
-                        "loam: wrote {} (FMI 3.0 co-simulation, model identifier {}; inputs: {}; outputs: {})",
-                        output.display(),
-                        s.model_identifier,
-                        if s.inputs.is_empty() { "none".into() } else { s.inputs.join(", ") },
-                        s.outputs.join(", ")
-                    );
-                    ExitCode::SUCCESS
-                }
-                Err(PackageError::Case(e)) => bad_input(&e),
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(1)
-                }
-            }
+        Command::Fmu { case, output, library } => cli::fmu::fmu_command(&case, output, library),
+        Command::Plot(args) => {
+            let (dir, options) = plot_options(*args);
+            cli::plot::plot_command(&dir, &options)
         }
-        Command::Plot(args) => plot_results(*args),
-        Command::Law { path, out } => {
-            let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-            let out = out.unwrap_or_else(|| default_out_dir(&loam::case::output_name(&name)));
-            let file = match read_path_file(&path) {
-                Ok(f) => f,
-                Err(e) => return bad_input(&e),
-            };
-            match loam_laws::driver::run_parsed_path(&file, &out) {
-                Ok(s) => {
-                    println!(
-                        "loam: {} ({} rows): peak q = {:.4} kPa, final p = {:.4} kPa, final q = {:.4} kPa; wrote {}",
-                        s.law,
-                        s.rows,
-                        s.peak_q / 1e3,
-                        s.final_p / 1e3,
-                        s.final_q / 1e3,
-                        out.join("path.csv").display()
-                    );
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    use loam_laws::driver::DriverError;
-                    eprintln!("error: {}", loam::input::compact_numbers(&e.to_string()));
-                    // bad input 2; a material point that cannot follow the path, or a write
-                    // failure, 1 (issue 16: a divergence was reported as bad input)
-                    ExitCode::from(match e {
-                        DriverError::Input { .. } | DriverError::Read { .. } => 2,
-                        DriverError::Law { .. }
-                        | DriverError::ControlNotConverged { .. }
-                        | DriverError::Write { .. } => 1,
-                    })
-                }
-            }
-        }
-    }
-}
-
-/// Reads a `loam law` path file as strictly as a case file (size limit, duplicate keys,
-/// text after the object, full JSON paths: [`loam::input`]).
-fn read_path_file(path: &std::path::Path) -> Result<loam_laws::driver::PathFile, CaseError> {
-    let text = loam::input::read_json_text(path, "path file")?;
-    loam::input::parse(&text).map(|(file, _)| file).map_err(|mut e| {
-        e.location = if e.location.is_empty() {
-            path.display().to_string()
-        } else if e.location.starts_with("line") {
-            format!("{}:{}", path.display(), e.location)
-        } else {
-            e.location
-        };
-        e
-    })
-}
-
-/// Most worker threads per core of the machine that `--threads` accepts: more only adds
-/// switching, and thousands took 22 s to create before the system refused (issue 31).
-const MAX_THREADS_PER_CORE: usize = 4;
-
-/// `--threads N` must lie in [1, [`MAX_THREADS_PER_CORE`] × the cores available to this
-/// process] (`std::thread::available_parallelism`, which follows CPU affinity and cgroup
-/// quotas; 1 if it cannot be told).
-fn check_threads(threads: Option<usize>) -> Result<(), String> {
-    let Some(n) = threads else { return Ok(()) };
-    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
-    let max = MAX_THREADS_PER_CORE * cores;
-    if n == 0 {
-        Err("must be at least 1, got 0".into())
-    } else if n > max {
-        Err(format!(
-            "must be at most {max} ({MAX_THREADS_PER_CORE} per core of the {cores} available to this process), got {n}"
-        ))
-    } else {
-        Ok(())
-    }
-}
-
-/// Exit code of a run stopped by SIGINT/SIGTERM after writing a checkpoint (128 + SIGINT).
-const INTERRUPTED: u8 = 130;
-
-/// What SIGINT and SIGTERM set (the run finishes its step, checkpoints and stops); a second
-/// signal ends the process at once, abandoning the step in progress, after writing the
-/// run's report as of the last converged step with the status `interrupted`
-/// ([`loam::interrupt`]).
-fn interrupt_handler() -> Option<Arc<Interrupt>> {
-    let interrupt = Arc::new(Interrupt::new());
-    let handler = interrupt.clone();
-    let installed = ctrlc::set_handler(move || {
-        if handler.request() {
-            let report = match handler.abandon() {
-                Some(Ok(path)) => format!("; {} says so", path.display()),
-                Some(Err(e)) => format!("; writing the run's report failed: {e}"),
-                None => String::new(),
-            };
-            eprintln!(
-                "\nloam: interrupted again: stopping now, the step in progress abandoned without a checkpoint{report}"
-            );
-            std::process::exit(i32::from(INTERRUPTED));
-        }
-        eprintln!("\nloam: interrupted: finishing the current step, then writing a checkpoint (again to stop now)");
-    });
-    installed.ok().map(|()| interrupt)
-}
-
-/// `loam run`: builds the case (and restores a checkpoint with `--resume`), runs it with
-/// output to `out` (every Newton iteration on stderr with `trace_newton`) and prints the
-/// summary line.
-fn run_case(
-    case: &std::path::Path,
-    out: Option<PathBuf>,
-    quiet: bool,
-    resume: Option<Option<PathBuf>>,
-    trace_newton: bool,
-) -> ExitCode {
-    let built = loam::case::Case::load(case).and_then(|mut c| {
-        c.solver.trace = trace_newton;
-        Simulation::new(c)
-    });
-    let mut sim = match built {
-        Ok(s) => s,
-        Err(e) => return bad_input(&e),
-    };
-    let out = out.unwrap_or_else(|| default_out_dir(&sim.case.name));
-    let fingerprint = std::fs::read_to_string(case).map(|t| checkpoint::fingerprint(&t)).unwrap_or(0);
-    let mut options =
-        RunOptions { progress: !quiet, case_fingerprint: fingerprint, resume: None, interrupt: interrupt_handler() };
-    if let Some(given) = resume {
-        let path = match given.or_else(|| checkpoint::list(&out).pop()) {
-            Some(p) => p,
-            None => {
-                eprintln!("error: --resume: no checkpoint in {}", checkpoint::directory(&out).display());
-                return ExitCode::from(2);
-            }
-        };
-        let restored = checkpoint::read(&path, fingerprint).map_err(|e| e.to_string()).and_then(|c| {
-            sim.restore_state(c.simulation, c.model)
-                .map_err(|e| format!("{}: does not fit this case: {e}", path.display()))
-                .map(|()| c.writer)
-        });
-        match restored {
-            Ok(writer) => {
-                if !quiet {
-                    println!("loam: resuming from {} (step {}, t = {:.6e} s)", path.display(), sim.step, sim.time());
-                }
-                // a checkpoint without results (none written yet) starts them afresh
-                options.resume = writer;
-            }
-            Err(e) => {
-                eprintln!("error: --resume: {e}");
-                return ExitCode::from(2);
-            }
-        }
-    }
-    match run(&mut sim, &out, &options) {
-        Ok((end, wall)) => {
-            let t = &sim.stats.timings;
-            let solver = sim.model.solver_timings();
-            let gmres = if solver.krylov_iterations > 0 {
-                format!(
-                    "; {} factorisations, {} solves by GMRES ({} iterations)",
-                    solver.factorisations, solver.krylov_solves, solver.krylov_iterations
-                )
-            } else {
-                String::new()
-            };
-            let blocks = if sim.is_coupled() {
-                let b = sim.stats.max_block_residuals;
-                format!(
-                    "; largest converged residual per block: soil {:.2e}, interface {:.2e}, structure {:.2e}",
-                    b.soil, b.interface, b.structure
-                )
-            } else {
-                String::new()
-            };
-            let summary = format!(
-                "{} steps, {} Newton iterations, {} step cuts, wall time {:.3} s (assembly {:.2} s, factorisation {:.2} s, solve {:.2} s{gmres}){blocks}",
-                sim.stats.steps, sim.stats.iterations, sim.stats.cuts, wall, t.assembly, t.factorisation, t.solve
-            );
-            match end {
-                RunEnd::Finished => {
-                    println!(
-                        "loam: finished t = {:.6e} s{}: {summary}; results in {}",
-                        sim.time(),
-                        if sim.at_rest { " (at rest)" } else { "" },
-                        out.display()
-                    );
-                    ExitCode::SUCCESS
-                }
-                RunEnd::Failed(e) => {
-                    eprintln!(
-                        "error: stopped at {e}; results up to t = {:.6e} s written to {} ({summary})",
-                        e.time,
-                        out.display()
-                    );
-                    ExitCode::from(1)
-                }
-                RunEnd::Interrupted(path) => {
-                    eprintln!(
-                        "loam: interrupted at t = {:.6e} s (step {}): results so far in {}, checkpoint {}; resume with: loam run {} --out {} --resume",
-                        sim.time(),
-                        sim.step,
-                        out.display(),
-                        path.display(),
-                        case.display(),
-                        out.display()
-                    );
-                    ExitCode::from(INTERRUPTED)
-                }
-            }
-        }
-        Err(e) => {
-            eprintln!("error: writing results to {}: {e}", out.display());
-            ExitCode::from(1)
-        }
+        Command::Law { path, out } => cli::law::law_command(&path, out),
     }
 }

@@ -376,7 +376,7 @@ impl Simulation {
     }
 
     /// Advances to `target` (> current time) in one step, cutting it on failure (every
-    /// converged sub-step counts as a step). Runs on Loam's thread pool ([`in_pool`]).
+    /// converged sub-step counts as a step). Runs on Loam's thread pool (`in_pool`).
     pub fn advance_step_to(&mut self, target: f64) -> Result<StepSummary, RunError> {
         in_pool(|| self.advance_step_to_here(target, &mut |_| {}))
     }

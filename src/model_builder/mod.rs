@@ -3,14 +3,14 @@
 //! vector lengths, grids that do not conform to an interface). One concern per module, in
 //! the order [`build_model`] takes them:
 //!
-//! 1. [`settings`]: analysis, solver and output settings, the time scheme;
-//! 2. [`meshes`]: FEM meshes, background grids with their bodies of material points, the
+//! 1. `settings`: analysis, solver and output settings, the time scheme;
+//! 2. `meshes`: FEM meshes, background grids with their bodies of material points, the
 //!    interfaces that attach grids to structures, and the one global node set with its node
 //!    roles;
-//! 3. [`regions`]: named node sets;
-//! 4. [`conditions`]: boundary conditions, penalty walls, the grids' attachment to their
-//!    structures ([`interfaces`]), loads and gravity;
-//! 5. [`monitors`] and [`fmu_variables`].
+//! 3. `regions`: named node sets;
+//! 4. `conditions`: boundary conditions, penalty walls, the grids' attachment to their
+//!    structures (`interfaces`), loads and gravity;
+//! 5. `monitors` and `fmu_variables`.
 
 mod conditions;
 mod fmu_variables;

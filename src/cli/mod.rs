@@ -1,0 +1,25 @@
+//! The commands of the `loam` executable. Each takes its parsed arguments and returns the
+//! process's exit code (0 done, 1 a run or write that failed, 2 bad input, 130 interrupted);
+//! `main.rs` only parses the command line (clap) and calls them.
+//!
+//! - [`run`]: `loam run`, a case to its end with output, checkpoints and signals;
+//! - [`check`]: `loam check`, a case built without running;
+//! - [`plot`]: `loam plot`, pictures of a run's results;
+//! - [`law`]: `loam law`, one material point along a laboratory path;
+//! - [`fmu`]: `loam fmu`, a case packaged as an FMU.
+
+pub mod check;
+pub mod fmu;
+pub mod law;
+pub mod plot;
+pub mod run;
+
+use std::process::ExitCode;
+
+use crate::case::CaseError;
+
+/// Prints a bad-input error (one line) and returns exit code 2.
+pub fn bad_input(e: &CaseError) -> ExitCode {
+    eprintln!("error: {e}");
+    ExitCode::from(2)
+}

@@ -1,0 +1,210 @@
+//! `loam run`: the thread pool, the case built (and restored with `--resume`), the run loop
+//! ([`crate::run`]) with SIGINT/SIGTERM handling, and the summary line.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Arc;
+
+use super::bad_input;
+use crate::checkpoint;
+use crate::interrupt::Interrupt;
+use crate::run::{default_out_dir, run, RunEnd, RunOptions};
+use crate::simulation::Simulation;
+
+/// The arguments of `loam run`.
+#[derive(Debug, Clone, Default)]
+pub struct RunArgs {
+    /// The case file.
+    pub case: PathBuf,
+    /// Output directory (default `out/<case name>`).
+    pub out: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    pub threads: Option<usize>,
+    /// No progress bar.
+    pub quiet: bool,
+    /// Continue from a checkpoint: `Some(None)` the newest in the output directory.
+    pub resume: Option<Option<PathBuf>>,
+    /// Every Newton iteration on stderr.
+    pub trace_newton: bool,
+}
+
+/// `loam run`: checks the thread count and runs the case inside a pool of that many threads.
+pub fn run_command(args: RunArgs) -> ExitCode {
+    let RunArgs { case, out, threads, quiet, resume, trace_newton } = args;
+    if let Err(problem) = check_threads(threads) {
+        eprintln!("error: --threads: {problem}");
+        return ExitCode::from(2);
+    }
+    // the whole run inside the pool: parallel loops called from one of its threads
+    // run there, without waking a worker and sleeping on every call (which cost about
+    // 1 ms per step at 448 material points)
+    match rayon::ThreadPoolBuilder::new().num_threads(threads.unwrap_or(0)).build() {
+        Ok(pool) => pool.install(|| run_case(&case, out, quiet, resume, trace_newton)),
+        Err(e) => {
+            eprintln!("error: thread pool: {e}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// Most worker threads per core of the machine that `--threads` accepts: more only adds
+/// switching, and thousands took 22 s to create before the system refused (issue 31).
+const MAX_THREADS_PER_CORE: usize = 4;
+
+/// `--threads N` must lie in [1, [`MAX_THREADS_PER_CORE`] × the cores available to this
+/// process] (`std::thread::available_parallelism`, which follows CPU affinity and cgroup
+/// quotas; 1 if it cannot be told).
+fn check_threads(threads: Option<usize>) -> Result<(), String> {
+    let Some(n) = threads else { return Ok(()) };
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    let max = MAX_THREADS_PER_CORE * cores;
+    if n == 0 {
+        Err("must be at least 1, got 0".into())
+    } else if n > max {
+        Err(format!(
+            "must be at most {max} ({MAX_THREADS_PER_CORE} per core of the {cores} available to this process), got {n}"
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+/// Exit code of a run stopped by SIGINT/SIGTERM after writing a checkpoint (128 + SIGINT).
+const INTERRUPTED: u8 = 130;
+
+/// What SIGINT and SIGTERM set (the run finishes its step, checkpoints and stops); a second
+/// signal ends the process at once, abandoning the step in progress, after writing the
+/// run's report as of the last converged step with the status `interrupted`
+/// ([`loam::interrupt`]).
+fn interrupt_handler() -> Option<Arc<Interrupt>> {
+    let interrupt = Arc::new(Interrupt::new());
+    let handler = interrupt.clone();
+    let installed = ctrlc::set_handler(move || {
+        if handler.request() {
+            let report = match handler.abandon() {
+                Some(Ok(path)) => format!("; {} says so", path.display()),
+                Some(Err(e)) => format!("; writing the run's report failed: {e}"),
+                None => String::new(),
+            };
+            eprintln!(
+                "\nloam: interrupted again: stopping now, the step in progress abandoned without a checkpoint{report}"
+            );
+            std::process::exit(i32::from(INTERRUPTED));
+        }
+        eprintln!("\nloam: interrupted: finishing the current step, then writing a checkpoint (again to stop now)");
+    });
+    installed.ok().map(|()| interrupt)
+}
+
+/// `loam run`: builds the case (and restores a checkpoint with `--resume`), runs it with
+/// output to `out` (every Newton iteration on stderr with `trace_newton`) and prints the
+/// summary line.
+fn run_case(
+    case: &Path,
+    out: Option<PathBuf>,
+    quiet: bool,
+    resume: Option<Option<PathBuf>>,
+    trace_newton: bool,
+) -> ExitCode {
+    let built = crate::case::Case::load(case).and_then(|mut c| {
+        c.solver.trace = trace_newton;
+        Simulation::new(c)
+    });
+    let mut sim = match built {
+        Ok(s) => s,
+        Err(e) => return bad_input(&e),
+    };
+    let out = out.unwrap_or_else(|| default_out_dir(&sim.case.name));
+    let fingerprint = std::fs::read_to_string(case).map(|t| checkpoint::fingerprint(&t)).unwrap_or(0);
+    let mut options =
+        RunOptions { progress: !quiet, case_fingerprint: fingerprint, resume: None, interrupt: interrupt_handler() };
+    if let Some(given) = resume {
+        let path = match given.or_else(|| checkpoint::list(&out).pop()) {
+            Some(p) => p,
+            None => {
+                eprintln!("error: --resume: no checkpoint in {}", checkpoint::directory(&out).display());
+                return ExitCode::from(2);
+            }
+        };
+        let restored = checkpoint::read(&path, fingerprint).map_err(|e| e.to_string()).and_then(|c| {
+            sim.restore_state(c.simulation, c.model)
+                .map_err(|e| format!("{}: does not fit this case: {e}", path.display()))
+                .map(|()| c.writer)
+        });
+        match restored {
+            Ok(writer) => {
+                if !quiet {
+                    println!("loam: resuming from {} (step {}, t = {:.6e} s)", path.display(), sim.step, sim.time());
+                }
+                // a checkpoint without results (none written yet) starts them afresh
+                options.resume = writer;
+            }
+            Err(e) => {
+                eprintln!("error: --resume: {e}");
+                return ExitCode::from(2);
+            }
+        }
+    }
+    match run(&mut sim, &out, &options) {
+        Ok((end, wall)) => {
+            let t = &sim.stats.timings;
+            let solver = sim.model.solver_timings();
+            let gmres = if solver.krylov_iterations > 0 {
+                format!(
+                    "; {} factorisations, {} solves by GMRES ({} iterations)",
+                    solver.factorisations, solver.krylov_solves, solver.krylov_iterations
+                )
+            } else {
+                String::new()
+            };
+            let blocks = if sim.is_coupled() {
+                let b = sim.stats.max_block_residuals;
+                format!(
+                    "; largest converged residual per block: soil {:.2e}, interface {:.2e}, structure {:.2e}",
+                    b.soil, b.interface, b.structure
+                )
+            } else {
+                String::new()
+            };
+            let summary = format!(
+                "{} steps, {} Newton iterations, {} step cuts, wall time {:.3} s (assembly {:.2} s, factorisation {:.2} s, solve {:.2} s{gmres}){blocks}",
+                sim.stats.steps, sim.stats.iterations, sim.stats.cuts, wall, t.assembly, t.factorisation, t.solve
+            );
+            match end {
+                RunEnd::Finished => {
+                    println!(
+                        "loam: finished t = {:.6e} s{}: {summary}; results in {}",
+                        sim.time(),
+                        if sim.at_rest { " (at rest)" } else { "" },
+                        out.display()
+                    );
+                    ExitCode::SUCCESS
+                }
+                RunEnd::Failed(e) => {
+                    eprintln!(
+                        "error: stopped at {e}; results up to t = {:.6e} s written to {} ({summary})",
+                        e.time,
+                        out.display()
+                    );
+                    ExitCode::from(1)
+                }
+                RunEnd::Interrupted(path) => {
+                    eprintln!(
+                        "loam: interrupted at t = {:.6e} s (step {}): results so far in {}, checkpoint {}; resume with: loam run {} --out {} --resume",
+                        sim.time(),
+                        sim.step,
+                        out.display(),
+                        path.display(),
+                        case.display(),
+                        out.display()
+                    );
+                    ExitCode::from(INTERRUPTED)
+                }
+            }
+        }
+        Err(e) => {
+            eprintln!("error: writing results to {}: {e}", out.display());
+            ExitCode::from(1)
+        }
+    }
+}
