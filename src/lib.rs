@@ -8,6 +8,7 @@
 pub mod case;
 pub mod checkpoint;
 pub mod fmu_package;
+pub mod import;
 pub mod input;
 pub mod interrupt;
 pub mod model_builder;
