@@ -157,6 +157,27 @@ pub fn import(dir: &Path, out: &Path) -> Result<Import, ImportError> {
         domains.push(d);
     }
 
+    // what the body file holds beyond the bodies' elements
+    let assigned: BTreeSet<usize> =
+        bodies.iter().filter_map(|b| body.sub_model_part(&b.part)).flat_map(|p| p.elements.iter().copied()).collect();
+    for b in &body.elements {
+        let left = b.entities.iter().filter(|e| !assigned.contains(&e.0)).count();
+        if left > 0 {
+            notes.push(format!(
+                "{body_name}:{}: {left} {} elements in no sub model part of {mat_file}: ignored (no material)",
+                b.line, b.kind
+            ));
+        }
+    }
+    for b in &body.conditions {
+        notes.push(format!(
+            "{body_name}:{}: {} {} conditions on the body: ignored (material point conditions are not imported)",
+            b.line,
+            b.entities.len(),
+            b.kind
+        ));
+    }
+
     // regions, boundary conditions and loads
     let mut regions = Map::new();
     for (g, _) in &groups {
