@@ -252,3 +252,38 @@ fn unknown_keys_reported_unknown_law_refused() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr.contains("materials.json: properties[0].Material.constitutive_law.name: Kratos law 'HenckyBorjaCamClayPlasticPlaneStrain2DLaw' has no Loam counterpart"), "{stderr}");
 }
+
+/// Malformed JSON and an unknown Kratos process in a load list: exit code 2, one line naming
+/// the file and the line or JSON path.
+#[test]
+fn malformed_parameters_refused() {
+    let dir = edited_copy("cantilever_lineload_2D_quad", "badjson", "ProjectParameters.json", |t| {
+        t.replacen("\"end_time\": 1.0,", "\"end_time\": 1.0,,", 1)
+    });
+    let o = loam()
+        .args(["import", "kratos"])
+        .arg(&dir)
+        .arg("-o")
+        .arg(dir.parent().unwrap().join("c.json"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("{stderr}");
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
+    assert!(stderr.contains("ProjectParameters.json:6: invalid JSON"), "{stderr}");
+    let dir = edited_copy("cantilever_lineload_2D_quad", "process", "ProjectParameters.json", |t| {
+        t.replacen("assign_vector_by_direction_to_condition_process", "assign_scalar_variable_to_conditions_process", 1)
+    });
+    let o = loam()
+        .args(["import", "kratos"])
+        .arg(&dir)
+        .arg("-o")
+        .arg(dir.parent().unwrap().join("c.json"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("{stderr}");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr.contains("ProjectParameters.json: processes.loads_process_list[0].python_module: \"assign_scalar_variable_to_conditions_process\""), "{stderr}");
+}

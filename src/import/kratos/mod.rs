@@ -80,6 +80,7 @@ pub fn import(dir: &Path, out: &Path) -> Result<Import, ImportError> {
 
     let out_dir = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_path_buf();
     let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "kratos".into());
+    std::fs::create_dir_all(&out_dir).map_err(|e| ImportError(format!("{}: cannot create: {e}", out_dir.display())))?;
     let mut files = vec![out.to_path_buf()];
     let write = |name: &str, text: &str, files: &mut Vec<PathBuf>| -> Result<(), ImportError> {
         let path = out_dir.join(name);
