@@ -10,6 +10,7 @@ pub mod checkpoint;
 pub mod cli;
 pub mod fmu_package;
 pub mod hints;
+pub mod import;
 pub mod input;
 pub mod interrupt;
 pub mod model_builder;

@@ -61,6 +61,17 @@ enum Command {
     /// Draw a run's results as PNG files: the bodies coloured by a field at chosen times,
     /// and the monitors (one picture per group of one unit).
     Plot(Box<PlotArgs>),
+    /// Import another code's case as a Loam case: `loam import kratos DIR` (docs/kratos.md).
+    Import {
+        /// The format of the case.
+        #[arg(value_enum)]
+        format: loam::import::Format,
+        /// The case folder.
+        dir: PathBuf,
+        /// The Loam case to write (default <folder name>.json); meshes are written beside it.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
     /// Drive one material point of a law along a laboratory path and write path.csv.
     Law {
         /// The path file (JSON), e.g. cases/laws/mc_triaxial_drained.json.
@@ -201,6 +212,7 @@ fn main() -> ExitCode {
             let (dir, options) = plot_options(*args);
             cli::plot::plot_command(&dir, &options)
         }
+        Command::Import { format, dir, output } => loam::import::cli(format, &dir, output.as_deref()),
         Command::Law { path, out } => cli::law::law_command(&path, out),
     }
 }

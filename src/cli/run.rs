@@ -30,7 +30,15 @@ pub struct RunArgs {
 
 /// `loam run`: checks the thread count and runs the case inside a pool of that many threads.
 pub fn run_command(args: RunArgs) -> ExitCode {
-    let RunArgs { case, out, threads, quiet, resume, trace_newton } = args;
+    let RunArgs { case, mut out, threads, quiet, resume, trace_newton } = args;
+    let case = if case.is_dir() && case.join("ProjectParameters.json").is_file() {
+        match imported_case(&case, &mut out) {
+            Ok(c) => c,
+            Err(code) => return code,
+        }
+    } else {
+        case
+    };
     if let Err(problem) = check_threads(threads) {
         eprintln!("error: --threads: {problem}");
         return ExitCode::from(2);
@@ -43,6 +51,32 @@ pub fn run_command(args: RunArgs) -> ExitCode {
         Err(e) => {
             eprintln!("error: thread pool: {e}");
             ExitCode::from(1)
+        }
+    }
+}
+
+/// `loam run DIR` on a Kratos case folder: the case imported first into
+/// `OUT/imported/<folder>.json` ([`crate::import::kratos`], its notes on stderr), `OUT`
+/// defaulting to `out/<folder>`; returns the case file to run, or exit code 2.
+fn imported_case(dir: &Path, out: &mut Option<PathBuf>) -> Result<PathBuf, ExitCode> {
+    let name = dir
+        .canonicalize()
+        .ok()
+        .and_then(|d| d.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .unwrap_or_else(|| "kratos".into());
+    let out_dir = out.get_or_insert_with(|| default_out_dir(&crate::case::output_name(&name))).clone();
+    let target = out_dir.join("imported").join(format!("{name}.json"));
+    match crate::import::kratos::import(dir, &target) {
+        Ok(import) => {
+            for note in &import.notes {
+                eprintln!("note: {note}");
+            }
+            eprintln!("loam: imported the Kratos case {} as {}", dir.display(), target.display());
+            Ok(target)
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            Err(ExitCode::from(2))
         }
     }
 }

@@ -1,0 +1,316 @@
+//! `loam import kratos`: Kratos Multiphysics' own MPM test cases imported, run with the `loam`
+//! binary and compared with Kratos' results.
+//!
+//! The case folders in `tests/data/kratos/` are copies of `/work/shared/kratos/cases/` (Kratos'
+//! MPMApplication test suite, with their stored `results_reference.json`);
+//! `kratos_10.4.4_results.json` holds what Kratos 10.4.4 computes for the same folders on this
+//! machine (see its `source`). Each check prints Loam's value beside both. Kratos' own tests
+//! compare grid-node displacements with an absolute tolerance of 1e-3 m
+//! (`from_json_check_result_process`; 1e-2 m for the penalty cantilever).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::{json, Value};
+
+fn loam() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_loam"))
+}
+
+fn data(case: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/kratos").join(case)
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("loam-kratos-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Imports `dir` into `out/case.json`; returns the case path and the importer's stderr.
+fn import(dir: &Path, out: &Path) -> (PathBuf, String) {
+    let case = out.join("case.json");
+    let o = loam().args(["import", "kratos"]).arg(dir).arg("-o").arg(&case).output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "import of {} failed: {stderr}", dir.display());
+    (case, stderr)
+}
+
+/// Coordinates of node `id` of the case's grid file.
+fn grid_node(dir: &Path, id: usize) -> [f64; 2] {
+    let m = loam::import::kratos::mdpa::read(&dir.join("Grid.mdpa")).unwrap();
+    let x = m.nodes[&id];
+    [x[0], x[1]]
+}
+
+/// Adds `monitors` to the imported case, runs it and returns the last row of monitors.csv.
+fn run(case: &Path, monitors: Vec<Value>) -> BTreeMap<String, f64> {
+    let mut c: Value = serde_json::from_str(&std::fs::read_to_string(case).unwrap()).unwrap();
+    c["monitors"] = Value::Array(monitors);
+    c["output"] = json!({ "vtk": false });
+    std::fs::write(case, serde_json::to_string_pretty(&c).unwrap()).unwrap();
+    let out = case.parent().unwrap().join("out");
+    let o = loam().arg("run").arg(case).args(["--quiet", "--threads", "1", "--out"]).arg(&out).output().unwrap();
+    assert!(o.status.success(), "loam run failed: {}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(out.join("monitors.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let last: Vec<f64> = lines.last().unwrap().split(',').map(|v| v.parse().unwrap()).collect();
+    header.into_iter().zip(last).collect()
+}
+
+/// The last value of `variable` of `key` (e.g. `NODE_93`) in a Kratos result file.
+fn stored(file: &Path, key: &str, variable: &str) -> f64 {
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+    let v = &r[key][variable];
+    v.as_array().map_or_else(|| v.as_f64(), |a| a.last().and_then(Value::as_f64)).unwrap()
+}
+
+/// Kratos 10.4.4's value on this machine (`kratos_10.4.4_results.json`).
+fn kratos_now(case: &str, key: &str, variable: &str) -> f64 {
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(data("kratos_10.4.4_results.json")).unwrap()).unwrap();
+    r[case][key][variable].as_f64().unwrap()
+}
+
+/// Imports and runs `case`, returning Loam's displacement `component` at grid node `node`.
+fn grid_displacement(case: &str, node: usize, component: &str) -> f64 {
+    let dir = data(case);
+    let (json, _) = import(&dir, &temp_dir(case));
+    let m = run(
+        &json,
+        vec![json!({ "name": "u", "type": "displacement", "point": grid_node(&dir, node), "component": component })],
+    );
+    m["u"]
+}
+
+/// Prints and checks Loam against Kratos' stored reference and today's Kratos.
+fn compare(case: &str, node: usize, component: &str, tol_stored: f64, tol_now: f64) {
+    let var = if component == "x" { "DISPLACEMENT_X" } else { "DISPLACEMENT_Y" };
+    let key = format!("NODE_{node}");
+    let loam = grid_displacement(case, node, component);
+    let reference = stored(&data(case).join("results_reference.json"), &key, var);
+    let now = kratos_now(case, &key, var);
+    println!(
+        "{case}: grid node {node} {var}: Loam {loam:.10e}, Kratos stored reference {reference:.10e} (diff {:.3e}), Kratos 10.4.4 {now:.10e} (diff {:.3e})",
+        loam - reference,
+        loam - now
+    );
+    assert!(
+        (loam - reference).abs() <= tol_stored,
+        "{case}: Loam {loam} vs stored reference {reference} beyond {tol_stored}"
+    );
+    assert!((loam - now).abs() <= tol_now, "{case}: Loam {loam} vs Kratos 10.4.4 {now} beyond {tol_now}");
+}
+
+/// The acceptance case. Kratos 10.4.4 computes −0.673829 m at the tip (8, 1), and
+/// Loam the same to 1e-12 m (checked to 1e-6 m); the stored `results_reference.json` says −0.660814 m, which
+/// Kratos 10.4.4 itself does not reproduce (1.3e-2 m off, its own check tolerance is 1e-3 m):
+/// the stored file is stale (its horizontal displacements are also three times the beam's
+/// foreshortening), so the stored reference is checked only to 2 %.
+#[test]
+fn cantilever_selfweight_matches_kratos() {
+    compare("cantilever_selfweight_2D_quad", 93, "y", 0.02 * 0.66, 1e-6);
+    compare("cantilever_selfweight_2D_quad", 1, "x", 0.06, 1e-6);
+}
+
+/// Linear elastic cantilever under a line load on its top edge: Loam equals Kratos to 1e-4
+/// relative (the displacements are 3e-6 m, far below Kratos' absolute 1e-3 m).
+#[test]
+fn cantilever_lineload_matches_kratos() {
+    compare("cantilever_lineload_2D_quad", 881, "y", 3e-10, 3e-10);
+}
+
+/// The self-weight cantilever clamped by penalty boundary particles. Kratos' test compares it
+/// with the conforming result at 1e-2 m. Loam places its boundary particles evenly along the
+/// condition lines (Kratos: 5 per line at its own positions): 9e-4 m from Kratos 10.4.4.
+#[test]
+fn cantilever_penalty_matches_kratos() {
+    compare("cantilever_selfweight_penalty_2D_quad", 93, "y", 1e-2, 2e-3);
+}
+
+/// Axisymmetric circular plate under a line load, triangles, 3 points per cell: within
+/// Kratos' 1e-3 m (6e-5 m apart).
+#[test]
+fn circular_plate_axisym_matches_kratos() {
+    compare("circular_plate_axisym", 1, "y", 1e-3, 1e-3);
+}
+
+/// Cook's membrane, incompressible (ν = 0.499999) Neo-Hookean with pressure unknowns. Kratos'
+/// `MPMUpdatedLagrangianUP2D3N` is a stabilised equal-order u–p triangle, Loam's `mixed_up` a
+/// different mixed form, so the loaded corner is 2e-3 m (0.8 %) apart, beyond Kratos' 1e-3 m:
+/// checked to 1 %.
+#[test]
+fn cooks_membrane_up_close_to_kratos() {
+    compare("cooks_membrane_UP_incompressible", 1594, "y", 0.01 * 0.257, 0.01 * 0.257);
+}
+
+/// Two triangles sliding down a frictionless 45° slip boundary (dynamic, Newmark): the
+/// material point velocity at 1.5 s against Kratos' stored one (analytical g sin45 cos45 t).
+#[test]
+fn slip_boundary_matches_kratos() {
+    let case = "slip_boundary_2D";
+    let dir = data(case);
+    let (json, _) = import(&dir, &temp_dir(case));
+    let m = run(
+        &json,
+        vec![
+            json!({ "name": "vx", "type": "material_point_velocity", "point": [-7.07107, 6.36396], "component": "x" }),
+        ],
+    );
+    let reference = stored(&dir.join("results_reference.json"), "MP_26", "MP_VELOCITY_X");
+    println!(
+        "{case}: MP_VELOCITY_X at 1.5 s: Loam {:.10e}, Kratos stored {reference:.10e}, analytical {:.6}",
+        m["vx"],
+        4.905 * 1.5
+    );
+    assert!((m["vx"] - reference).abs() < 1e-3);
+}
+
+/// A copy of `case` in a temporary folder, `edit` applied to the named file's text.
+fn edited_copy(case: &str, name: &str, file: &str, edit: impl Fn(&str) -> String) -> PathBuf {
+    let dir = temp_dir(name).join("case");
+    std::fs::create_dir_all(&dir).unwrap();
+    for e in std::fs::read_dir(data(case)).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), dir.join(e.file_name())).unwrap();
+    }
+    let text = std::fs::read_to_string(dir.join(file)).unwrap();
+    std::fs::write(dir.join(file), edit(&text)).unwrap();
+    dir
+}
+
+/// The comparison catches a wrong importer: the line load along x instead of y (a swapped
+/// axis) moves the loaded tip by far more than the tolerance.
+#[test]
+fn swapped_axis_is_caught() {
+    let case = "cantilever_lineload_2D_quad";
+    let dir = edited_copy(case, "swapped", "ProjectParameters.json", |t| {
+        t.replacen(
+            "\"direction\": [\n                        0.0,\n                        -1.0,",
+            "\"direction\": [\n                        -1.0,\n                        0.0,",
+            1,
+        )
+    });
+    let (json, _) = import(&dir, dir.parent().unwrap());
+    let m = run(
+        &json,
+        vec![json!({ "name": "u", "type": "displacement", "point": grid_node(&dir, 881), "component": "y" })],
+    );
+    let reference = stored(&dir.join("results_reference.json"), "NODE_881", "DISPLACEMENT_Y");
+    println!("swapped axis: Loam {:.4e} vs reference {reference:.4e}", m["u"]);
+    assert!((m["u"] - reference).abs() > 100.0 * 3e-10, "a swapped load direction went unnoticed");
+}
+
+/// A malformed node line: exit code 2, one line naming the file and line, no panic.
+#[test]
+fn malformed_mdpa_names_file_and_line() {
+    let dir = edited_copy("cantilever_lineload_2D_quad", "malformed", "Grid.mdpa", |t| {
+        let mut lines: Vec<String> = t.lines().map(String::from).collect();
+        lines[9] = "    3   0.1000000000   zero   0.0000000000".into();
+        lines.join("\n")
+    });
+    let o = loam()
+        .args(["import", "kratos"])
+        .arg(&dir)
+        .arg("-o")
+        .arg(dir.parent().unwrap().join("c.json"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("{stderr}");
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
+    assert!(stderr.contains("Grid.mdpa:10: coordinate `zero` is not a finite number"), "{stderr}");
+}
+
+/// Every key the importer does not take over is reported with its file and JSON path; an
+/// unknown law is refused (exit code 2) naming its JSON path.
+#[test]
+fn unknown_keys_reported_unknown_law_refused() {
+    let dir = edited_copy("cantilever_lineload_2D_quad", "unknown", "ProjectParameters.json", |t| {
+        t.replacen("\"pressure_dofs\": false", "\"pressure_dofs\": false, \"block_builder\": true", 1)
+    });
+    let (_, notes) = import(&dir, dir.parent().unwrap());
+    println!("{notes}");
+    assert!(notes
+        .contains("ProjectParameters.json: solver_settings.block_builder: ignored (not understood by the importer)"));
+    assert!(notes.contains("processes.list_other_processes[0]: from_json_check_result_process: ignored"));
+    let dir = edited_copy("cantilever_lineload_2D_quad", "law", "materials.json", |t| {
+        t.replacen("LinearElasticIsotropicPlaneStrain2DLaw", "HenckyBorjaCamClayPlasticPlaneStrain2DLaw", 1)
+    });
+    let o = loam()
+        .args(["import", "kratos"])
+        .arg(&dir)
+        .arg("-o")
+        .arg(dir.parent().unwrap().join("c.json"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("{stderr}");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr.contains("materials.json: properties[0].Material.constitutive_law.name: Kratos law 'HenckyBorjaCamClayPlasticPlaneStrain2DLaw' has no Loam counterpart"), "{stderr}");
+}
+
+/// Malformed JSON and an unknown Kratos process in a load list: exit code 2, one line naming
+/// the file and the line or JSON path.
+#[test]
+fn malformed_parameters_refused() {
+    let dir = edited_copy("cantilever_lineload_2D_quad", "badjson", "ProjectParameters.json", |t| {
+        t.replacen("\"end_time\": 1.0,", "\"end_time\": 1.0,,", 1)
+    });
+    let o = loam()
+        .args(["import", "kratos"])
+        .arg(&dir)
+        .arg("-o")
+        .arg(dir.parent().unwrap().join("c.json"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("{stderr}");
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
+    assert!(stderr.contains("ProjectParameters.json:6: invalid JSON"), "{stderr}");
+    let dir = edited_copy("cantilever_lineload_2D_quad", "process", "ProjectParameters.json", |t| {
+        t.replacen("assign_vector_by_direction_to_condition_process", "assign_scalar_variable_to_conditions_process", 1)
+    });
+    let o = loam()
+        .args(["import", "kratos"])
+        .arg(&dir)
+        .arg("-o")
+        .arg(dir.parent().unwrap().join("c.json"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("{stderr}");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr.contains("ProjectParameters.json: processes.loads_process_list[0].python_module: \"assign_scalar_variable_to_conditions_process\""), "{stderr}");
+}
+
+/// `loam run DIR` on a Kratos case folder imports it on the fly into `OUT/imported/` and runs
+/// it: the imported case is the one `loam import kratos` writes (same settings, materials,
+/// conditions), and the results land in the run's folder.
+#[test]
+fn run_on_a_kratos_folder_imports_on_the_fly() {
+    let dir = data("cantilever_selfweight_2D_quad");
+    let out = temp_dir("run-folder");
+    let o = loam().arg("run").arg(&dir).arg("--out").arg(&out).arg("--quiet").output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("{stderr}");
+    assert!(o.status.success(), "loam run on the folder: {stderr}");
+    let on_the_fly = out.join("imported/cantilever_selfweight_2D_quad.json");
+    assert!(stderr.contains("imported the Kratos case"), "{stderr}");
+    let (explicit, _) = import(&dir, &temp_dir("run-folder-explicit"));
+    let strip = |p: &Path| {
+        let mut v: Value = serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap();
+        // mesh file names differ with the case name; the settings and materials must not
+        v["domains"].as_array_mut().unwrap().iter_mut().for_each(|d| {
+            d.as_object_mut().unwrap().retain(|k, _| k != "grid_mesh" && k != "material_points");
+        });
+        v.as_object_mut().unwrap().remove("description");
+        v
+    };
+    assert_eq!(strip(&on_the_fly), strip(&explicit), "the on-the-fly import is the explicit one");
+    assert!(out.join("monitors.csv").is_file(), "results written in the run's folder");
+}
