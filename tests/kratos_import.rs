@@ -203,6 +203,21 @@ fn swapped_axis_is_caught() {
     assert!((m["u"] - reference).abs() > 100.0 * 3e-10, "a swapped load direction went unnoticed");
 }
 
+/// Imports `dir` expecting a refusal: exit code 2; returns stderr (printed).
+fn refused_import(dir: &Path) -> String {
+    let o = loam()
+        .args(["import", "kratos"])
+        .arg(dir)
+        .arg("-o")
+        .arg(dir.parent().unwrap().join("c.json"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    println!("{stderr}");
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    stderr
+}
+
 /// A malformed node line: exit code 2, one line naming the file and line, no panic.
 #[test]
 fn malformed_mdpa_names_file_and_line() {
@@ -211,16 +226,7 @@ fn malformed_mdpa_names_file_and_line() {
         lines[9] = "    3   0.1000000000   zero   0.0000000000".into();
         lines.join("\n")
     });
-    let o = loam()
-        .args(["import", "kratos"])
-        .arg(&dir)
-        .arg("-o")
-        .arg(dir.parent().unwrap().join("c.json"))
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    println!("{stderr}");
-    assert_eq!(o.status.code(), Some(2));
+    let stderr = refused_import(&dir);
     assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
     assert!(stderr.contains("Grid.mdpa:10: coordinate `zero` is not a finite number"), "{stderr}");
 }
@@ -240,16 +246,7 @@ fn unknown_keys_reported_unknown_law_refused() {
     let dir = edited_copy("cantilever_lineload_2D_quad", "law", "materials.json", |t| {
         t.replacen("LinearElasticIsotropicPlaneStrain2DLaw", "HenckyBorjaCamClayPlasticPlaneStrain2DLaw", 1)
     });
-    let o = loam()
-        .args(["import", "kratos"])
-        .arg(&dir)
-        .arg("-o")
-        .arg(dir.parent().unwrap().join("c.json"))
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    println!("{stderr}");
-    assert_eq!(o.status.code(), Some(2));
+    let stderr = refused_import(&dir);
     assert!(stderr.contains("materials.json: properties[0].Material.constitutive_law.name: Kratos law 'HenckyBorjaCamClayPlasticPlaneStrain2DLaw' has no Loam counterpart"), "{stderr}");
 }
 
@@ -260,31 +257,13 @@ fn malformed_parameters_refused() {
     let dir = edited_copy("cantilever_lineload_2D_quad", "badjson", "ProjectParameters.json", |t| {
         t.replacen("\"end_time\": 1.0,", "\"end_time\": 1.0,,", 1)
     });
-    let o = loam()
-        .args(["import", "kratos"])
-        .arg(&dir)
-        .arg("-o")
-        .arg(dir.parent().unwrap().join("c.json"))
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    println!("{stderr}");
-    assert_eq!(o.status.code(), Some(2));
+    let stderr = refused_import(&dir);
     assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
     assert!(stderr.contains("ProjectParameters.json:6: invalid JSON"), "{stderr}");
     let dir = edited_copy("cantilever_lineload_2D_quad", "process", "ProjectParameters.json", |t| {
         t.replacen("assign_vector_by_direction_to_condition_process", "assign_scalar_variable_to_conditions_process", 1)
     });
-    let o = loam()
-        .args(["import", "kratos"])
-        .arg(&dir)
-        .arg("-o")
-        .arg(dir.parent().unwrap().join("c.json"))
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    println!("{stderr}");
-    assert_eq!(o.status.code(), Some(2));
+    let stderr = refused_import(&dir);
     assert!(stderr.contains("ProjectParameters.json: processes.loads_process_list[0].python_module: \"assign_scalar_variable_to_conditions_process\""), "{stderr}");
 }
 

@@ -314,7 +314,8 @@ impl Grid {
             }
             let s = self.moved_lattice_coordinates(lattice, x)?;
             let half_cells = [half_size[0] / lattice.spacing()[0], half_size[1] / lattice.spacing()[1]];
-            return Some(self.moved_lattice_functions(lattice, s, half_cells, formulation));
+            let (support, geometry, _) = self.moved_lattice_functions(lattice, s, half_cells, formulation);
+            return Some((support, geometry));
         }
         let (cell, xi) = self.locate(x)?;
         let element = self.mesh.element;
@@ -348,9 +349,7 @@ impl Grid {
                 lattice.projection_rule(s, formulation, thickness, rule);
             } else {
                 for (g, (point, weight)) in rule.iter_mut().zip(lattice.projection_points(s)) {
-                    let (_, mut geometry) = self.moved_lattice_functions(lattice, point, [0.0; 2], formulation);
-                    let (_, jacobian) = self.lattice_map(lattice, point);
-                    let det = jacobian[0][0] * jacobian[1][1] - jacobian[0][1] * jacobian[1][0];
+                    let (_, mut geometry, det) = self.moved_lattice_functions(lattice, point, [0.0; 2], formulation);
                     geometry.weight = weight * det * formulation.measure_factor(thickness, geometry.radius);
                     *g = geometry;
                 }
@@ -366,6 +365,16 @@ impl Grid {
     /// a moved grid stays isoparametric (module doc of [`crate::basis`]).
     fn lattice_map(&self, lattice: &SmoothLattice, s: [f64; 2]) -> ([f64; 2], [[f64; 2]; 2]) {
         let (support, values) = lattice.functions_at(s, [0.0; 2]);
+        self.map_from(lattice, support, &values)
+    }
+
+    /// [`Grid::lattice_map`] from the map's functions `values` on `support`, already evaluated.
+    fn map_from(
+        &self,
+        lattice: &SmoothLattice,
+        support: usize,
+        values: &[[f64; 3]; SUPPORT_NODES],
+    ) -> ([f64; 2], [[f64; 2]; 2]) {
         let mut x = [0.0; 2];
         let mut jacobian = [[0.0; 2]; 2];
         for (v, &a) in values.iter().zip(lattice.support(support)) {
@@ -411,16 +420,21 @@ impl Grid {
     }
 
     /// The functions of a moved smooth lattice at lattice coordinates `s`: shape values,
-    /// gradients `∂N/∂x = (∂x/∂s)⁻ᵀ ∂N/∂s`, and the radius `Σ N_I x_I`.
+    /// gradients `∂N/∂x = (∂x/∂s)⁻ᵀ ∂N/∂s`, and the radius `Σ N_I x_I`; with `det ∂x/∂s`.
     fn moved_lattice_functions(
         &self,
         lattice: &SmoothLattice,
         s: [f64; 2],
         half_cells: [f64; 2],
         formulation: Formulation,
-    ) -> (usize, PointGeometry) {
+    ) -> (usize, PointGeometry, f64) {
         let (support, values) = lattice.functions_at(s, half_cells);
-        let (_, j) = self.lattice_map(lattice, s);
+        // the map's functions are these unless they depend on the point's domain (GIMP)
+        let (_, j) = if lattice.basis() == Basis::Gimp && half_cells != [0.0; 2] {
+            self.lattice_map(lattice, s)
+        } else {
+            self.map_from(lattice, support, &values)
+        };
         let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
         // ∂s/∂x = (∂x/∂s)⁻¹
         let inverse = [[j[1][1] / det, -j[0][1] / det], [-j[1][0] / det, j[0][0] / det]];
@@ -435,7 +449,7 @@ impl Grid {
                 g.radius += v[0] * self.mesh.coords[node][0];
             }
         }
-        (support, g)
+        (support, g, det)
     }
 
     /// The Gauss rule [`ElementType::gauss_points_mixed`] of `cell` in the step's
