@@ -98,6 +98,8 @@ pub struct StepSummary {
     pub residual: f64,
     /// Newton iterations of the last sub-step.
     pub last_iterations: usize,
+    /// Of those, the iterations with a new tangent ([`loam_fem::model::StepReport::tangents`]).
+    pub last_tangents: usize,
     /// Length of the last sub-step (s).
     pub last_time_step: f64,
     /// Converged residual per block (soil, interface, structure) of the last sub-step.
@@ -338,7 +340,9 @@ impl Simulation {
         let summary = in_pool(|| self.advance_step_to_here(target, on_substep))?;
         if let Some(adaptive) = self.case.analysis.adaptive {
             if !(shortened && summary.substeps == 1) {
-                let k = summary.last_iterations.max(1) as f64;
+                // Newton iterations with a new tangent: all of them under full Newton; under
+                // modified Newton the cheap ones with kept factors do not shorten the step
+                let k = summary.last_tangents.max(1) as f64;
                 let factor = (adaptive.target_iterations as f64 / k).sqrt().clamp(0.5, adaptive.growth);
                 self.time_step =
                     (summary.last_time_step * factor).clamp(adaptive.min_time_step, adaptive.max_time_step);
@@ -408,6 +412,7 @@ impl Simulation {
                     summary.substeps += 1;
                     summary.residual = report.residuals.last().copied().unwrap_or(0.0);
                     summary.last_iterations = report.iterations;
+                    summary.last_tangents = report.tangents;
                     summary.last_time_step = h;
                     summary.block_residual = report.block_residuals.last().copied().unwrap_or_default();
                     self.stats.max_block_residuals = self.stats.max_block_residuals.max(summary.block_residual);

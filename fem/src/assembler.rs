@@ -86,6 +86,9 @@ pub struct Assembler {
     rotations: SlipRotations,
     friction: NodalFriction,
     solver: LinearSolver,
+    /// The step length Δt of the Newton tangent whose factors the solver keeps (set by
+    /// [`Assembler::keep_factors_for`]; `None` after any other solve).
+    factors_for: Option<f64>,
 }
 
 impl Assembler {
@@ -151,6 +154,7 @@ impl Assembler {
             rotations,
             friction,
             solver,
+            factors_for: None,
             dofs,
             pattern,
             domain_matrix,
@@ -286,28 +290,74 @@ impl Assembler {
     /// Step 3b: solves `K δu = −R`; the correction per DOF is then [`Assembler::correction`]
     /// and `‖δu‖` over the equations is returned.
     pub fn solve(&mut self) -> Result<f64, LinearSolverError> {
+        self.factors_for = None;
+        let (solver, pattern) = (&mut self.solver, &self.pattern);
         if self.scale.is_empty() {
-            self.solver.solve(&self.pattern, &self.values, &mut self.rhs)?;
+            solver.solve(pattern, &self.values, &mut self.rhs)?;
         } else {
             // D K D x̂ = D (−R), δ = D x̂ (module doc); the values are restored after
-            self.pattern.scale_symmetric(&mut self.values, &self.scale);
+            pattern.scale_symmetric(&mut self.values, &self.scale);
             for (r, d) in self.rhs.iter_mut().zip(&self.scale) {
                 *r *= d;
             }
-            let solved = self.solver.solve(&self.pattern, &self.values, &mut self.rhs);
+            let solved = solver.solve(pattern, &self.values, &mut self.rhs);
             let inverse: Vec<f64> = self.scale.iter().map(|d| 1.0 / d).collect();
-            self.pattern.scale_symmetric(&mut self.values, &inverse);
+            pattern.scale_symmetric(&mut self.values, &inverse);
             solved?;
             for (r, d) in self.rhs.iter_mut().zip(&self.scale) {
                 *r *= d;
             }
         }
+        Ok(self.take_correction())
+    }
+
+    /// Marks the factors of the last [`solve`](Self::solve) as those of the Newton tangent of
+    /// a step of length `dt`, for [`solve_with_kept_factors`](Self::solve_with_kept_factors).
+    pub fn keep_factors_for(&mut self, dt: f64) {
+        self.factors_for = Some(dt);
+    }
+
+    /// Whether the solver keeps the factors of a Newton tangent of a step of length `dt`
+    /// on this pattern.
+    pub fn has_factors_for(&self, dt: f64) -> bool {
+        self.factors_for == Some(dt)
+    }
+
+    /// Step 3b of a modified Newton iteration: solves `K_k δu = −R` with the kept factors of
+    /// an earlier tangent `K_k` ([`keep_factors_for`](Self::keep_factors_for)); `None` if
+    /// there are none, else `‖δu‖` as [`solve`](Self::solve).
+    pub fn solve_with_kept_factors(&mut self) -> Result<Option<f64>, LinearSolverError> {
+        if self.factors_for.is_none() {
+            return Ok(None);
+        }
+        for (r, d) in self.rhs.iter_mut().zip(&self.scale) {
+            *r *= d;
+        }
+        let solved = self.solver.solve_with_kept_factors(&mut self.rhs);
+        if !matches!(solved, Ok(true)) {
+            self.factors_for = None;
+        }
+        if !solved? {
+            for (r, d) in self.rhs.iter_mut().zip(&self.scale) {
+                *r /= d;
+            }
+            return Ok(None);
+        }
+        for (r, d) in self.rhs.iter_mut().zip(&self.scale) {
+            *r *= d;
+        }
+        Ok(Some(self.take_correction()))
+    }
+
+    /// After a solve: the correction per DOF (global frame) from the one per equation;
+    /// returns `‖δu‖` over the equations.
+    fn take_correction(&mut self) -> f64 {
         self.solved = true;
         for (g, &e) in self.dofs.equations().iter().enumerate() {
             self.delta[g] = if e != CONSTRAINED { self.rhs[e] } else { 0.0 };
         }
         self.rotations.to_global(&mut self.delta);
-        Ok(self.weighted_norm())
+        self.weighted_norm()
     }
 
     /// The correction `δu` of the last solve (full DOF vector, global frame).

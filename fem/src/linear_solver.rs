@@ -41,7 +41,7 @@ use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, IntranodeLbltRef, LdltRef, LltRef, SymbolicCholesky,
 };
-use faer::sparse::linalg::lu::{factorize_symbolic_lu, NumericLu, SymbolicLu};
+use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::SparseColMatRef;
 use faer::{Conj, MatMut, Side};
@@ -148,6 +148,37 @@ pub struct SolverTimings {
     /// Saddle-point systems solved by LU (after a failure of `L B Lᵀ` / `L D Lᵀ`, or
     /// unsymmetric).
     pub saddle_point_lu: usize,
+    /// Solves with the factors of an earlier tangent ([`LinearSolver::solve_with_kept_factors`]).
+    pub reused_factors: usize,
+}
+
+impl std::ops::AddAssign for SolverTimings {
+    fn add_assign(&mut self, o: Self) {
+        self.symbolic += o.symbolic;
+        self.factorisation += o.factorisation;
+        self.solve += o.solve;
+        self.factorisations += o.factorisations;
+        self.krylov_solves += o.krylov_solves;
+        self.krylov_iterations += o.krylov_iterations;
+        self.ldlt_failures += o.ldlt_failures;
+        self.saddle_point_lu += o.saddle_point_lu;
+        self.reused_factors += o.reused_factors;
+    }
+}
+
+/// Which factorisation the last successful [`LinearSolver::solve`] left numeric, for
+/// [`LinearSolver::solve_with_kept_factors`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+enum KeptFactors {
+    /// None (no solve yet, a new pattern, a failure, or a GMRES solve).
+    #[default]
+    None,
+    /// `P A Q = L U`.
+    Lu,
+    /// `A = L Lᵀ`.
+    Llt,
+    /// `L B Lᵀ` (Bunch–Kaufman, `pivoting`) or `L D Lᵀ`.
+    Ldlt { pivoting: bool },
 }
 
 /// Symbolic Cholesky factorisation with the numeric factor and the workspace kept between
@@ -169,6 +200,27 @@ struct LdltState {
     subdiag: Vec<f64>,
     perm_forward: Vec<usize>,
     perm_inverse: Vec<usize>,
+}
+
+impl LdltState {
+    /// Overwrites `x` with `A⁻¹ x` from the factor: `L B Lᵀ` with the Bunch–Kaufman
+    /// permutation if `pivoting`, else `L D Lᵀ`.
+    fn solve_in_place(&mut self, x: &mut [f64], pivoting: bool, par: faer::Par) {
+        let n = x.len();
+        let x = MatMut::from_column_major_slice_mut(x, n, 1);
+        let stack = MemStack::new(&mut self.scratch);
+        if pivoting {
+            let perm = PermRef::new_checked(&self.perm_forward, &self.perm_inverse, n);
+            IntranodeLbltRef::new(&self.symbolic, &self.values, &self.subdiag, perm).solve_in_place_with_conj(
+                Conj::No,
+                x,
+                par,
+                stack,
+            );
+        } else {
+            LdltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(Conj::No, x, par, stack);
+        }
+    }
 }
 
 impl std::fmt::Debug for LdltState {
@@ -249,6 +301,8 @@ pub struct LinearSolver {
     /// `(A + Aᵀ)/2` for its factorisation.
     symmetric_values: Vec<f64>,
     gmres: Gmres,
+    /// The factors the last successful solve left.
+    kept: KeptFactors,
     /// Accumulated timings.
     pub timings: SolverTimings,
 }
@@ -270,6 +324,7 @@ impl LinearSolver {
             symmetric_part_failed: false,
             symmetric_values: Vec::new(),
             gmres: Gmres::default(),
+            kept: KeptFactors::None,
             timings: SolverTimings::default(),
         }
     }
@@ -290,6 +345,7 @@ impl LinearSolver {
         self.lu = None;
         self.llt = None;
         self.ldlt = None;
+        self.kept = KeptFactors::None;
         self.llt_failed = false;
         self.ldlt_backoff = 0;
         self.ldlt_skip = 0;
@@ -333,6 +389,7 @@ impl LinearSolver {
         rhs: &mut [f64],
     ) -> Result<(), LinearSolverError> {
         let n = pattern.num_equations();
+        self.kept = KeptFactors::None;
         if n == 0 {
             return Ok(());
         }
@@ -347,6 +404,7 @@ impl LinearSolver {
             } else if pattern.is_symmetric(values, 1e-10) {
                 if self.solve_symmetric_indefinite(pattern, values, rhs)? {
                     self.ldlt_backoff = 0;
+                    self.kept = KeptFactors::Ldlt { pivoting: self.kind != LinearSolverKind::Ldlt };
                     return check_finite(rhs);
                 }
                 self.ldlt_backoff = (2 * self.ldlt_backoff + 1).min(LDLT_BACKOFF);
@@ -368,6 +426,7 @@ impl LinearSolver {
                 let t = Instant::now();
                 self.llt.as_mut().expect("Cholesky factor present").solve_in_place(rhs);
                 self.timings.solve += t.elapsed().as_secs_f64();
+                self.kept = KeptFactors::Llt;
                 return check_finite(rhs);
             }
             if self.kind == LinearSolverKind::Cholesky {
@@ -434,7 +493,38 @@ impl LinearSolver {
             MemStack::new(&mut st.scratch),
         );
         self.timings.solve += t.elapsed().as_secs_f64();
+        self.kept = KeptFactors::Lu;
         check_finite(rhs)
+    }
+
+    /// Solves `A_k x = b` in place with the factors that the last successful
+    /// [`solve`](Self::solve) left, of an earlier matrix `A_k` of this pattern (modified
+    /// Newton, [`crate::newton`]): triangular solves only, without refinement. `Ok(false)`
+    /// (and `rhs` unchanged) if there are none.
+    pub fn solve_with_kept_factors(&mut self, rhs: &mut [f64]) -> Result<bool, LinearSolverError> {
+        let n = rhs.len();
+        let par = faer::get_global_parallelism();
+        let t = Instant::now();
+        match self.kept {
+            KeptFactors::None => return Ok(false),
+            KeptFactors::Llt => self.llt.as_mut().expect("Cholesky factor kept").solve_in_place(rhs),
+            KeptFactors::Lu => {
+                let st = self.lu.as_mut().expect("LU factor kept");
+                LuRef::new_unchecked(&st.symbolic, &st.numeric).solve_in_place_with_conj(
+                    Conj::No,
+                    MatMut::from_column_major_slice_mut(rhs, n, 1),
+                    par,
+                    MemStack::new(&mut st.scratch),
+                );
+            }
+            KeptFactors::Ldlt { pivoting } => {
+                let st = self.ldlt.as_mut().expect("L D Lᵀ factor kept");
+                st.solve_in_place(rhs, pivoting, par);
+            }
+        }
+        self.timings.solve += t.elapsed().as_secs_f64();
+        self.timings.reused_factors += 1;
+        check_finite(rhs).map(|()| true)
     }
 
     /// `L B Lᵀ` (Bunch–Kaufman; `L D Lᵀ` with signed regularisation for the `ldlt` kind) of
@@ -516,23 +606,8 @@ impl LinearSolver {
         self.timings.factorisations += 1;
         let t = Instant::now();
         let b = rhs.to_vec();
-        let solve = |st: &mut LdltState, x: &mut [f64]| {
-            let x = MatMut::from_column_major_slice_mut(x, n, 1);
-            let stack = MemStack::new(&mut st.scratch);
-            if pivoting {
-                let perm = PermRef::new_checked(&st.perm_forward, &st.perm_inverse, n);
-                IntranodeLbltRef::new(&st.symbolic, &st.values, &st.subdiag, perm).solve_in_place_with_conj(
-                    Conj::No,
-                    x,
-                    par,
-                    stack,
-                );
-            } else {
-                LdltRef::new(&st.symbolic, &st.values).solve_in_place_with_conj(Conj::No, x, par, stack);
-            }
-        };
         let mut x = b.clone();
-        solve(st, &mut x);
+        st.solve_in_place(&mut x, pivoting, par);
         let mut r = vec![0.0; n];
         pattern.multiply(values, &x, &mut r);
         for (ri, bi) in r.iter_mut().zip(&b) {
@@ -543,7 +618,7 @@ impl LinearSolver {
             if rn <= 1e-12 * bn {
                 break;
             }
-            solve(st, &mut r);
+            st.solve_in_place(&mut r, pivoting, par);
             for (xi, di) in x.iter_mut().zip(&r) {
                 *xi += di;
             }

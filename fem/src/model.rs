@@ -211,6 +211,9 @@ impl std::ops::Sub for PhaseTimings {
 pub struct StepReport {
     /// Newton iterations (linear solves).
     pub iterations: usize,
+    /// Of `iterations`: those that assembled and factorised a new tangent (all of them
+    /// unless `solver.tangent_reuse` is `auto`).
+    pub tangents: usize,
     /// Free-DOF residual norm at each iteration, the last one converged.
     pub residuals: Vec<f64>,
     /// Residual norms per block (soil, interface, structure) at each iteration.
@@ -278,6 +281,8 @@ pub struct Model {
     /// assembler built at the next step if that step keeps the pattern.
     restored_solver_memory: Option<SolverMemory>,
     assembler: Option<Assembler>,
+    /// The solver counters of the patterns dropped so far ([`Model::solver_timings`]).
+    retired_solver_timings: SolverTimings,
 }
 
 impl Model {
@@ -307,6 +312,7 @@ impl Model {
             applied_factors: Vec::new(),
             restored_solver_memory: None,
             assembler: None,
+            retired_solver_timings: SolverTimings::default(),
         }
     }
 
@@ -374,7 +380,14 @@ impl Model {
 
     /// Forgets the sparsity pattern (after a change of domains or constraints).
     pub fn invalidate_pattern(&mut self) {
-        self.assembler = None;
+        self.retire_assembler();
+    }
+
+    /// Drops the assembler of the current pattern, keeping its solver's counters.
+    fn retire_assembler(&mut self) {
+        if let Some(a) = self.assembler.take() {
+            self.retired_solver_timings += a.solver_timings();
+        }
     }
 
     /// Builds the assembler (DOF map, element-buffer layout, sparsity pattern), if needed.
@@ -407,10 +420,14 @@ impl Model {
         self.assembler = Some(assembler);
     }
 
-    /// Accumulated times of the linear solver (symbolic analyses, numeric factorisations,
-    /// solves) since the pattern was built.
+    /// Accumulated times and counters of the linear solver (symbolic analyses, numeric
+    /// factorisations, solves) over every pattern of the run.
     pub fn solver_timings(&self) -> SolverTimings {
-        self.assembler.as_ref().map_or_else(SolverTimings::default, |a| a.solver_timings())
+        let mut t = self.retired_solver_timings;
+        if let Some(a) = &self.assembler {
+            t += a.solver_timings();
+        }
+        t
     }
 
     /// Gravity at time `t`.
@@ -518,7 +535,7 @@ impl Model {
         self.soil_forces = state.soil_forces;
         self.applied_factors = state.applied_factors;
         self.restored_solver_memory = state.solver_memory;
-        self.assembler = None;
+        self.retire_assembler();
         Ok(())
     }
 

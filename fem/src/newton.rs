@@ -11,6 +11,16 @@
 //! 4. the convergence criteria decide; if not converged, `K δu = −R` is solved and
 //!    `u ← u + δu`.
 //!
+//! **Modified Newton** ([`TangentReuse::Auto`], `solver.tangent_reuse`): the factors of the
+//! last tangent of the pattern and step length are kept, also into the next step; an
+//! iteration solves with them instead of assembling and factorising a new tangent while the
+//! residual contracts by [`REUSE_CONTRACTION`] or better per iteration (the first iteration
+//! of a step tries them unconditionally), in the first half of the iteration budget. A kept
+//! factor's correction that does not reduce the residual is taken back whole, and a new
+//! tangent is factorised at the previous iterate. The converged state meets the same
+//! criteria as with full Newton (the residual is always exact); only the path differs
+//! (linear instead of quadratic convergence in the reused iterations).
+//!
 //! The residual and correction norms of every iteration, per block of the monolithic system,
 //! go into the [`StepReport`]; with [`NewtonSettings::trace`] (`loam run --trace-newton`)
 //! every iteration also prints them on stderr.
@@ -57,11 +67,35 @@ pub struct NewtonSettings {
     /// included, is rebuilt only when the material leaves them; 0 rebuilds it at every
     /// change of the active cells.
     pub mpm_pattern_rings: usize,
+    /// Whether an iteration may solve with the factors of an earlier tangent (modified
+    /// Newton) while the residual contracts fast enough (default `off`; see
+    /// [`TangentReuse`]).
+    pub tangent_reuse: TangentReuse,
     /// Print every iteration's residual and correction norms on stderr (not a case key:
     /// `loam run --trace-newton` sets it).
     #[serde(skip)]
     pub trace: bool,
 }
+
+/// When a Newton iteration solves with the factors of an earlier tangent instead of
+/// assembling and factorising a new one: the case file's `solver.tangent_reuse`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TangentReuse {
+    /// Full Newton: a new tangent at every iteration.
+    #[default]
+    Off,
+    /// Modified Newton decided per iteration from the measured contraction (module doc):
+    /// the kept factors of the last tangent of this pattern and step length serve while
+    /// `‖R_k‖/‖R_{k−1}‖ ≤` [`REUSE_CONTRACTION`], in the first half of the iteration budget.
+    Auto,
+}
+
+/// Largest contraction `‖R_k‖/‖R_{k−1}‖` of the last iteration under which the next one may
+/// reuse kept factors ([`TangentReuse::Auto`]): a modified-Newton iteration then costs a
+/// residual assembly and two triangular solves instead of a tangent assembly and a
+/// factorisation, and four of them still gain 2.4 decades on the residual.
+pub const REUSE_CONTRACTION: f64 = 0.25;
 
 /// Default of [`NewtonSettings::mpm_pattern_rings`].
 pub const DEFAULT_MPM_PATTERN_RINGS: usize = 1;
@@ -80,6 +114,7 @@ impl Default for NewtonSettings {
             line_search_max_cuts: 4,
             cholesky_factorisation: CholeskyFactorisation::Supernodal,
             mpm_pattern_rings: DEFAULT_MPM_PATTERN_RINGS,
+            tangent_reuse: TangentReuse::Off,
             trace: false,
         }
     }
@@ -177,21 +212,45 @@ impl NewtonStrategy {
         let mut du_step = vec![0.0; n];
         let mut last_du = f64::INFINITY;
         let mut previous_du = f64::INFINITY;
+        let reuse_allowed = settings.tangent_reuse == TangentReuse::Auto;
+        // whether the last correction came from kept factors (modified Newton)
+        let mut reused_last = false;
         for it in 0..=settings.max_iterations {
-            if problem.scheme.is_dynamic() {
-                problem.scheme.inertial_accelerations(problem.state, problem.committed, &mut inertial);
-            }
             let r_prev = report.residuals.last().copied().unwrap_or(f64::INFINITY);
             let du_step_norm = problem.assembler.dof_norm(&du_step);
-            let displacement_met = convergence.displacement_met(it, last_du, du_step_norm);
+            let mut displacement_met = convergence.displacement_met(it, last_du, du_step_norm);
             let likely = convergence.likely(it, r_prev, last_du, previous_du, du_step_norm);
-            let mut with_tangent = !likely;
+            let planned_reuse =
+                reuse_allowed && it < settings.max_iterations / 2 && problem.assembler.has_factors_for(problem.dt);
+            let mut with_tangent = !likely && !planned_reuse;
             // fraction of the last correction currently applied
             let mut step_length = 1.0;
             let mut backtracks = 0;
+            let mut taken_back = false;
             let r_norm = loop {
-                let r = Self::assemble_residual(problem, &inertial, with_tangent, report)?;
+                // the inertia of the iterate as it now stands (a line search or a taken-back
+                // correction moved it)
+                if problem.scheme.is_dynamic() {
+                    problem.scheme.inertial_accelerations(problem.state, problem.committed, &mut inertial);
+                }
+                let assembled = Self::assemble_residual(problem, &inertial, with_tangent, report);
+                let reuse_failed = reused_last
+                    && !taken_back
+                    && assembled.as_ref().map_or(true, |r| r.partial_cmp(&r_prev) != Some(std::cmp::Ordering::Less));
+                let r = if reuse_failed { f64::NAN } else { assembled? };
+                if reuse_failed {
+                    // a correction from kept factors that did not reduce the residual (or that
+                    // a domain refused: an inverted point) is taken back whole; a new tangent
+                    // at the previous iterate follows
+                    problem.apply_correction(-step_length, &mut du_step);
+                    taken_back = true;
+                    displacement_met = false;
+                    last_du = f64::INFINITY;
+                    with_tangent = true;
+                    continue;
+                }
                 if settings.line_search
+                    && !taken_back
                     && it > 1
                     && backtracks < settings.line_search_max_cuts
                     && (r >= r_prev || r.is_nan())
@@ -211,7 +270,7 @@ impl NewtonStrategy {
             if settings.trace {
                 let b = problem.assembler.block_norms();
                 eprintln!(
-                    "newton t={:.6e} dt={:.3e} it={it} |r|={r_norm:.3e} (soil {:.3e} interface {:.3e} structure {:.3e}) |du|={last_du:.3e} |Du|={:.3e} backtracks={backtracks} tangent={with_tangent}",
+                    "newton t={:.6e} dt={:.3e} it={it} |r|={r_norm:.3e} (soil {:.3e} interface {:.3e} structure {:.3e}) |du|={last_du:.3e} |Du|={:.3e} backtracks={backtracks} tangent={with_tangent} reused={reused_last}",
                     problem.time, problem.dt, b.soil, b.interface, b.structure, problem.assembler.dof_norm(&du_step)
                 );
             }
@@ -225,16 +284,33 @@ impl NewtonStrategy {
             if it == settings.max_iterations {
                 break;
             }
-            if !with_tangent {
-                // the prediction failed: the tangent at the same iterate
-                with_tangent = true;
-                Self::assemble_residual(problem, &inertial, with_tangent, report)?;
-            }
-            let t = Instant::now();
-            problem.assembler.tangent();
-            report.timings.assembly += t.elapsed().as_secs_f64();
+            let contraction = if it == 0 { 0.0 } else { r_norm / r_prev };
+            let reuse = planned_reuse && !taken_back && contraction <= REUSE_CONTRACTION;
             let before = problem.assembler.solver_timings();
-            let correction = problem.assembler.solve()?;
+            let mut correction = None;
+            if reuse {
+                correction = problem.assembler.solve_with_kept_factors()?;
+            }
+            reused_last = correction.is_some();
+            let correction = match correction {
+                Some(c) => c,
+                None => {
+                    if !with_tangent {
+                        // the prediction failed: the tangent at the same iterate
+                        with_tangent = true;
+                        Self::assemble_residual(problem, &inertial, with_tangent, report)?;
+                    }
+                    let t = Instant::now();
+                    problem.assembler.tangent();
+                    report.timings.assembly += t.elapsed().as_secs_f64();
+                    let c = problem.assembler.solve()?;
+                    report.tangents += 1;
+                    if reuse_allowed {
+                        problem.assembler.keep_factors_for(problem.dt);
+                    }
+                    c
+                }
+            };
             let after = problem.assembler.solver_timings();
             report.timings.factorisation +=
                 after.factorisation - before.factorisation + after.symbolic - before.symbolic;

@@ -105,6 +105,9 @@ pub struct BlockResiduals {
 pub struct LinearSolverReport {
     /// Numeric factorisations.
     pub factorisations: usize,
+    /// Solves with the kept factors of an earlier tangent (`solver.tangent_reuse`).
+    #[serde(default)]
+    pub reused_factorisations: usize,
     /// Solves done by GMRES.
     pub krylov_solves: usize,
     /// GMRES iterations.
@@ -318,6 +321,7 @@ impl RunSummary {
             },
             linear_solver: LinearSolverReport {
                 factorisations: solver.factorisations,
+                reused_factorisations: solver.reused_factors,
                 krylov_solves: solver.krylov_solves,
                 krylov_iterations: solver.krylov_iterations,
                 saddle_point_lu: solver.saddle_point_lu,
