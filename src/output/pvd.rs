@@ -8,9 +8,11 @@
 //! </VTKFile>
 //! ```
 //!
-//! The whole file is rewritten after every step (to a temporary file, then renamed over the
-//! old one), so a run that stops at any moment leaves a valid series of the steps written
-//! so far.
+//! The first data set (and a resumed series) writes the whole file, to a temporary file then
+//! renamed over the old one; each later data set overwrites only the closing tags with its
+//! line and the closing tags (one write of a line's length at a known offset), so a run of
+//! `n` outputs writes O(n) bytes of `.pvd` in all, not O(n²), and a run that stops between
+//! outputs leaves a valid series of the steps written so far.
 
 use std::path::{Path, PathBuf};
 
@@ -26,13 +28,21 @@ pub type DataSet = (f64, String, usize);
 pub struct PvdSeries {
     path: PathBuf,
     steps: Vec<DataSet>,
+    /// Byte offset of the closing tags in the file as written (`None`: not written yet).
+    closing_at: Option<u64>,
 }
+
+/// The header of a `.pvd` document, up to the first data set.
+const HEADER: &str =
+    "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n";
+/// The closing tags of a `.pvd` document.
+const CLOSING: &str = "  </Collection>\n</VTKFile>\n";
 
 impl PvdSeries {
     /// A series to be written to `path` (e.g. `results/soil.pvd`). Nothing is written until
     /// the first [`add`](Self::add).
     pub fn new(path: impl Into<PathBuf>) -> Self {
-        Self { path: path.into(), steps: Vec::new() }
+        Self { path: path.into(), steps: Vec::new(), closing_at: None }
     }
 
     /// Record that `file` (a name relative to the `.pvd`'s directory, e.g. `soil_000003.vtu`)
@@ -51,7 +61,11 @@ impl PvdSeries {
             return Err(invalid(format!("`{file}` is not a file name relative to the .pvd")));
         }
         self.steps.push((time, file.to_string(), part));
-        if let Err(e) = self.write() {
+        let written = match self.closing_at {
+            Some(offset) => self.append(offset),
+            None => self.write(),
+        };
+        if let Err(e) = written {
             self.steps.pop();
             return Err(e);
         }
@@ -61,7 +75,7 @@ impl PvdSeries {
     /// A series to be written to `path` that already holds `steps` (a resumed run); the
     /// `.pvd` is rewritten with them.
     pub fn resume(path: impl Into<PathBuf>, steps: Vec<DataSet>) -> Result<Self, OutputError> {
-        let series = Self { path: path.into(), steps };
+        let mut series = Self { path: path.into(), steps, closing_at: None };
         series.write()?;
         Ok(series)
     }
@@ -78,25 +92,48 @@ impl PvdSeries {
 
     /// The `.pvd` document of the steps so far.
     fn document(&self) -> String {
-        let mut xml = String::from(
-            "<?xml version=\"1.0\"?>\n\
-             <VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n",
-        );
-        for (time, file, part) in &self.steps {
-            xml +=
-                &format!("    <DataSet timestep=\"{time}\" group=\"\" part=\"{part}\" file=\"{}\"/>\n", escape(file));
+        let mut xml = String::from(HEADER);
+        for step in &self.steps {
+            xml += &data_set_line(step);
         }
-        xml += "  </Collection>\n</VTKFile>\n";
+        xml += CLOSING;
         xml
     }
 
-    fn write(&self) -> Result<(), OutputError> {
-        let write_err = |e: std::io::Error| OutputError::Write { file: self.path.clone(), reason: e.to_string() };
+    fn write_error(&self, e: std::io::Error) -> OutputError {
+        OutputError::Write { file: self.path.clone(), reason: e.to_string() }
+    }
+
+    /// Writes the whole document (temporary file renamed over the old one).
+    fn write(&mut self) -> Result<(), OutputError> {
         let mut tmp = self.path.clone().into_os_string();
         tmp.push(".tmp");
-        std::fs::write(&tmp, self.document()).map_err(write_err)?;
-        std::fs::rename(&tmp, &self.path).map_err(write_err)
+        let document = self.document();
+        std::fs::write(&tmp, &document).map_err(|e| self.write_error(e))?;
+        std::fs::rename(&tmp, &self.path).map_err(|e| self.write_error(e))?;
+        self.closing_at = Some((document.len() - CLOSING.len()) as u64);
+        Ok(())
     }
+
+    /// Writes the last data set's line and the closing tags over the closing tags at
+    /// `offset`.
+    fn append(&mut self, offset: u64) -> Result<(), OutputError> {
+        use std::io::{Seek, SeekFrom, Write};
+        let line = data_set_line(self.steps.last().expect("a data set to append"));
+        let appended = (|| {
+            let mut file = std::fs::OpenOptions::new().write(true).open(&self.path)?;
+            file.seek(SeekFrom::Start(offset))?;
+            file.write_all(format!("{line}{CLOSING}").as_bytes())
+        })();
+        appended.map_err(|e| self.write_error(e))?;
+        self.closing_at = Some(offset + line.len() as u64);
+        Ok(())
+    }
+}
+
+/// The `<DataSet …/>` line of one data set.
+fn data_set_line((time, file, part): &DataSet) -> String {
+    format!("    <DataSet timestep=\"{time}\" group=\"\" part=\"{part}\" file=\"{}\"/>\n", escape(file))
 }
 
 /// Escape the five XML special characters for an attribute value.
@@ -151,6 +188,12 @@ mod tests {
             three.contains("timestep=\"0.00000015\" group=\"\" part=\"0\" file=\"a&amp;b &lt;&quot;c&quot;&gt;.vtu\"")
         );
         assert!(three.ends_with("  </Collection>\n</VTKFile>\n"));
+        // the appended file is the whole document, and stays so after a resume and more steps
+        assert_eq!(three, series.document());
+        let mut resumed = PvdSeries::resume(&path, series.steps()[..2].to_vec()).unwrap();
+        resumed.add_part(2.0, "soil_000002.vtu", 1).unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), resumed.document());
+        assert_eq!(resumed.steps().len(), 3);
         assert_eq!(series.steps().len(), 3);
         assert_eq!(series.path(), path);
         // no temporary file left behind
