@@ -41,7 +41,7 @@ use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, IntranodeLbltRef, LdltRef, LltRef, SymbolicCholesky,
 };
-use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
+use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, LuSymbolicParams, NumericLu, SymbolicLu};
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::SparseColMatRef;
 use faer::{Conj, MatMut, Side};
@@ -88,13 +88,14 @@ pub enum LinearSolverKind {
     SymmetricPartGmres,
 }
 
-/// How the Cholesky-type factorisations (`L Lᵀ`, `L D Lᵀ`, `L B Lᵀ`) are organised: the
-/// case file's `solver.cholesky_factorisation`.
+/// How the sparse factorisations (`L Lᵀ`, `L D Lᵀ`, `L B Lᵀ`, and since issue 30 the LU too)
+/// are organised: the case file's `solver.cholesky_factorisation`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum CholeskyFactorisation {
     /// Supernodal (dense blocks of columns with the same structure): 1.4–2.3× faster than
-    /// the simplicial one on these 2D FEM/MPM matrices from about 1 000 equations on
+    /// the simplicial one on these 2D FEM/MPM matrices from about 1 000 equations on, and
+    /// the LU of the Bui collapse's unsymmetric Mohr–Coulomb tangent 3.4× faster
     /// (docs/performance.md).
     #[default]
     Supernodal,
@@ -463,7 +464,13 @@ impl LinearSolver {
         if self.lu.is_none() {
             let t = Instant::now();
             let a = pattern.matrix(values);
-            let symbolic = factorize_symbolic_lu(a.symbolic(), Default::default()).map_err(factorisation_error)?;
+            // supernodal unless asked otherwise: faer's flop-ratio heuristic picks the simplicial
+            // LU for these 2D MPM matrices, 3.4× slower on the Bui collapse (performance.md)
+            let params = LuSymbolicParams {
+                supernodal_flop_ratio_threshold: self.factorisation.threshold(),
+                ..Default::default()
+            };
+            let symbolic = factorize_symbolic_lu(a.symbolic(), params).map_err(factorisation_error)?;
             let scratch = buffer(StackReq::any_of(&[
                 symbolic.factorize_numeric_lu_scratch::<f64>(par, Default::default()),
                 symbolic.solve_in_place_scratch::<f64>(1, par),
