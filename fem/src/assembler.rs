@@ -33,7 +33,7 @@ use crate::dofs::{Block, DofMap, DofTie, NodeRole, CONSTRAINED};
 use crate::domain::{AssemblyInput, Domain, DomainError};
 use crate::friction::NodalFriction;
 use crate::linear_solver::{CholeskyFactorisation, LinearSolver, LinearSolverError, LinearSolverKind, SolverTimings};
-use crate::slip::{Slip, SlipRotations};
+use crate::slip::{axis_normal_dofs, Slip, SlipRotations};
 
 /// What decides the equations of a model: nodes, roles, constraints and ties.
 pub struct SystemLayout<'a> {
@@ -113,6 +113,9 @@ impl Assembler {
         let rotations =
             SlipRotations::new(dim, system.slips, system.frames, &layout, |n| (0..dim).any(|i| dirichlet[n * dim + i]));
         for d in rotations.normal_dofs() {
+            constrained[d] = true;
+        }
+        for d in axis_normal_dofs(dim, system.slips, |d| dirichlet[d]) {
             constrained[d] = true;
         }
         let friction = NodalFriction::new(dim, &rotations.frictional_nodes(), &layout);

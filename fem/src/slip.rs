@@ -29,6 +29,29 @@ pub struct Slip {
     pub friction: f64,
 }
 
+/// The global DOFs that slip conditions hold at nodes that also carry a Dirichlet condition
+/// (which [`SlipRotations::new`] leaves out of the rotations): where such a node's slip normal
+/// lies along a global axis whose component no Dirichlet condition fixes, that component.
+/// Without it the corner node between a wall (`u_x` prescribed) and a slip base (normal `y`)
+/// was free across the base: an undamped vertical mode of one node (docs/granular_scaling.md).
+/// An inclined normal at such a node is left free, as before.
+pub fn axis_normal_dofs(dim: usize, slips: &[Slip], is_dirichlet: impl Fn(usize) -> bool) -> Vec<usize> {
+    let mut dofs = Vec::new();
+    for s in slips {
+        let node_dofs = s.node * dim..(s.node + 1) * dim;
+        if !node_dofs.clone().any(&is_dirichlet) {
+            continue;
+        }
+        let len = s.normal[..dim].iter().map(|v| v * v).sum::<f64>().sqrt();
+        for (i, d) in node_dofs.enumerate() {
+            if len > 0.0 && (s.normal[i].abs() / len - 1.0).abs() < 1e-9 && !is_dirichlet(d) {
+                dofs.push(d);
+            }
+        }
+    }
+    dofs
+}
+
 /// Local basis `Q` (columns `q[.][k]`, axis 0 the normal) for a normal in `dim` dimensions.
 pub fn local_basis(normal: [f64; 3], dim: usize) -> [[f64; 3]; 3] {
     let len = normal[..dim].iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -185,6 +208,23 @@ impl SlipRotations {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_dirichlet_corner_keeps_its_axis_slip_component() {
+        let slip = |node, normal| Slip { node, normal, friction: 0.36 };
+        // 2D: node 0 the wall-base corner (u_x held by the wall, base normal −y), node 1 a
+        // base node without Dirichlet (rotated, not listed), node 2 a Dirichlet node on an
+        // inclined boundary (left free), node 3 fully held (nothing to add)
+        let slips =
+            [slip(0, [0.0, -2.0, 0.0]), slip(1, [0.0, -1.0, 0.0]), slip(2, [0.6, 0.8, 0.0]), slip(3, [0.0, 1.0, 0.0])];
+        let dirichlet = |d: usize| d == 0 || d == 4 || d == 6 || d == 7;
+        assert_eq!(axis_normal_dofs(2, &slips, dirichlet), vec![1]);
+        // 3D: a node with u_x, u_y held on a base of normal z gives u_z
+        let slips = [slip(5, [0.0, 0.0, 1.0])];
+        assert_eq!(axis_normal_dofs(3, &slips, |d| d == 15 || d == 16), vec![17]);
+        // the normal's component already held: nothing
+        assert!(axis_normal_dofs(3, &slips, |d| d == 17).is_empty());
+    }
 
     #[test]
     fn bases_are_orthonormal_with_the_normal_first() {
