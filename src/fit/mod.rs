@@ -341,17 +341,25 @@ impl Problem {
         let test = &self.tests[t];
         let err = |message: String| EvalError { test: t, input: true, message };
         let column = |c: &Column, key: &str| {
-            table
-                .column(&c.quantity)
-                .map(|v| v.iter().map(|x| c.sign * x / c.unit.factor()).collect::<Vec<f64>>())
-                .ok_or_else(|| {
-                    err(format!(
-                        "tests[{t}].{key}.quantity: no column `{}` in the driver's output of {} (columns: {})",
-                        c.quantity,
-                        self.law,
-                        table.columns.join(", ")
-                    ))
-                })
+            let values = table.column(&c.quantity).ok_or_else(|| {
+                err(format!(
+                    "tests[{t}].{key}.quantity: no column `{}` in the driver's output of {} (columns: {})",
+                    c.quantity,
+                    self.law,
+                    table.columns.join(", ")
+                ))
+            })?;
+            let stress = spec::is_stress_quantity(&c.quantity);
+            if stress != c.unit.is_stress() {
+                return Err(err(format!(
+                    "tests[{t}].{key}.unit: `{}` is {}, so its unit must be {}, got \"{}\"",
+                    c.quantity,
+                    if stress { "a stress" } else { "dimensionless" },
+                    if stress { "\"Pa\", \"kPa\" or \"MPa\"" } else { "\"1\" or \"%\"" },
+                    c.unit.label()
+                )));
+            }
+            Ok(values.iter().map(|x| c.sign * x / c.unit.factor()).collect::<Vec<f64>>())
         };
         let mut xs = column(&test.spec.x, "x")?;
         let mut ys: Vec<Vec<f64>> = test
@@ -480,19 +488,6 @@ fn read_test(t: usize, spec: &LabTest, base: &Path) -> Result<Test, FitError> {
     for (key, col) in columns {
         if col.sign != 1.0 && col.sign != -1.0 {
             return Err(FitError::input(at(&format!("{key}.sign")), format!("must be 1 or -1, got {}", col.sign)));
-        }
-        let stress = spec::is_stress_quantity(&col.quantity);
-        if stress != col.unit.is_stress() {
-            return Err(FitError::input(
-                at(&format!("{key}.unit")),
-                format!(
-                    "`{}` is {}, so its unit must be {}, got \"{}\"",
-                    col.quantity,
-                    if stress { "a stress" } else { "dimensionless" },
-                    if stress { "\"Pa\", \"kPa\" or \"MPa\"" } else { "\"1\" or \"%\"" },
-                    col.unit.label()
-                ),
-            ));
         }
         let k = table.column(&col.column).ok_or_else(|| {
             FitError::input(
