@@ -498,3 +498,20 @@ fn a_fit_that_does_not_converge_writes_the_best_point() {
     assert!(stderr.contains("did not converge") && stderr.contains("best point so far"), "{stderr}");
     assert!(out.join("fit.csv").is_file() && out.join("material.json").is_file());
 }
+
+/// `loam plot DIR` on a fit's output draws the measured points and fitted lines per test:
+/// one picture per measured quantity (q and volumetric strain against axial strain).
+#[test]
+fn loam_plot_draws_a_fit() {
+    let out = temp_dir("plot");
+    let run = loam().args(["fit", "cases/laws/fit_mc_triaxial.json", "--out"]).arg(&out).output().unwrap();
+    assert!(run.status.success());
+    let run = loam().arg("plot").arg(&out).output().unwrap();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    println!("{stdout}{}", String::from_utf8_lossy(&run.stderr));
+    assert!(run.status.success());
+    for name in ["fit_q_vs_axial_strain.png", "fit_volumetric_strain_vs_axial_strain.png"] {
+        let png = out.join("plots").join(name);
+        assert!(std::fs::metadata(&png).map(|m| m.len() > 1000).unwrap_or(false), "{}", png.display());
+    }
+}

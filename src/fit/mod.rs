@@ -269,7 +269,10 @@ impl Problem {
         let theta0 = problem.initial();
         if let Err(e) = problem.fitted(&theta0) {
             return Err(if e.input {
-                FitError::Input(CaseError::new("", e.message))
+                FitError::Input(match e.message.split_once(": ") {
+                    Some((location, message)) => CaseError::new(location, message),
+                    None => CaseError::new("", e.message),
+                })
             } else {
                 FitError::Start { test: e.test, name: problem.tests[e.test].spec.name.clone(), message: e.message }
             });
@@ -385,8 +388,10 @@ impl Problem {
         for &x in &test.x {
             if x < lo - tol || x > hi + tol {
                 return Err(err(format!(
-                    "tests[{t}].path: the simulated {} spans [{lo}, {hi}] {unit}, the measured point x = {x} {unit} lies outside: extend the path",
-                    test.spec.x.quantity
+                    "tests[{t}].path: the simulated {} spans [{}, {}] {unit}, the measured point x = {x} {unit} lies outside: extend the path",
+                    test.spec.x.quantity,
+                    output::round(lo) + 0.0,
+                    output::round(hi) + 0.0
                 )));
             }
             let k = xs.partition_point(|v| *v < x).clamp(1, xs.len() - 1);
