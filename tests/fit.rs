@@ -451,7 +451,8 @@ fn malformed_fit_files_and_csv_exit_2_naming_the_key_or_line() {
                    "x": {"column": "ea", "quantity": "axial_strain", "unit": "%", "sign": -1},
                    "curves": [{"column": "q", "quantity": "q", "unit": "kPa"}], "weight": 1.0}]
     });
-    let cases: Vec<(&str, Box<dyn Fn(&mut Value)>, &str)> = vec![
+    type Change = Box<dyn Fn(&mut Value)>;
+    let cases: Vec<(&str, Change, &str)> = vec![
         ("unknown key", Box::new(|v| v["tests"][0]["wieght"] = json!(1)), "tests[0]"),
         ("missing weight", Box::new(|v| drop(v["tests"][0].as_object_mut().unwrap().remove("weight"))), "tests[0]"),
         ("not a parameter", Box::new(|v| v["fit"][0]["name"] = json!("friction")), "fit[0].name"),

@@ -15,8 +15,11 @@ use super::PlotError;
 /// The rows of `fit.csv` of one picture: per test (in file order), `(x, measured, fitted)`.
 type Group = Vec<(String, Vec<(f64, f64, f64)>)>;
 
-/// Reads `fit.csv`: groups keyed by `(x_quantity, x_unit, y_quantity, y_unit)`.
-fn read(path: &Path) -> Result<BTreeMap<(String, String, String, String), Group>, PlotError> {
+/// A picture's key: `(x_quantity, x_unit, y_quantity, y_unit)`.
+type Key = (String, String, String, String);
+
+/// Reads `fit.csv`: the groups by [`Key`].
+fn read(path: &Path) -> Result<BTreeMap<Key, Group>, PlotError> {
     let bad = |reason: String| PlotError::Read { file: path.to_path_buf(), reason };
     let text = std::fs::read_to_string(path).map_err(|e| bad(e.to_string()))?;
     let mut lines = text.lines();
