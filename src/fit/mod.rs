@@ -724,3 +724,25 @@ pub fn fit(problem: &Problem) -> FitResult {
         warnings,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bound transformation: `θ(u(θ)) = θ` inside the bounds, `∂θ/∂u` against a central
+    /// difference, every `u` inside the bounds.
+    #[test]
+    fn bound_transformation_round_trip_and_derivative() {
+        let p = Parameter { name: "friction_angle".into(), min: 15.0, max: 45.0, initial: 30.0 };
+        for theta in [15.0, 15.001, 22.5, 30.0, 44.9, 45.0] {
+            assert!((p.theta(p.u(theta)) - theta).abs() < 1e-12, "{theta}");
+        }
+        for u in [-3.0, -1.0, 0.0, 0.4, 1.2, 7.0] {
+            let h = 1e-6;
+            let fd = (p.theta(u + h) - p.theta(u - h)) / (2.0 * h);
+            assert!((fd - p.dtheta_du(u)).abs() < 1e-7 * 15.0, "{u}: {fd} vs {}", p.dtheta_du(u));
+            assert!((15.0..=45.0).contains(&p.theta(u)));
+        }
+        assert!(p.at_bound(15.02) && p.at_bound(44.99) && !p.at_bound(30.0));
+    }
+}
