@@ -32,8 +32,9 @@
 //! **Derivatives** of the residuals by finite differences in θ: central
 //! `∂r/∂θ_j ≈ (r(θ + h_j e_j) − r(θ − h_j e_j))/(2 h_j)`, with
 //! `h_j = h max(|θ_j|, 1e-3 (b_j − a_j))` (`h` = `solver.finite_difference_step`, default
-//! 1e-6: the truncation error `O(h²)` and the driver's round-off `O(ε/h)` are both below
-//! 1e-8 relative); one-sided inside the bounds where `θ_j ± h_j` would leave them. The
+//! 1e-6: it balances the truncation error `O(h²)` against the driver's round-off `O(ε/h)`;
+//! against the closed form of a Hencky test the error is below 1e-7 of the column's scale,
+//! `tests/fit.rs`); one-sided inside the bounds where `θ_j ± h_j` would leave them. The
 //! solver's Jacobian is `∂r/∂u = ∂r/∂θ · diag(∂θ/∂u)`.
 //!
 //! **Uncertainty** at the optimum `θ̂` ([`stats`]), from the Jacobian `J = ∂r/∂θ` in the
