@@ -80,6 +80,15 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Calibrate a law to laboratory curves (docs/fit.md): fitted parameters with 95 %
+    /// intervals, fit.csv, material.json.
+    Fit {
+        /// The fit file (JSON), e.g. cases/laws/fit_mc_triaxial.json.
+        fit: PathBuf,
+        /// Output directory (default out/<fit file name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
 }
 
 /// `loam plot` arguments.
@@ -214,5 +223,6 @@ fn main() -> ExitCode {
         }
         Command::Import { format, dir, output } => loam::import::cli(format, &dir, output.as_deref()),
         Command::Law { path, out } => cli::law::law_command(&path, out),
+        Command::Fit { fit, out } => cli::fit::fit_command(&fit, out),
     }
 }

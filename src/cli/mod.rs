@@ -6,9 +6,11 @@
 //! - [`check`]: `loam check`, a case built without running;
 //! - [`plot`]: `loam plot`, pictures of a run's results;
 //! - [`law`]: `loam law`, one material point along a laboratory path;
+//! - [`fit`]: `loam fit`, a law calibrated to laboratory curves;
 //! - [`fmu`]: `loam fmu`, a case packaged as an FMU.
 
 pub mod check;
+pub mod fit;
 pub mod fmu;
 pub mod law;
 pub mod plot;

@@ -14,11 +14,13 @@
 //!   meshes deformed, 3D projected on a plane);
 //! - [`frame`]: drawing a frame (equal scales, colour bar, title);
 //! - [`colormap`], [`overlay`] (reference curves), [`walls`] (wall lines from the case);
-//! - [`monitors`]: monitor plots; [`animation`]: the GIF.
+//! - [`monitors`]: monitor plots; [`animation`]: the GIF;
+//! - [`fit`]: the measured and fitted curves of a `loam fit` output (`fit.csv`).
 
 pub mod animation;
 pub mod colormap;
 pub mod field;
+pub mod fit;
 pub mod frame;
 pub mod monitors;
 pub mod overlay;
@@ -49,7 +51,7 @@ pub enum PlotError {
     #[error("{}: no such directory", .0.display())]
     NoDirectory(PathBuf),
     /// Nothing to plot in the directory.
-    #[error("{}: no results (no .pvd series, no monitors.csv); give the --out directory of a `loam run`", .0.display())]
+    #[error("{}: no results (no .pvd series, no monitors.csv, no fit.csv); give the --out directory of a `loam run` or `loam fit`", .0.display())]
     NoResults(PathBuf),
     /// The field is not written by any domain.
     #[error("no field `{field}` in {}; fields: {available}", dir.display())]
@@ -228,6 +230,14 @@ pub fn plot(dir: &Path, options: &PlotOptions) -> Result<PlotReport, PlotError> 
         .filter(|s| !s.steps.is_empty() && (options.grid || !s.is_grid))
         .collect();
     let monitors_csv = dir.join("monitors.csv");
+    let fit_csv = dir.join("fit.csv");
+    if series.is_empty() && !monitors_csv.is_file() && fit_csv.is_file() {
+        // the output of `loam fit`: measured points and fitted lines per test
+        let out = options.out.clone().unwrap_or_else(|| dir.join("plots"));
+        std::fs::create_dir_all(&out).map_err(|e| PlotError::Write { file: out.clone(), reason: e.to_string() })?;
+        let files = fit::plot_fit(&fit_csv, &out, options.size)?;
+        return Ok(PlotReport { files: files.into_iter().map(|f| (f, None)).collect(), ..Default::default() });
+    }
     if series.is_empty() && !monitors_csv.is_file() {
         return Err(PlotError::NoResults(dir.to_path_buf()));
     }

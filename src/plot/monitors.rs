@@ -89,7 +89,7 @@ pub fn groups(
 }
 
 /// Colours of the lines, in turn (matplotlib's tab10).
-const LINE_COLORS: [RGBColor; 6] = [
+pub(crate) const LINE_COLORS: [RGBColor; 6] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
@@ -118,7 +118,7 @@ fn draw_err<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> P
     PlotError::Draw(e.to_string())
 }
 
-fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+pub(crate) fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (a, b) =
         values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
     if a > b {
@@ -217,7 +217,7 @@ const LEGEND_BOX: (f64, f64) = (0.35, 0.3);
 /// the fewest of the curves' `points` (ties in the order upper right, upper left, lower
 /// right, lower left), so that the legend hides as little of the curves as it can (a
 /// load–settlement curve ends in the upper right and leaves the lower right empty).
-fn legend_corner(points: &[(f64, f64)], x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+pub(crate) fn legend_corner(points: &[(f64, f64)], x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
     let (w, h) = (x.1 - x.0, y.1 - y.0);
     let count = |right: bool, upper: bool| {
         points
