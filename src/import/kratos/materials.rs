@@ -10,13 +10,15 @@
 //! | `LinearElasticIsotropic…Law` | `linear_elastic` |
 //! | `HyperElasticNeoHookean…Law` | `neo_hookean` |
 //! | `HenckyMCPlastic…Law` | `mohr_coulomb` (angles from radians to degrees) |
+//! | `HenckyMCStrainSofteningPlastic…Law` | `mohr_coulomb_softening`: peak values from `COHESION`, `INTERNAL_FRICTION_ANGLE`, `INTERNAL_DILATANCY_ANGLE`, residual ones from their `…_RESIDUAL`, `SHAPE_FUNCTION_BETA` the shape factor (the same exponential decay with the accumulated plastic deviatoric strain) |
+//! | `HenckyBorjaCamClayPlastic…Law` | `modified_cam_clay`: `PRE_CONSOLIDATION_STRESS` (negative in Kratos, compression negative) to a positive `preconsolidation_pressure`; `OVER_CONSOLIDATION_RATIO`, `SWELLING_SLOPE`, `NORMAL_COMPRESSION_SLOPE`, `CRITICAL_STATE_LINE`, `INITIAL_SHEAR_MODULUS`, `ALPHA_SHEAR` to their Loam names (both codes use Borja's ln v – ln p slopes and `μ = μ₀ + α p₀ e^(ε_v^e/κ̂)`) |
+//! | `DispNewtonianFluid…Law` | `newtonian_fluid` (`DYNAMIC_VISCOSITY`, `BULK_MODULUS`) |
 //!
 //! followed by `PlaneStrain2D`, `PlaneStress2D`, `Axisym2D` or `3D` (the formulation), with
 //! `UP` before it for the mixed displacement–pressure form. Variables: `DENSITY`,
-//! `YOUNG_MODULUS`, `POISSON_RATIO`, `COHESION`, `INTERNAL_FRICTION_ANGLE`,
-//! `INTERNAL_DILATANCY_ANGLE`, `THICKNESS`, `MATERIAL_POINTS_PER_ELEMENT`. Every other law is
-//! refused (Hencky–Cam Clay and Mohr–Coulomb with softening have different parameters in
-//! Loam), every other variable reported.
+//! `YOUNG_MODULUS`, `POISSON_RATIO`, the laws' own variables above, `THICKNESS`,
+//! `MATERIAL_POINTS_PER_ELEMENT`. Every other law (e.g. the sand hypoplasticity) is refused,
+//! every other variable reported.
 
 use serde_json::{json, Map, Value};
 
@@ -76,6 +78,58 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Vec<BodyM
                 m.insert("dilatancy_angle".into(), json!(num("INTERNAL_DILATANCY_ANGLE")?.to_degrees()));
                 m
             }
+            "HenckyMCStrainSofteningPlastic" => {
+                let mut m = Map::new();
+                m.insert("law".into(), json!("mohr_coulomb_softening"));
+                for (loam, kratos, angle) in [
+                    ("density", "DENSITY", false),
+                    ("young_modulus", "YOUNG_MODULUS", false),
+                    ("poisson_ratio", "POISSON_RATIO", false),
+                    ("peak_cohesion", "COHESION", false),
+                    ("residual_cohesion", "COHESION_RESIDUAL", false),
+                    ("peak_friction_angle", "INTERNAL_FRICTION_ANGLE", true),
+                    ("residual_friction_angle", "INTERNAL_FRICTION_ANGLE_RESIDUAL", true),
+                    ("peak_dilatancy_angle", "INTERNAL_DILATANCY_ANGLE", true),
+                    ("residual_dilatancy_angle", "INTERNAL_DILATANCY_ANGLE_RESIDUAL", true),
+                    ("shape_factor", "SHAPE_FUNCTION_BETA", false),
+                ] {
+                    let v = num(kratos)?;
+                    m.insert(loam.into(), json!(if angle { v.to_degrees() } else { v }));
+                }
+                m
+            }
+            "HenckyBorjaCamClayPlastic" => {
+                let preconsolidation = num("PRE_CONSOLIDATION_STRESS")?;
+                if !(preconsolidation < 0.0) {
+                    return Err(vars.error(
+                        "PRE_CONSOLIDATION_STRESS",
+                        format!("{preconsolidation} is not a compression (Kratos takes compression negative)"),
+                    ));
+                }
+                let mut m = Map::new();
+                m.insert("law".into(), json!("modified_cam_clay"));
+                m.insert("density".into(), json!(num("DENSITY")?));
+                m.insert("preconsolidation_pressure".into(), json!(-preconsolidation));
+                for (loam, kratos) in [
+                    ("ocr", "OVER_CONSOLIDATION_RATIO"),
+                    ("swelling_slope", "SWELLING_SLOPE"),
+                    ("compression_slope", "NORMAL_COMPRESSION_SLOPE"),
+                    ("critical_state_slope", "CRITICAL_STATE_LINE"),
+                    ("initial_shear_modulus", "INITIAL_SHEAR_MODULUS"),
+                    ("alpha_shear", "ALPHA_SHEAR"),
+                ] {
+                    m.insert(loam.into(), json!(num(kratos)?));
+                }
+                m
+            }
+            "DispNewtonianFluid" => {
+                let mut m = Map::new();
+                m.insert("law".into(), json!("newtonian_fluid"));
+                m.insert("density".into(), json!(num("DENSITY")?));
+                m.insert("viscosity".into(), json!(num("DYNAMIC_VISCOSITY")?));
+                m.insert("bulk_modulus".into(), json!(num("BULK_MODULUS")?));
+                m
+            }
             _ => return Err(law.error("name", format!("Kratos law '{name}' has no Loam counterpart"))),
         };
         let thickness = vars.optional_number("THICKNESS")?;
@@ -124,7 +178,70 @@ pub fn split_law_name(name: &str) -> Option<(&str, &'static str, bool)> {
 
 #[cfg(test)]
 mod tests {
-    use super::split_law_name;
+    use super::{read, split_law_name};
+    use loam_laws::material::MaterialSpec;
+
+    /// A materials file with one body of law `name` and `variables`.
+    fn materials(name: &str, variables: &str) -> String {
+        format!(
+            r#"{{"properties": [{{"model_part_name": "Initial_MPM_Material.Parts_Soil", "properties_id": 1,
+                "Material": {{"constitutive_law": {{"name": "{name}"}}, "Variables": {{ {variables} }}, "Tables": {{}}}}}}]}}"#
+        )
+    }
+
+    /// Reads one body's material and builds it as a Loam law (the keys must be Loam's).
+    fn imported(name: &str, variables: &str) -> serde_json::Value {
+        let mut notes = Vec::new();
+        let bodies = read(&materials(name, variables), "ParticleMaterials.json", &mut notes).expect("imports");
+        assert!(notes.is_empty(), "every variable taken over: {notes:?}");
+        let material = bodies[0].material.clone();
+        let spec: MaterialSpec = serde_json::from_value(material.clone()).expect("Loam's keys");
+        spec.build().expect("a valid Loam law");
+        material
+    }
+
+    #[test]
+    fn softening_cam_clay_and_fluid_laws_map_to_loams() {
+        let m = imported(
+            "HenckyMCStrainSofteningPlasticPlaneStrain2DLaw",
+            r#""DENSITY": 2000, "YOUNG_MODULUS": 1e7, "POISSON_RATIO": 0.3, "COHESION": 5000, "COHESION_RESIDUAL": 1000,
+               "INTERNAL_FRICTION_ANGLE": 0.872664625997165, "INTERNAL_FRICTION_ANGLE_RESIDUAL": 0.5235987755982,
+               "INTERNAL_DILATANCY_ANGLE": 0.436332312998582, "INTERNAL_DILATANCY_ANGLE_RESIDUAL": 0.0, "SHAPE_FUNCTION_BETA": 4.0"#,
+        );
+        assert_eq!(m["law"], "mohr_coulomb_softening");
+        assert!((m["peak_friction_angle"].as_f64().unwrap() - 50.0).abs() < 1e-9);
+        assert!((m["residual_friction_angle"].as_f64().unwrap() - 30.0).abs() < 1e-9);
+        assert!((m["peak_dilatancy_angle"].as_f64().unwrap() - 25.0).abs() < 1e-9);
+        assert_eq!(m["residual_cohesion"], 1000.0);
+        assert_eq!(m["shape_factor"], 4.0);
+
+        let m = imported(
+            "HenckyBorjaCamClayPlasticPlaneStrain2DLaw",
+            r#""DENSITY": 1800, "PRE_CONSOLIDATION_STRESS": -90000.0, "OVER_CONSOLIDATION_RATIO": 1.0, "SWELLING_SLOPE": 0.018,
+               "NORMAL_COMPRESSION_SLOPE": 0.13, "CRITICAL_STATE_LINE": 1.05, "INITIAL_SHEAR_MODULUS": 5400000.0, "ALPHA_SHEAR": 0.0"#,
+        );
+        assert_eq!(m["law"], "modified_cam_clay");
+        assert_eq!(m["preconsolidation_pressure"], 90000.0);
+        assert_eq!(m["compression_slope"], 0.13);
+        assert_eq!(m["critical_state_slope"], 1.05);
+
+        let m = imported(
+            "DispNewtonianFluidPlaneStrain2DLaw",
+            r#""DENSITY": 1000, "BULK_MODULUS": 2.2e9, "DYNAMIC_VISCOSITY": 1e-3"#,
+        );
+        assert_eq!(m["law"], "newtonian_fluid");
+        assert_eq!(m["viscosity"], 1e-3);
+
+        // a tensile preconsolidation stress is Kratos input with the wrong sign
+        let mut notes = Vec::new();
+        let text = materials(
+            "HenckyBorjaCamClayPlastic3DLaw",
+            r#""DENSITY": 1800, "PRE_CONSOLIDATION_STRESS": 90000.0, "OVER_CONSOLIDATION_RATIO": 1.0, "SWELLING_SLOPE": 0.018,
+               "NORMAL_COMPRESSION_SLOPE": 0.13, "CRITICAL_STATE_LINE": 1.05, "INITIAL_SHEAR_MODULUS": 5400000.0, "ALPHA_SHEAR": 0.0"#,
+        );
+        let err = read(&text, "ParticleMaterials.json", &mut notes).unwrap_err().to_string();
+        assert!(err.contains("PRE_CONSOLIDATION_STRESS") && err.contains("compression negative"), "{err}");
+    }
 
     #[test]
     fn law_names() {
