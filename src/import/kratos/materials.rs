@@ -100,7 +100,7 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Vec<BodyM
             }
             "HenckyBorjaCamClayPlastic" => {
                 let preconsolidation = num("PRE_CONSOLIDATION_STRESS")?;
-                if !(preconsolidation < 0.0) {
+                if preconsolidation >= 0.0 {
                     return Err(vars.error(
                         "PRE_CONSOLIDATION_STRESS",
                         format!("{preconsolidation} is not a compression (Kratos takes compression negative)"),
