@@ -118,6 +118,23 @@ fn syntax_error(e: &serde_json::Error, path: &str) -> CaseError {
     }
 }
 
+/// Reads the JSON file `path` (a `what`, e.g. "fit file") as strictly as a case file: the size
+/// limit, duplicate keys, text after the object and unknown keys are errors located at
+/// `FILE:line L column C`, at the full JSON path, or at the file.
+pub fn read_strict<T: DeserializeOwned>(path: &Path, what: &str) -> Result<T, CaseError> {
+    let text = read_json_text(path, what)?;
+    parse(&text).map(|(file, _)| file).map_err(|mut e| {
+        e.location = if e.location.is_empty() {
+            path.display().to_string()
+        } else if e.location.starts_with("line") {
+            format!("{}:{}", path.display(), e.location)
+        } else {
+            e.location
+        };
+        e
+    })
+}
+
 /// Parses `text` strictly and deserializes a `T` from it, with every error naming its JSON
 /// path (module doc). A missing key at the top level has the location `""`.
 pub fn parse<T: DeserializeOwned>(text: &str) -> Result<(T, Value), CaseError> {

@@ -5,7 +5,6 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use super::bad_input;
-use crate::case::CaseError;
 use crate::fit::{self, FitFile, Status};
 use crate::run::default_out_dir;
 
@@ -14,7 +13,7 @@ use crate::run::default_out_dir;
 pub fn fit_command(path: &Path, out: Option<PathBuf>) -> ExitCode {
     let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let out = out.unwrap_or_else(|| default_out_dir(&crate::case::output_name(&name)));
-    let file = match read_fit_file(path) {
+    let file = match crate::input::read_strict::<FitFile>(path, "fit file") {
         Ok(f) => f,
         Err(e) => return bad_input(&e),
     };
@@ -49,20 +48,4 @@ pub fn fit_command(path: &Path, out: Option<PathBuf>) -> ExitCode {
             ExitCode::from(1)
         }
     }
-}
-
-/// Reads a fit file as strictly as a case file (size limit, duplicate keys, unknown keys,
-/// full JSON paths).
-fn read_fit_file(path: &Path) -> Result<FitFile, CaseError> {
-    let text = crate::input::read_json_text(path, "fit file")?;
-    crate::input::parse(&text).map(|(file, _)| file).map_err(|mut e| {
-        e.location = if e.location.is_empty() {
-            path.display().to_string()
-        } else if e.location.starts_with("line") {
-            format!("{}:{}", path.display(), e.location)
-        } else {
-            e.location
-        };
-        e
-    })
 }

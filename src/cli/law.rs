@@ -5,14 +5,13 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use super::bad_input;
-use crate::case::CaseError;
 use crate::run::default_out_dir;
 
 /// Runs the path file `path`, writing to `out` (default `out/<path name>`).
 pub fn law_command(path: &Path, out: Option<PathBuf>) -> ExitCode {
     let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let out = out.unwrap_or_else(|| default_out_dir(&crate::case::output_name(&name)));
-    let file = match read_path_file(path) {
+    let file = match crate::input::read_strict::<loam_laws::driver::PathFile>(path, "path file") {
         Ok(f) => f,
         Err(e) => return bad_input(&e),
     };
@@ -40,20 +39,4 @@ pub fn law_command(path: &Path, out: Option<PathBuf>) -> ExitCode {
             })
         }
     }
-}
-
-/// Reads a `loam law` path file as strictly as a case file (size limit, duplicate keys,
-/// text after the object, full JSON paths: [`loam::input`]).
-fn read_path_file(path: &Path) -> Result<loam_laws::driver::PathFile, CaseError> {
-    let text = crate::input::read_json_text(path, "path file")?;
-    crate::input::parse(&text).map(|(file, _)| file).map_err(|mut e| {
-        e.location = if e.location.is_empty() {
-            path.display().to_string()
-        } else if e.location.starts_with("line") {
-            format!("{}:{}", path.display(), e.location)
-        } else {
-            e.location
-        };
-        e
-    })
 }

@@ -7,9 +7,7 @@ use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
-use super::field::axis_tick;
-use super::frame::{register_font, FONT};
-use super::monitors::{legend_corner, range, LINE_COLORS};
+use super::monitors::{legend_line, line_chart, range, Axes, LINE_COLORS};
 use super::PlotError;
 
 /// The rows of `fit.csv` of one picture: per test (in file order), `(x, measured, fitted)`.
@@ -61,34 +59,16 @@ fn label(quantity: &str, unit: &str) -> String {
 pub fn plot_fit(fit_csv: &Path, out: &Path, size: (u32, u32)) -> Result<Vec<PathBuf>, PlotError> {
     let mut files = Vec::new();
     for ((xq, xu, yq, yu), tests) in read(fit_csv)? {
-        register_font();
-        let mut buffer = vec![255u8; 3 * size.0 as usize * size.1 as usize];
-        {
-            let root = BitMapBackend::with_buffer(&mut buffer, size).into_drawing_area();
-            root.fill(&WHITE).map_err(draw_err)?;
-            let all = || tests.iter().flat_map(|(_, p)| p.iter());
-            let (x0, x1) = range(all().map(|p| p.0));
-            let (y0, y1) = range(all().flat_map(|p| [p.1, p.2]));
-            let mut chart = ChartBuilder::on(&root)
-                .caption(format!("{yq} against {xq}: measured (points) and fitted (lines)"), (FONT, 17))
-                .margin(14)
-                .x_label_area_size(42)
-                .y_label_area_size(72)
-                .build_cartesian_2d(x0..x1, y0..y1)
-                .map_err(draw_err)?;
-            chart
-                .configure_mesh()
-                .light_line_style(TRANSPARENT)
-                .bold_line_style(RGBColor(225, 225, 225))
-                .x_desc(label(&xq, &xu))
-                .y_desc(label(&yq, &yu))
-                .x_label_formatter(&|v| axis_tick(*v, x1 - x0))
-                .y_label_formatter(&|v| axis_tick(*v, y1 - y0))
-                .label_style((FONT, 13))
-                .axis_desc_style((FONT, 14))
-                .draw()
-                .map_err(draw_err)?;
-            let mut drawn = Vec::new();
+        let all = || tests.iter().flat_map(|(_, p)| p.iter());
+        let caption = format!("{yq} against {xq}: measured (points) and fitted (lines)");
+        let axes = Axes {
+            caption: &caption,
+            x: range(all().map(|p| p.0)),
+            y: range(all().flat_map(|p| [p.1, p.2])),
+            x_desc: label(&xq, &xu),
+            y_desc: label(&yq, &yu),
+        };
+        let buffer = line_chart(size, &axes, |chart, drawn| {
             for (i, (name, points)) in tests.iter().enumerate() {
                 let color = LINE_COLORS[i % LINE_COLORS.len()];
                 let mut sorted = points.clone();
@@ -103,18 +83,10 @@ pub fn plot_fit(fit_csv: &Path, out: &Path, size: (u32, u32)) -> Result<Vec<Path
                     .draw_series(LineSeries::new(line, color.stroke_width(2)))
                     .map_err(draw_err)?
                     .label(name.clone())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+                    .legend(legend_line(color));
             }
-            chart
-                .configure_series_labels()
-                .label_font((FONT, 13))
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .position(legend_corner(&drawn, (x0, x1), (y0, y1)))
-                .draw()
-                .map_err(draw_err)?;
-            root.present().map_err(draw_err)?;
-        }
+            Ok(())
+        })?;
         let name: String = format!("fit_{yq}_vs_{xq}")
             .chars()
             .map(|c| if c.is_ascii_alphanumeric() || c == '_' || c == '-' { c } else { '_' })

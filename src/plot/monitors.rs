@@ -132,54 +132,100 @@ pub(crate) fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     }
 }
 
+/// The chart a line plot draws its series on.
+pub(crate) type LineChart<'a, 'b> = ChartContext<
+    'a,
+    BitMapBackend<'b>,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+
+/// The axes of a line plot: caption, ranges and axis titles.
+pub(crate) struct Axes<'a> {
+    pub caption: &'a str,
+    pub x: (f64, f64),
+    pub y: (f64, f64),
+    pub x_desc: String,
+    pub y_desc: String,
+}
+
+/// Draws a line plot of `size` pixels into an RGB buffer: the axes, then the series that
+/// `series` draws (pushing every point it drew into its second argument), then the legend in
+/// the emptiest corner ([`legend_corner`]). Monitor and fit pictures share it.
+pub(crate) fn line_chart(
+    size: (u32, u32),
+    axes: &Axes<'_>,
+    series: impl FnOnce(&mut LineChart<'_, '_>, &mut Vec<(f64, f64)>) -> Result<(), PlotError>,
+) -> Result<Vec<u8>, PlotError> {
+    register_font();
+    let mut buffer = vec![255u8; 3 * size.0 as usize * size.1 as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buffer, size).into_drawing_area();
+        root.fill(&WHITE).map_err(draw_err)?;
+        let ((x0, x1), (y0, y1)) = (axes.x, axes.y);
+        let mut chart = ChartBuilder::on(&root)
+            .caption(axes.caption, (FONT, 17))
+            .margin(14)
+            .x_label_area_size(42)
+            .y_label_area_size(72)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(draw_err)?;
+        chart
+            .configure_mesh()
+            .light_line_style(TRANSPARENT)
+            .bold_line_style(RGBColor(225, 225, 225))
+            .x_desc(axes.x_desc.as_str())
+            .y_desc(axes.y_desc.as_str())
+            .x_label_formatter(&|v| axis_tick(*v, x1 - x0))
+            .y_label_formatter(&|v| axis_tick(*v, y1 - y0))
+            .label_style((FONT, 13))
+            .axis_desc_style((FONT, 14))
+            .draw()
+            .map_err(draw_err)?;
+        let mut drawn = Vec::new();
+        series(&mut chart, &mut drawn)?;
+        chart
+            .configure_series_labels()
+            .label_font((FONT, 13))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(legend_corner(&drawn, (x0, x1), (y0, y1)))
+            .draw()
+            .map_err(draw_err)?;
+        root.present().map_err(draw_err)?;
+    }
+    Ok(buffer)
+}
+
+/// A series' legend entry: a short line in its colour.
+pub(crate) fn legend_line(color: RGBColor) -> impl Fn((i32, i32)) -> PathElement<(i32, i32)> {
+    move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+}
+
 impl MonitorPlot<'_> {
     /// Writes the plot as a PNG of `size` to `path`.
     pub fn write(&self, path: &Path, size: (u32, u32)) -> Result<(), PlotError> {
-        register_font();
-        let mut buffer = vec![255u8; 3 * size.0 as usize * size.1 as usize];
-        {
-            let root = BitMapBackend::with_buffer(&mut buffer, size).into_drawing_area();
-            root.fill(&WHITE).map_err(draw_err)?;
-            let t = self.table;
-            let xs = t.values(self.x);
-            let x_unit = DisplayUnit::for_range(
-                self.x_unit.as_deref().unwrap_or(""),
-                xs.iter().fold(0.0, |m, v| f64::max(m, v.abs())),
-            );
-            let largest = self
-                .ys
-                .iter()
-                .flat_map(|&k| t.values(k))
-                .filter(|v| v.is_finite())
-                .fold(0.0, |m, v| f64::max(m, v.abs()));
-            let y_unit = DisplayUnit::for_range(self.y_unit.as_deref().unwrap_or(""), largest);
-            let (x0, x1) = range(xs.iter().map(|v| v / x_unit.factor));
-            let (y0, y1) = range(self.ys.iter().flat_map(|&k| t.values(k)).map(|v| v / y_unit.factor));
-            let x_name = if self.x == 0 { "time".to_string() } else { t.names[self.x].clone() };
-            let y_name = match &self.y_unit {
-                Some(u) => quantity(u).to_string(),
-                None => t.names[self.ys[0]].clone(),
-            };
-            let mut chart = ChartBuilder::on(&root)
-                .caption(&self.title, (FONT, 17))
-                .margin(14)
-                .x_label_area_size(42)
-                .y_label_area_size(72)
-                .build_cartesian_2d(x0..x1, y0..y1)
-                .map_err(draw_err)?;
-            chart
-                .configure_mesh()
-                .light_line_style(TRANSPARENT)
-                .bold_line_style(RGBColor(225, 225, 225))
-                .x_desc(x_unit.label(&x_name))
-                .y_desc(y_unit.label(&y_name))
-                .x_label_formatter(&|v| axis_tick(*v, x1 - x0))
-                .y_label_formatter(&|v| axis_tick(*v, y1 - y0))
-                .label_style((FONT, 13))
-                .axis_desc_style((FONT, 14))
-                .draw()
-                .map_err(draw_err)?;
-            let mut drawn = Vec::new();
+        let t = self.table;
+        let xs = t.values(self.x);
+        let x_unit = DisplayUnit::for_range(
+            self.x_unit.as_deref().unwrap_or(""),
+            xs.iter().fold(0.0, |m, v| f64::max(m, v.abs())),
+        );
+        let largest =
+            self.ys.iter().flat_map(|&k| t.values(k)).filter(|v| v.is_finite()).fold(0.0, |m, v| f64::max(m, v.abs()));
+        let y_unit = DisplayUnit::for_range(self.y_unit.as_deref().unwrap_or(""), largest);
+        let x_name = if self.x == 0 { "time".to_string() } else { t.names[self.x].clone() };
+        let y_name = match &self.y_unit {
+            Some(u) => quantity(u).to_string(),
+            None => t.names[self.ys[0]].clone(),
+        };
+        let axes = Axes {
+            caption: &self.title,
+            x: range(xs.iter().map(|v| v / x_unit.factor)),
+            y: range(self.ys.iter().flat_map(|&k| t.values(k)).map(|v| v / y_unit.factor)),
+            x_desc: x_unit.label(&x_name),
+            y_desc: y_unit.label(&y_name),
+        };
+        let buffer = line_chart(size, &axes, |chart, drawn| {
             for (i, &k) in self.ys.iter().enumerate() {
                 let color = LINE_COLORS[i % LINE_COLORS.len()];
                 let points: Vec<(f64, f64)> = t
@@ -193,18 +239,10 @@ impl MonitorPlot<'_> {
                     .draw_series(LineSeries::new(points, color.stroke_width(2)))
                     .map_err(draw_err)?
                     .label(t.names[k].clone())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+                    .legend(legend_line(color));
             }
-            chart
-                .configure_series_labels()
-                .label_font((FONT, 13))
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .position(legend_corner(&drawn, (x0, x1), (y0, y1)))
-                .draw()
-                .map_err(draw_err)?;
-            root.present().map_err(draw_err)?;
-        }
+            Ok(())
+        })?;
         super::write_png(path, &buffer, size)
     }
 }
