@@ -106,6 +106,7 @@ mod tests {
             newton: Default::default(),
             linear_solver: Default::default(),
             wall_time: WallTimeReport::default(),
+            memory: Default::default(),
             monitors: Default::default(),
             monitor_units: Default::default(),
             grid_motion: Vec::new(),

@@ -190,6 +190,14 @@ fn run_writes_its_report() {
     assert!(s["newton"]["iterations"].as_u64().unwrap() >= 2);
     assert!(s["threads"].as_u64().unwrap() >= 1);
     assert!(s["wall_time"]["total"].as_f64().unwrap() >= s["wall_time"]["assembly"].as_f64().unwrap());
+    // memory: the FEM cantilever's symmetric tangent is factorised by Cholesky, whose factor
+    // holds at least the matrix's lower triangle
+    let (nnz, factor) =
+        (s["memory"]["matrix_nonzeros"].as_u64().unwrap(), s["memory"]["factor_entries"].as_u64().unwrap());
+    assert!(nnz > 0 && 2 * factor >= nnz, "matrix {nnz}, factor {factor}");
+    if cfg!(target_os = "linux") {
+        assert!(s["memory"]["peak_rss_mb"].as_f64().unwrap() > 1.0);
+    }
     let tip = s["monitors"]["tip_uy"].as_f64().unwrap();
     assert!((tip + 0.39256).abs() / 0.39256 < 0.03, "{tip}");
     assert_eq!(s["monitor_units"]["tip_uy"], "m");

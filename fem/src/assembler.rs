@@ -185,6 +185,11 @@ impl Assembler {
         self.solver.remember(memory);
     }
 
+    /// Entries of the solver's last Cholesky-type factor ([`LinearSolver::factor_entries`]).
+    pub fn factor_entries(&self) -> Option<usize> {
+        self.solver.factor_entries()
+    }
+
     /// Accumulated linear-solver timings of this pattern.
     pub fn solver_timings(&self) -> SolverTimings {
         self.solver.timings

@@ -341,6 +341,16 @@ impl LinearSolver {
         self.symmetric_part_failed = memory.symmetric_part_failed;
     }
 
+    /// Entries (values) of the factor the last successful solve left if it is Cholesky-type
+    /// (`L Lᵀ`, `L D Lᵀ`, `L B Lᵀ`); `None` after an LU, a GMRES solve or before any solve.
+    pub fn factor_entries(&self) -> Option<usize> {
+        match self.kept {
+            KeptFactors::Llt => self.llt.as_ref().map(|st| st.values.len()),
+            KeptFactors::Ldlt { .. } => self.ldlt.as_ref().map(|st| st.values.len()),
+            KeptFactors::Lu | KeptFactors::None => None,
+        }
+    }
+
     /// Forgets the symbolic factorisations (call when the pattern changes).
     pub fn reset_pattern(&mut self) {
         self.lu = None;

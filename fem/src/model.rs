@@ -420,6 +420,12 @@ impl Model {
         self.assembler = Some(assembler);
     }
 
+    /// Entries of the last Cholesky-type factor of the current pattern (None after an LU or
+    /// before a factorisation).
+    pub fn factor_entries(&self) -> Option<usize> {
+        self.assembler.as_ref().and_then(|a| a.factor_entries())
+    }
+
     /// Accumulated times and counters of the linear solver (symbolic analyses, numeric
     /// factorisations, solves) over every pattern of the run.
     pub fn solver_timings(&self) -> SolverTimings {

@@ -21,6 +21,7 @@
 //!   "wall_time": { "total": 53.1, "search": 1.2, "pattern": 0.4, "assembly": 20.3,
 //!                  "factorisation": 25.0, "symbolic": 0.3, "solve": 2.1, "commit": 0.5,
 //!                  "output": 1.0, "other": 2.6 },
+//!   "memory": { "peak_rss_mb": 61.2, "matrix_nonzeros": 151234, "factor_entries": null },
 //!   "monitors": { "runout": 0.416, "height_at_wall": 0.1002 },
 //!   "monitor_units": { "runout": "m", "height_at_wall": "m" }
 //! }
@@ -121,6 +122,39 @@ pub struct LinearSolverReport {
     pub ldlt_failures: usize,
 }
 
+/// Memory of the run (issue 30): what the process held at its peak beside the sizes of the
+/// global matrix and its factor, so that a user can see what a larger case will need.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct MemoryReport {
+    /// Peak resident set size of the process so far (MB; `VmHWM` of `/proc/self/status`;
+    /// absent where the system does not report it).
+    pub peak_rss_mb: Option<f64>,
+    /// Nonzeros of the global matrix of the current sparsity pattern.
+    pub matrix_nonzeros: usize,
+    /// Entries of the last Cholesky-type factor (`L Lᵀ`, `L D Lᵀ`, `L B Lᵀ`) of the pattern;
+    /// absent when the last factorisation was an LU (faer does not report its size).
+    pub factor_entries: Option<usize>,
+}
+
+impl MemoryReport {
+    /// The memory of `sim` now.
+    pub fn of(sim: &Simulation) -> Self {
+        Self {
+            peak_rss_mb: peak_rss_mb(),
+            matrix_nonzeros: sim.model.nnz(),
+            factor_entries: sim.model.factor_entries(),
+        }
+    }
+}
+
+/// `VmHWM` of `/proc/self/status` in MB.
+fn peak_rss_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
 /// Wall time per phase (s).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct WallTimeReport {
@@ -193,6 +227,9 @@ pub struct RunSummary {
     pub linear_solver: LinearSolverReport,
     /// Wall time per phase (s).
     pub wall_time: WallTimeReport,
+    /// Memory: the process's peak resident set and the sizes of the linear system.
+    #[serde(default)]
+    pub memory: MemoryReport,
     /// Monitor values at the last converged state, by name in case order (`null` where not
     /// finite).
     pub monitors: NamedValues<Option<f64>>,
@@ -328,6 +365,7 @@ impl RunSummary {
                 ldlt_failures: solver.ldlt_failures,
             },
             wall_time,
+            memory: MemoryReport::of(sim),
             monitors,
             monitor_units,
             grid_motion: sim
