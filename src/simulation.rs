@@ -10,6 +10,7 @@ use loam_coupling::interface::InterfaceSummary;
 use loam_fem::amplitude::Amplitude;
 use loam_fem::convergence::BlockNorms;
 use loam_fem::model::{Model, PhaseTimings, StepError};
+use loam_fem::newton::TangentReuse;
 
 use crate::case::{Case, CaseError};
 use crate::model_builder::{build_model, InputSlot, ModelInput, ModelOutput};
@@ -343,7 +344,12 @@ impl Simulation {
                 // Newton iterations with a new tangent: all of them under full Newton; under
                 // modified Newton the cheap ones with kept factors do not shorten the step
                 let k = summary.last_tangents.max(1) as f64;
-                let factor = (adaptive.target_iterations as f64 / k).sqrt().clamp(0.5, adaptive.growth);
+                let mut factor = (adaptive.target_iterations as f64 / k).sqrt().clamp(0.5, adaptive.growth);
+                // under modified Newton a step of the same length keeps the factors valid into
+                // the next step: changes within ±20 % are not made
+                if self.case.solver.tangent_reuse == TangentReuse::Auto && (0.8..=1.25).contains(&factor) {
+                    factor = 1.0;
+                }
                 self.time_step =
                     (summary.last_time_step * factor).clamp(adaptive.min_time_step, adaptive.max_time_step);
             }
