@@ -244,10 +244,19 @@ fn unknown_keys_reported_unknown_law_refused() {
         .contains("ProjectParameters.json: solver_settings.block_builder: ignored (not understood by the importer)"));
     assert!(notes.contains("processes.list_other_processes[0]: from_json_check_result_process: ignored"));
     let dir = edited_copy("cantilever_lineload_2D_quad", "law", "materials.json", |t| {
+        t.replacen("LinearElasticIsotropicPlaneStrain2DLaw", "SandHypoplasticPlaneStrain2DLaw", 1)
+    });
+    let stderr = refused_import(&dir);
+    assert!(stderr.contains("materials.json: properties[0].Material.constitutive_law.name: Kratos law 'SandHypoplasticPlaneStrain2DLaw' has no Loam counterpart"), "{stderr}");
+    // a law Loam has, given without its variables: the missing one is named
+    let dir = edited_copy("cantilever_lineload_2D_quad", "camclay", "materials.json", |t| {
         t.replacen("LinearElasticIsotropicPlaneStrain2DLaw", "HenckyBorjaCamClayPlasticPlaneStrain2DLaw", 1)
     });
     let stderr = refused_import(&dir);
-    assert!(stderr.contains("materials.json: properties[0].Material.constitutive_law.name: Kratos law 'HenckyBorjaCamClayPlasticPlaneStrain2DLaw' has no Loam counterpart"), "{stderr}");
+    assert!(
+        stderr.contains("materials.json: properties[0].Material.Variables.PRE_CONSOLIDATION_STRESS: missing"),
+        "{stderr}"
+    );
 }
 
 /// Malformed JSON and an unknown Kratos process in a load list: exit code 2, one line naming
