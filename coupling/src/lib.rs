@@ -24,3 +24,4 @@
 
 pub mod interface;
 pub mod mesh_motion;
+pub mod tie;
