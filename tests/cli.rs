@@ -104,6 +104,12 @@ fn bad_input_exits_2_naming_the_json_path() {
         check_edited("unknown", |j| j["solver"]["max_iteration"] = json!(3)),
         &["solver", "max_iteration"],
     );
+    // issue 26: the PETSc solver needs the `petsc` feature; a default build refuses it
+    expect_bad(
+        "petsc without the feature",
+        check_edited("petsc", |j| j["solver"]["linear_solver"] = json!("petsc")),
+        &["solver.linear_solver", "petsc", "feature"],
+    );
     expect_bad("unknown top key", check_edited("unknown-top", |j| j["gravityy"] = json!(1)), &["gravityy"]);
     expect_bad(
         "wrong type",

@@ -86,6 +86,10 @@ pub enum LinearSolverKind {
     /// is not positive definite or GMRES does not converge. Pays in mass-dominated steps
     /// (small Δt), where the skew part is small beside `M/(βΔt²)`.
     SymmetricPartGmres,
+    /// PETSc's Krylov solvers with algebraic multigrid (issue 26, docs/distributed.md). Only
+    /// a build with the `petsc` Cargo feature has it; the case loader refuses it otherwise,
+    /// and [`LinearSolver::solve`] returns an error.
+    Petsc,
 }
 
 /// How the sparse factorisations (`L Lᵀ`, `L D Lᵀ`, `L B Lᵀ`, and since issue 30 the LU too)
@@ -401,6 +405,11 @@ impl LinearSolver {
     ) -> Result<(), LinearSolverError> {
         let n = pattern.num_equations();
         self.kept = KeptFactors::None;
+        if self.kind == LinearSolverKind::Petsc {
+            return Err(LinearSolverError::Factorisation(
+                "`petsc` is not in this build (it needs the `petsc` Cargo feature)".into(),
+            ));
+        }
         if n == 0 {
             return Ok(());
         }
@@ -427,7 +436,7 @@ impl LinearSolver {
         }
         let symmetric = match self.kind {
             LinearSolverKind::Cholesky => true,
-            LinearSolverKind::Lu | LinearSolverKind::Ldlt | LinearSolverKind::Lblt => false,
+            LinearSolverKind::Lu | LinearSolverKind::Ldlt | LinearSolverKind::Lblt | LinearSolverKind::Petsc => false,
             LinearSolverKind::Auto | LinearSolverKind::SymmetricPartGmres => {
                 !self.llt_failed && pattern.is_symmetric(values, 1e-10)
             }

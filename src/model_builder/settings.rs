@@ -66,6 +66,13 @@ pub(super) fn check(case: &Case) -> Result<TimeScheme, CaseError> {
             ),
         ));
     }
+    if case.solver.linear_solver == loam_fem::linear_solver::LinearSolverKind::Petsc {
+        return Err(CaseError::new(
+            "solver.linear_solver",
+            "`petsc` (Krylov + AMG, issue 26) is not in this build: it needs the `petsc` Cargo feature \
+             (scripts/install_petsc.sh, docs/distributed.md); use `auto` here",
+        ));
+    }
     check_limits(case)?;
     if let Some(a) = &case.analysis.adaptive {
         check_positive("analysis.adaptive.min_time_step", a.min_time_step)?;
