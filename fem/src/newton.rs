@@ -287,10 +287,7 @@ impl NewtonStrategy {
             let contraction = if it == 0 { 0.0 } else { r_norm / r_prev };
             let reuse = planned_reuse && !taken_back && contraction <= REUSE_CONTRACTION;
             let before = problem.assembler.solver_timings();
-            let mut correction = None;
-            if reuse {
-                correction = problem.assembler.solve_with_kept_factors()?;
-            }
+            let correction = if reuse { problem.assembler.solve_with_kept_factors()? } else { None };
             reused_last = correction.is_some();
             let correction = match correction {
                 Some(c) => c,
