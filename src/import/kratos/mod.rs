@@ -68,6 +68,12 @@ pub fn import(dir: &Path, out: &Path) -> Result<Import, ImportError> {
             project.axisymmetric
         )));
     }
+    let dim = project.domain_size;
+    if (dim == 3) != (formulation == "3d") {
+        return Err(ImportError(format!(
+            "{file}: solver_settings.domain_size is {dim} but the laws of {mat_file} are {formulation}"
+        )));
+    }
     let thickness = first.thickness.unwrap_or(1.0);
     let mixed_up = project.pressure_dofs || bodies.iter().any(|b| b.mixed_up);
     if project.pressure_dofs != bodies.iter().all(|b| b.mixed_up) {
@@ -91,7 +97,7 @@ pub fn import(dir: &Path, out: &Path) -> Result<Import, ImportError> {
 
     // the grid: every element of the grid file, the sub model parts the conditions use as groups
     let grid_cells =
-        cells_of(&grid, &grid_name, grid.elements.iter().flat_map(|b| b.entities.iter().map(|e| e.0)), "Element2D")?;
+        cells_of(&grid, &grid_name, grid.elements.iter().flat_map(|b| b.entities.iter().map(|e| e.0)), "Element", dim)?;
     let mut groups: Vec<(String, BTreeSet<usize>)> = Vec::new();
     let part_of = |c: &Condition| match c {
         Condition::Displacement { part, .. }
@@ -125,7 +131,7 @@ pub fn import(dir: &Path, out: &Path) -> Result<Import, ImportError> {
         groups.push((part, nodes));
     }
     let grid_file = format!("{stem}_grid.msh");
-    write(&grid_file, &msh::write(&grid.nodes, &grid_cells, &groups), &mut files)?;
+    write(&grid_file, &msh::write(&grid.nodes, &grid_cells, dim, &groups), &mut files)?;
 
     // the bodies
     let mut materials = Map::new();
@@ -134,18 +140,22 @@ pub fn import(dir: &Path, out: &Path) -> Result<Import, ImportError> {
         let smp = body
             .sub_model_part(&b.part)
             .ok_or_else(|| ImportError(format!("{body_name}: no sub model part '{}' (named by {mat_file})", b.part)))?;
-        let cells = cells_of(&body, &body_name, smp.elements.iter().copied(), "MPMUpdatedLagrangian")?;
+        let cells = cells_of(&body, &body_name, smp.elements.iter().copied(), "MPMUpdatedLagrangian", dim)?;
         let ppc = b.points_per_cell.unwrap_or(1);
-        let allowed: &[usize] = if cells[0].len() == 4 { &[1, 4, 9, 16] } else { &[1, 3] };
+        let (allowed, shape): (&[usize], _) = match (dim, cells[0].len()) {
+            (2, 4) => (&[1, 4, 9, 16], "quadrilateral"),
+            (2, _) => (&[1, 3], "triangular"),
+            (_, 8) => (&[1, 8, 27, 64], "hexahedral"),
+            _ => (&[1, 4], "tetrahedral"),
+        };
         if !allowed.contains(&ppc) {
             return Err(ImportError(format!(
-                "{mat_file}: properties[{k}].Material.Variables.MATERIAL_POINTS_PER_ELEMENT: {ppc} on {} cells: Loam places {allowed:?}",
-                if cells[0].len() == 4 { "quadrilateral" } else { "triangular" }
+                "{mat_file}: properties[{k}].Material.Variables.MATERIAL_POINTS_PER_ELEMENT: {ppc} on {shape} cells: Loam places {allowed:?}"
             )));
         }
         let name = if bodies.len() == 1 { "body".to_string() } else { format!("body_{}", k + 1) };
         let mesh_file = format!("{stem}_{name}.msh");
-        write(&mesh_file, &msh::write(&body.nodes, &cells, &[]), &mut files)?;
+        write(&mesh_file, &msh::write(&body.nodes, &cells, dim, &[]), &mut files)?;
         materials.insert(name.clone(), b.material.clone());
         let mut d = json!({
             "name": name, "type": "mpm", "material": name,
@@ -189,9 +199,14 @@ pub fn import(dir: &Path, out: &Path) -> Result<Import, ImportError> {
     for c in &project.conditions {
         match c {
             Condition::Displacement { part, value } => {
-                bcs.push(json!({ "region": part, "displacement": [value[0], value[1]] }));
+                bcs.push(json!({ "region": part, "displacement": value[..dim] }));
             }
             Condition::Slip { part } => bcs.push(json!({ "region": part, "slip": {} })),
+            Condition::LineLoad { part, .. } if dim == 3 => {
+                return Err(ImportError(format!(
+                    "{file}: LINE_LOAD on {part} in a 3D case: line loads on 3D grids are not imported (POINT_LOAD is)"
+                )));
+            }
             Condition::LineLoad { part, load } => {
                 if thickness != 1.0 {
                     notes.push(format!(
@@ -201,7 +216,12 @@ pub fn import(dir: &Path, out: &Path) -> Result<Import, ImportError> {
                 loads.push(json!({ "type": "traction", "region": part, "traction": [load[0] / thickness, load[1] / thickness] }));
             }
             Condition::PointLoad { part, force } => {
-                loads.push(json!({ "type": "nodal_force", "region": part, "force": [force[0], force[1]] }));
+                loads.push(json!({ "type": "nodal_force", "region": part, "force": force[..dim] }));
+            }
+            Condition::Penalty { part, .. } if dim == 3 => {
+                return Err(ImportError(format!(
+                    "{file}: apply_mpm_particle_dirichlet_condition_process on {part} in a 3D case: Loam's penalty walls are 2D polylines"
+                )));
             }
             Condition::Penalty { part, points_per_condition, penalty } => {
                 let (lines, spacing) = penalty_lines(&grid, &grid_name, part, &body, *points_per_condition)?;
@@ -224,7 +244,7 @@ pub fn import(dir: &Path, out: &Path) -> Result<Import, ImportError> {
         json!(format!("Kratos MPM case '{}' imported by `loam import kratos {}`", project.name, dir.display())),
     );
     case.insert("formulation".into(), json!(formulation));
-    if formulation != "axisymmetric" {
+    if formulation != "axisymmetric" && dim == 2 {
         case.insert("thickness".into(), json!(thickness));
     }
     case.insert("materials".into(), Value::Object(materials));
@@ -239,7 +259,7 @@ pub fn import(dir: &Path, out: &Path) -> Result<Import, ImportError> {
         case.insert("loads".into(), Value::Array(loads));
     }
     if let Some(g) = project.gravity {
-        case.insert("gravity".into(), json!({ "acceleration": [g[0], g[1]] }));
+        case.insert("gravity".into(), json!({ "acceleration": g[..dim] }));
     }
     case.insert("analysis".into(), project.analysis.clone());
     case.insert("solver".into(), project.solver.clone());
@@ -249,23 +269,26 @@ pub fn import(dir: &Path, out: &Path) -> Result<Import, ImportError> {
     Ok(Import { files, notes })
 }
 
-/// The node lists of the elements `ids` of `m`, all of one 2D linear kind whose name starts
-/// with `prefix` (3 or 4 nodes).
+/// The node lists of the elements `ids` of `m`, all of one linear kind of dimension `dim`
+/// whose name starts with `prefix` (2D: 3 or 4 nodes; 3D: 4 or 8 nodes).
 fn cells_of(
     m: &mdpa::Mdpa,
     file: &str,
     ids: impl Iterator<Item = usize>,
     prefix: &str,
+    dim: usize,
 ) -> Result<Vec<Vec<usize>>, ImportError> {
+    let kinds_taken: [&str; 2] = if dim == 3 { ["3D4N", "3D8N"] } else { ["2D3N", "2D4N"] };
     let mut cells = Vec::new();
     let mut kinds = BTreeSet::new();
     for id in ids {
         let (kind, nodes) = m
             .element(id)
             .ok_or_else(|| ImportError(format!("{file}: element {id} is listed but no Elements block defines it")))?;
-        if !kind.starts_with(prefix) || !(kind.ends_with("2D3N") || kind.ends_with("2D4N")) {
+        if !kind.starts_with(prefix) || !kinds_taken.iter().any(|k| kind.ends_with(k)) {
             return Err(ImportError(format!(
-                "{file}: element {id} is a {kind}: the importer takes {prefix}…2D3N and …2D4N"
+                "{file}: element {id} is a {kind}: in a {dim}D case the importer takes {prefix}…{} and …{}",
+                kinds_taken[0], kinds_taken[1]
             )));
         }
         kinds.insert(nodes.len());
@@ -275,9 +298,7 @@ fn cells_of(
         return Err(ImportError(format!("{file}: no {prefix}… elements")));
     }
     if kinds.len() > 1 {
-        return Err(ImportError(format!(
-            "{file}: triangles and quadrilaterals mixed (Loam meshes have one cell type)"
-        )));
+        return Err(ImportError(format!("{file}: cell shapes mixed (Loam meshes have one cell type)")));
     }
     Ok(cells)
 }

@@ -9,10 +9,16 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write;
 
-/// The text of an MSH 4.1 file with `cells` (all of one type: 3 nodes → triangles, 4 →
-/// quadrangles) over `nodes` and the node sets `groups`. Only nodes that a cell or a group
-/// uses are written.
-pub fn write(nodes: &BTreeMap<usize, [f64; 3]>, cells: &[Vec<usize>], groups: &[(String, BTreeSet<usize>)]) -> String {
+/// The text of an MSH 4.1 file with `cells` of dimension `dim` (all of one type: in 2D 3
+/// nodes → triangles, 4 → quadrangles; in 3D 4 → tetrahedra, 8 → hexahedra, Kratos' and
+/// Gmsh's node orders being the same) over `nodes` and the node sets `groups`. Only nodes
+/// that a cell or a group uses are written.
+pub fn write(
+    nodes: &BTreeMap<usize, [f64; 3]>,
+    cells: &[Vec<usize>],
+    dim: usize,
+    groups: &[(String, BTreeSet<usize>)],
+) -> String {
     let mut used: BTreeSet<usize> = cells.iter().flatten().copied().collect();
     groups.iter().for_each(|(_, g)| used.extend(g));
     let (min, max) = bounds(nodes, &used);
@@ -26,7 +32,8 @@ pub fn write(nodes: &BTreeMap<usize, [f64; 3]>, cells: &[Vec<usize>], groups: &[
         s.push_str("$EndPhysicalNames\n");
     }
     s.push_str("$Entities\n");
-    let _ = writeln!(s, "{} 0 1 0", groups.len());
+    let (surfaces, volumes) = if dim == 3 { (0, 1) } else { (1, 0) };
+    let _ = writeln!(s, "{} 0 {surfaces} {volumes}", groups.len());
     for (k, (_, g)) in groups.iter().enumerate() {
         let x = g.iter().next().and_then(|n| nodes.get(n)).copied().unwrap_or_default();
         let _ = writeln!(s, "{} {} {} {} 1 {}", k + 1, x[0], x[1], x[2], k + 1);
@@ -34,7 +41,7 @@ pub fn write(nodes: &BTreeMap<usize, [f64; 3]>, cells: &[Vec<usize>], groups: &[
     let _ = writeln!(s, "1 {} {} {} {} {} {} 0 0", min[0], min[1], min[2], max[0], max[1], max[2]);
     s.push_str("$EndEntities\n");
     let (lo, hi) = (used.first().copied().unwrap_or(0), used.last().copied().unwrap_or(0));
-    let _ = writeln!(s, "$Nodes\n1 {} {lo} {hi}\n2 1 0 {}", used.len(), used.len());
+    let _ = writeln!(s, "$Nodes\n1 {} {lo} {hi}\n{dim} 1 0 {}", used.len(), used.len());
     for n in &used {
         let _ = writeln!(s, "{n}");
     }
@@ -47,8 +54,14 @@ pub fn write(nodes: &BTreeMap<usize, [f64; 3]>, cells: &[Vec<usize>], groups: &[
     let total = cells.len() + points;
     let blocks = 1 + groups.len();
     let _ = writeln!(s, "$Elements\n{blocks} {total} 1 {total}");
-    let kind = if cells.first().is_some_and(|c| c.len() == 4) { 3 } else { 2 };
-    let _ = writeln!(s, "2 1 {kind} {}", cells.len());
+    // Gmsh element types: 2 triangle, 3 quadrangle, 4 tetrahedron, 5 hexahedron
+    let kind = match (dim, cells.first().map_or(0, Vec::len)) {
+        (3, 8) => 5,
+        (3, _) => 4,
+        (_, 4) => 3,
+        _ => 2,
+    };
+    let _ = writeln!(s, "{dim} 1 {kind} {}", cells.len());
     let mut tag = 0;
     for c in cells {
         tag += 1;

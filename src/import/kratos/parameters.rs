@@ -100,8 +100,8 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Project, 
     let solver_type = s.string("solver_type")?;
     s.take("model_part_name");
     let domain_size = s.optional_number("domain_size")?.unwrap_or(2.0) as usize;
-    if domain_size != 2 {
-        return Err(s.error("domain_size", "only 2D cases are imported (3D Kratos cases: not yet)"));
+    if domain_size != 2 && domain_size != 3 {
+        return Err(s.error("domain_size", format!("{domain_size}: Kratos MPM cases are 2 or 3")));
     }
     s.ignore("echo_level", "verbosity", notes);
     if let Some(a) = s.optional_string("analysis_type")? {
