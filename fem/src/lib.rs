@@ -29,6 +29,7 @@ pub mod mesh;
 pub mod mixed_kernel;
 pub mod model;
 pub mod newton;
+pub mod pattern_lu;
 pub mod rigid_modes;
 pub mod scheme;
 pub mod slip;

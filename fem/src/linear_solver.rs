@@ -3,9 +3,14 @@
 //!
 //! `auto` (the default) checks the assembled tangent's symmetry (one pass over the
 //! nonzeros through the precomputed transpose map) and uses the Cholesky factorisation
-//! `A = L Lᵀ` when it is symmetric and positive definite, sparse LU `P A Q = L U`
-//! otherwise. On this project's FEM/MPM matrices Cholesky with AMD ordering was up to 10×
-//! faster than LU (whose column ordering fills in more), see `../shared/STACK.md`.
+//! `A = L Lᵀ` when it is symmetric and positive definite, sparse LU otherwise. On this
+//! project's FEM/MPM matrices Cholesky with AMD ordering was up to 10× faster than faer's LU
+//! `P A Q = L U` (partial pivoting: its structure is bounded by the Cholesky factor of `AᵀA`
+//! under COLAMD), see `../shared/STACK.md`. So every LU but the one `lu` asks for is first
+//! tried on the matrix's symmetric pattern ([`crate::pattern_lu`]: the Cholesky structure
+//! under AMD, pivoting restricted to the supernodes, 2× faster than faer's LU on the Bui
+//! collapse's Mohr–Coulomb tangents); a pivot below its tolerance or a solve not accurate to
+//! `1e-8` after refinement hands the pattern to faer's LU.
 //!
 //! **Saddle-point systems** (mixed u–p domains: `[K_uu K_up; K_pu K_pp]`, symmetric and
 //! indefinite for the hyperelastic laws and the pressure-independent plasticity) break
@@ -49,6 +54,7 @@ use serde::Deserialize;
 
 use crate::assembly::AssemblyPattern;
 use crate::krylov::Gmres;
+use crate::pattern_lu::PatternLu;
 
 /// Relative residual `‖b − A x‖/‖b‖` a GMRES solve must reach: far below the
 /// Newton tolerances, so that Newton takes the same path as with exact solves.
@@ -71,7 +77,8 @@ pub enum LinearSolverKind {
     /// point (mixed u–p) `L B Lᵀ` when symmetric, LU otherwise.
     #[default]
     Auto,
-    /// Sparse LU with partial pivoting (any matrix).
+    /// faer's sparse LU with partial pivoting (any matrix), not the LU on the symmetric
+    /// pattern that the other kinds try first.
     Lu,
     /// Sparse Cholesky (symmetric positive definite matrices only).
     Cholesky,
@@ -155,6 +162,8 @@ pub struct SolverTimings {
     pub saddle_point_lu: usize,
     /// Solves with the factors of an earlier tangent ([`LinearSolver::solve_with_kept_factors`]).
     pub reused_factors: usize,
+    /// Patterns on which the LU on the symmetric pattern failed (then the general LU).
+    pub pattern_lu_failures: usize,
 }
 
 impl std::ops::AddAssign for SolverTimings {
@@ -168,6 +177,7 @@ impl std::ops::AddAssign for SolverTimings {
         self.ldlt_failures += o.ldlt_failures;
         self.saddle_point_lu += o.saddle_point_lu;
         self.reused_factors += o.reused_factors;
+        self.pattern_lu_failures += o.pattern_lu_failures;
     }
 }
 
@@ -180,6 +190,8 @@ enum KeptFactors {
     None,
     /// `P A Q = L U`.
     Lu,
+    /// `P A Pᵀ = L U` on the symmetric pattern ([`PatternLu`]).
+    PatternLu,
     /// `A = L Lᵀ`.
     Llt,
     /// `L B Lᵀ` (Bunch–Kaufman, `pivoting`) or `L D Lᵀ`.
@@ -266,6 +278,42 @@ impl std::fmt::Debug for LuState {
     }
 }
 
+/// Solves `A x = b` in place (`rhs`: `b` on entry) with an approximate inverse `solve`
+/// (factors of `A`, or of a nearby matrix), followed by up to [`LDLT_REFINEMENTS`] steps of
+/// iterative refinement `x ← x + solve(b − A x)` while the residual is above `1e-12 ‖b‖`;
+/// `true` (and `x` in `rhs`) if it ends below `1e-8 ‖b‖`, else `false` and `rhs` unchanged.
+fn refined_solve(
+    pattern: &AssemblyPattern,
+    values: &[f64],
+    rhs: &mut [f64],
+    mut solve: impl FnMut(&mut [f64]),
+) -> bool {
+    let b = rhs.to_vec();
+    let mut x = b.clone();
+    solve(&mut x);
+    let mut r = vec![0.0; b.len()];
+    let residual = |x: &[f64], r: &mut [f64]| {
+        pattern.multiply(values, x, r);
+        r.iter_mut().zip(&b).for_each(|(ri, bi)| *ri = bi - *ri);
+        norm2(r)
+    };
+    let bn = norm2(&b);
+    let mut rn = residual(&x, &mut r);
+    for _ in 0..LDLT_REFINEMENTS {
+        if rn <= 1e-12 * bn {
+            break;
+        }
+        solve(&mut r);
+        x.iter_mut().zip(&r).for_each(|(xi, di)| *xi += di);
+        rn = residual(&x, &mut r);
+    }
+    let accurate = rn <= 1e-8 * bn;
+    if accurate {
+        rhs.copy_from_slice(&x);
+    }
+    accurate
+}
+
 fn factorisation_error(e: impl std::fmt::Debug) -> LinearSolverError {
     LinearSolverError::Factorisation(format!("{e:?}"))
 }
@@ -282,6 +330,10 @@ pub struct SolverMemory {
     pub cholesky_failed: bool,
     /// GMRES on the symmetric part's factors failed: LU from then on.
     pub symmetric_part_failed: bool,
+    /// The LU on the symmetric pattern met a small pivot or an inaccurate solve: the
+    /// general LU from then on.
+    #[serde(default)]
+    pub pattern_lu_failed: bool,
 }
 
 /// A direct solver bound to one sparsity pattern.
@@ -290,6 +342,10 @@ pub struct LinearSolver {
     kind: LinearSolverKind,
     factorisation: CholeskyFactorisation,
     lu: Option<LuState>,
+    pattern_lu: Option<PatternLu>,
+    /// Set once the LU on the symmetric pattern failed on this pattern: the general LU from
+    /// then on.
+    pattern_lu_failed: bool,
     llt: Option<CholeskyState>,
     ldlt: Option<LdltState>,
     /// Expected pivot sign of each equation of a saddle-point system (`+1` displacement,
@@ -320,6 +376,8 @@ impl LinearSolver {
             kind,
             factorisation,
             lu: None,
+            pattern_lu: None,
+            pattern_lu_failed: false,
             llt: None,
             ldlt: None,
             signs: Vec::new(),
@@ -336,13 +394,18 @@ impl LinearSolver {
 
     /// What this solver has learnt about its pattern's matrices.
     pub fn memory(&self) -> SolverMemory {
-        SolverMemory { cholesky_failed: self.llt_failed, symmetric_part_failed: self.symmetric_part_failed }
+        SolverMemory {
+            cholesky_failed: self.llt_failed,
+            symmetric_part_failed: self.symmetric_part_failed,
+            pattern_lu_failed: self.pattern_lu_failed,
+        }
     }
 
     /// Starts from what a solver of the same pattern had learnt ([`LinearSolver::memory`]).
     pub fn remember(&mut self, memory: SolverMemory) {
         self.llt_failed = memory.cholesky_failed;
         self.symmetric_part_failed = memory.symmetric_part_failed;
+        self.pattern_lu_failed = memory.pattern_lu_failed;
     }
 
     /// Entries (values) of the factor the last successful solve left if it is Cholesky-type
@@ -351,6 +414,7 @@ impl LinearSolver {
         match self.kept {
             KeptFactors::Llt => self.llt.as_ref().map(|st| st.values.len()),
             KeptFactors::Ldlt { .. } => self.ldlt.as_ref().map(|st| st.values.len()),
+            KeptFactors::PatternLu => self.pattern_lu.as_ref().map(PatternLu::factor_entries),
             KeptFactors::Lu | KeptFactors::None => None,
         }
     }
@@ -358,6 +422,8 @@ impl LinearSolver {
     /// Forgets the symbolic factorisations (call when the pattern changes).
     pub fn reset_pattern(&mut self) {
         self.lu = None;
+        self.pattern_lu = None;
+        self.pattern_lu_failed = false;
         self.llt = None;
         self.ldlt = None;
         self.kept = KeptFactors::None;
@@ -471,13 +537,24 @@ impl LinearSolver {
         self.solve_lu(pattern, values, rhs)
     }
 
-    /// Sparse LU with partial pivoting (symbolic analysis once per pattern).
+    /// Sparse LU: on the symmetric pattern ([`PatternLu`]) unless the kind is `lu` or it
+    /// has failed on this pattern, else with partial pivoting (faer's; symbolic analysis
+    /// once per pattern).
     fn solve_lu(
         &mut self,
         pattern: &AssemblyPattern,
         values: &[f64],
         rhs: &mut [f64],
     ) -> Result<(), LinearSolverError> {
+        if self.kind != LinearSolverKind::Lu && !self.pattern_lu_failed {
+            if self.solve_pattern_lu(pattern, values, rhs) {
+                self.kept = KeptFactors::PatternLu;
+                return check_finite(rhs);
+            }
+            self.pattern_lu_failed = true;
+            self.pattern_lu = None;
+            self.timings.pattern_lu_failures += 1;
+        }
         let n = pattern.num_equations();
         let par = faer::get_global_parallelism();
         if self.lu.is_none() {
@@ -523,6 +600,28 @@ impl LinearSolver {
         check_finite(rhs)
     }
 
+    /// LU on the symmetric pattern and a refined solve; `false` (and `rhs` unchanged) if the
+    /// analysis, a pivot or the solve's accuracy fails.
+    fn solve_pattern_lu(&mut self, pattern: &AssemblyPattern, values: &[f64], rhs: &mut [f64]) -> bool {
+        if self.pattern_lu.is_none() {
+            let t = Instant::now();
+            self.pattern_lu = PatternLu::analyse(pattern.symbolic().as_ref());
+            self.timings.symbolic += t.elapsed().as_secs_f64();
+        }
+        let Some(lu) = self.pattern_lu.as_mut() else { return false };
+        let t = Instant::now();
+        let factored = lu.factorise(pattern.matrix(values)).is_ok();
+        self.timings.factorisation += t.elapsed().as_secs_f64();
+        if !factored {
+            return false;
+        }
+        self.timings.factorisations += 1;
+        let t = Instant::now();
+        let accurate = refined_solve(pattern, values, rhs, |x| lu.solve_in_place(x));
+        self.timings.solve += t.elapsed().as_secs_f64();
+        accurate
+    }
+
     /// Solves `A_k x = b` in place with the factors that the last successful
     /// [`solve`](Self::solve) left, of an earlier matrix `A_k` of this pattern (modified
     /// Newton, [`crate::newton`]): triangular solves only, without refinement. `Ok(false)`
@@ -534,6 +633,7 @@ impl LinearSolver {
         match self.kept {
             KeptFactors::None => return Ok(false),
             KeptFactors::Llt => self.llt.as_mut().expect("Cholesky factor kept").solve_in_place(rhs),
+            KeptFactors::PatternLu => self.pattern_lu.as_mut().expect("pattern LU kept").solve_in_place(rhs),
             KeptFactors::Lu => {
                 let st = self.lu.as_mut().expect("LU factor kept");
                 LuRef::new_unchecked(&st.symbolic, &st.numeric).solve_in_place_with_conj(
@@ -631,36 +731,9 @@ impl LinearSolver {
         self.timings.factorisation += t.elapsed().as_secs_f64();
         self.timings.factorisations += 1;
         let t = Instant::now();
-        let b = rhs.to_vec();
-        let mut x = b.clone();
-        st.solve_in_place(&mut x, pivoting, par);
-        let mut r = vec![0.0; n];
-        pattern.multiply(values, &x, &mut r);
-        for (ri, bi) in r.iter_mut().zip(&b) {
-            *ri = bi - *ri;
-        }
-        let (bn, mut rn) = (norm2(&b), norm2(&r));
-        for _ in 0..LDLT_REFINEMENTS {
-            if rn <= 1e-12 * bn {
-                break;
-            }
-            st.solve_in_place(&mut r, pivoting, par);
-            for (xi, di) in x.iter_mut().zip(&r) {
-                *xi += di;
-            }
-            pattern.multiply(values, &x, &mut r);
-            for (ri, bi) in r.iter_mut().zip(&b) {
-                *ri = bi - *ri;
-            }
-            rn = norm2(&r);
-        }
+        let accurate = refined_solve(pattern, values, rhs, |x| st.solve_in_place(x, pivoting, par));
         self.timings.solve += t.elapsed().as_secs_f64();
-        let accurate = rn <= 1e-8 * bn;
-        if !accurate {
-            return Ok(false);
-        }
-        rhs.copy_from_slice(&x);
-        Ok(true)
+        Ok(accurate)
     }
 
     /// Cholesky factorisation of the symmetric matrix with nonzeros `values` (its lower

@@ -120,6 +120,10 @@ pub struct LinearSolverReport {
     /// Saddle-point systems whose symmetric indefinite factorisation failed.
     #[serde(default)]
     pub ldlt_failures: usize,
+    /// Sparsity patterns on which the LU on the symmetric pattern (restricted pivoting) met
+    /// a small pivot or an inaccurate solve, so that LU with partial pivoting took over.
+    #[serde(default)]
+    pub pattern_lu_failures: usize,
 }
 
 /// Memory of the run (issue 30): what the process held at its peak beside the sizes of the
@@ -363,6 +367,7 @@ impl RunSummary {
                 krylov_iterations: solver.krylov_iterations,
                 saddle_point_lu: solver.saddle_point_lu,
                 ldlt_failures: solver.ldlt_failures,
+                pattern_lu_failures: solver.pattern_lu_failures,
             },
             wall_time,
             memory: MemoryReport::of(sim),
