@@ -32,7 +32,9 @@ use crate::convergence::BlockNorms;
 use crate::dofs::{Block, DofMap, DofTie, NodeRole, CONSTRAINED};
 use crate::domain::{AssemblyInput, Domain, DomainError};
 use crate::friction::NodalFriction;
-use crate::linear_solver::{CholeskyFactorisation, LinearSolver, LinearSolverError, LinearSolverKind, SolverTimings};
+use crate::linear_solver::{
+    CholeskyFactorisation, LinearSolver, LinearSolverError, LinearSolverKind, PetscOptions, SolverTimings,
+};
 use crate::slip::{axis_normal_dofs, Slip, SlipRotations};
 
 /// What decides the equations of a model: nodes, roles, constraints and ties.
@@ -57,6 +59,8 @@ pub struct SystemLayout<'a> {
     pub solver: LinearSolverKind,
     /// How its Cholesky-type factorisations are organised.
     pub cholesky: CholeskyFactorisation,
+    /// Extra options of the `petsc` solver.
+    pub petsc_options: &'a PetscOptions,
 }
 
 /// The global system of one sparsity pattern (see the module doc).
@@ -134,6 +138,9 @@ impl Assembler {
             }
         }
         let mut solver = LinearSolver::new(system.solver, system.cholesky);
+        if system.solver == LinearSolverKind::Petsc {
+            solver.set_petsc_options(system.petsc_options.clone());
+        }
         if !scale.is_empty() {
             let mut signs = vec![1i8; n_eq];
             for (g, &e) in dofs.equations().iter().enumerate() {

@@ -29,6 +29,8 @@ pub mod mesh;
 pub mod mixed_kernel;
 pub mod model;
 pub mod newton;
+#[cfg(feature = "petsc")]
+mod petsc_solver;
 pub mod rigid_modes;
 pub mod scheme;
 pub mod slip;

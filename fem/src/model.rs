@@ -24,7 +24,7 @@ use crate::convergence::BlockNorms;
 pub use crate::convergence::ConvergenceCriterion;
 use crate::dofs::{DofTie, NodeRole};
 use crate::domain::{AssemblyInput, Domain, DomainError, NamedOutput, NodalState};
-use crate::linear_solver::{LinearSolverError, SolverMemory, SolverTimings};
+use crate::linear_solver::{LinearSolverError, PetscOptions, SolverMemory, SolverTimings};
 pub use crate::newton::NewtonSettings;
 use crate::newton::{assembly_input, NewtonStrategy, StepProblem};
 use crate::rigid_modes::{free_rigid_motion, short, FreeMotion};
@@ -264,6 +264,9 @@ pub struct Model {
     pub scheme: TimeScheme,
     /// Newton settings.
     pub settings: NewtonSettings,
+    /// Extra PETSc options of `settings.linear_solver == Petsc` (the case's
+    /// `solver.petsc_options`; kept apart because [`NewtonSettings`] is `Copy`).
+    pub petsc_options: PetscOptions,
     /// Current iterate (equal to `committed` between steps).
     pub state: NodalState,
     /// Last converged state.
@@ -304,6 +307,7 @@ impl Model {
             gravity: ([0.0; 3], Amplitude::default()),
             scheme,
             settings,
+            petsc_options: PetscOptions::default(),
             state: NodalState::zeros(n),
             committed: NodalState::zeros(n),
             time: 0.0,
@@ -412,6 +416,7 @@ impl Model {
             pressure_scales: &self.pressure_scales,
             solver: self.settings.linear_solver,
             cholesky: self.settings.cholesky_factorisation,
+            petsc_options: &self.petsc_options,
         };
         let mut assembler = Assembler::new(&system, &self.domains);
         if let Some(memory) = self.restored_solver_memory.take() {
