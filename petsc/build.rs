@@ -27,7 +27,8 @@ fn main() {
         .allowlist_function(
             "Mat(Create|SetSizes|SetType|SeqAIJSetPreallocationCSR|SeqAIJGetArray|SeqAIJRestoreArray|AssemblyBegin|AssemblyEnd|SetBlockSize|Destroy|CreateVecs|SetOption)",
         )
-        .allowlist_function("Vec(GetArray|RestoreArray|GetArrayRead|RestoreArrayRead|Destroy|GetSize)")
+        .allowlist_function("Vec(GetArray|RestoreArray|GetArrayRead|RestoreArrayRead|Destroy|GetSize|Duplicate)")
+        .allowlist_function("MatNullSpace(Create|Destroy)|MatSetNearNullSpace")
         .allowlist_function(
             "KSP(Create|SetOperators|SetType|GetType|GetPC|SetTolerances|SetFromOptions|SetOptionsPrefix|Solve|GetIterationNumber|GetConvergedReason|GetResidualNorm|Destroy|GMRESSetRestart|SetNormType|SetPCSide|SetInitialGuessNonzero|SetUp)",
         )

@@ -330,6 +330,8 @@ pub struct LinearSolver {
     kept: KeptFactors,
     /// Options of the `petsc` kind.
     petsc_options: PetscOptions,
+    /// Near null space of the matrices (the `petsc` kind's GAMG), one vector per mode.
+    near_null_space: Vec<Vec<f64>>,
     /// The PETSc solver of this pattern (`petsc` kind, after the first solve).
     #[cfg(feature = "petsc")]
     petsc: Option<crate::petsc_solver::PetscSolver>,
@@ -356,10 +358,18 @@ impl LinearSolver {
             gmres: Gmres::default(),
             kept: KeptFactors::None,
             petsc_options: PetscOptions::default(),
+            near_null_space: Vec::new(),
             #[cfg(feature = "petsc")]
             petsc: None,
             timings: SolverTimings::default(),
         }
+    }
+
+    /// Sets the near null space of this pattern's matrices (vectors per equation, e.g. the
+    /// rigid-body modes), which the `petsc` kind gives its GAMG preconditioner (before the
+    /// first solve); the direct solvers do not use it.
+    pub fn set_near_null_space(&mut self, vectors: Vec<Vec<f64>>) {
+        self.near_null_space = vectors;
     }
 
     /// Sets the extra PETSc options of the `petsc` kind (before the first solve).
@@ -520,7 +530,8 @@ impl LinearSolver {
         }
         if self.petsc.is_none() {
             let t = Instant::now();
-            self.petsc = Some(crate::petsc_solver::PetscSolver::new(pattern, &self.petsc_options)?);
+            self.petsc =
+                Some(crate::petsc_solver::PetscSolver::new(pattern, &self.petsc_options, &self.near_null_space)?);
             self.timings.symbolic += t.elapsed().as_secs_f64();
         }
         let solver = self.petsc.as_mut().expect("PETSc solver present");

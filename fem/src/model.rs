@@ -419,6 +419,11 @@ impl Model {
             petsc_options: &self.petsc_options,
         };
         let mut assembler = Assembler::new(&system, &self.domains);
+        if self.settings.linear_solver == crate::linear_solver::LinearSolverKind::Petsc {
+            // the near null space of PETSc's AMG: rigid-body modes at the step's start
+            let modes = assembler.rigid_body_modes(&self.positions());
+            assembler.set_near_null_space(modes);
+        }
         if let Some(memory) = self.restored_solver_memory.take() {
             assembler.remember(memory);
         }

@@ -4,7 +4,8 @@
 //!
 //! **Defaults.** CG when the assembled tangent is symmetric (the check `auto` makes, to
 //! `1e-10` relative), GMRES (restart 100, right preconditioning) otherwise; the
-//! preconditioner is PETSc's smoothed-aggregation AMG `gamg`; the relative tolerance
+//! preconditioner is PETSc's smoothed-aggregation AMG `gamg`, with the rigid-body modes of
+//! the nodes as its near null space (`Assembler::rigid_body_modes`); the relative tolerance
 //! [`PETSC_RELATIVE_TOLERANCE`] on the unpreconditioned residual `‖b − A x‖/‖b‖`, so that
 //! Newton takes the direct solver's path; at most [`PETSC_MAX_ITERATIONS`] iterations.
 //! [`PetscOptions`] (the case file's `solver.petsc_options`) override any of it
@@ -57,8 +58,13 @@ fn petsc_error(e: loam_petsc::Error) -> LinearSolverError {
 }
 
 impl PetscSolver {
-    /// The solver of `pattern` with the case's extra `options`.
-    pub(crate) fn new(pattern: &AssemblyPattern, options: &PetscOptions) -> Result<Self, LinearSolverError> {
+    /// The solver of `pattern` with the case's extra `options` and the near null space of
+    /// its matrices (the rigid-body modes per equation, for GAMG; may be empty).
+    pub(crate) fn new(
+        pattern: &AssemblyPattern,
+        options: &PetscOptions,
+        near_null_space: &[Vec<f64>],
+    ) -> Result<Self, LinearSolverError> {
         let mut settings = KrylovSettings {
             ksp_type: "gmres".into(),
             pc_type: "gamg".into(),
@@ -87,7 +93,10 @@ impl PetscSolver {
             passed.push((name.clone(), value.clone()));
         }
         let symbolic = pattern.symbolic();
-        let krylov = KrylovSolver::new(symbolic.col_ptr(), symbolic.row_idx(), &passed).map_err(petsc_error)?;
+        let mut krylov = KrylovSolver::new(symbolic.col_ptr(), symbolic.row_idx(), &passed).map_err(petsc_error)?;
+        if settings.pc_type == "gamg" && near_null_space.iter().all(|v| v.len() == pattern.num_equations()) {
+            krylov.set_near_null_space(near_null_space).map_err(petsc_error)?;
+        }
         Ok(Self { krylov, settings, ksp_given, configured_symmetric: None })
     }
 

@@ -317,6 +317,70 @@ impl KrylovSolver {
         self.n == 0
     }
 
+    /// Gives the matrix a near null space (for PCGAMG: the rigid-body modes of elasticity),
+    /// `vectors` of the solver's size; they are orthonormalised here (modified Gram–Schmidt),
+    /// and a vector that depends on the others is dropped.
+    pub fn set_near_null_space(&mut self, vectors: &[Vec<f64>]) -> Result<(), Error> {
+        let mut basis: Vec<Vec<f64>> = Vec::with_capacity(vectors.len());
+        for v in vectors {
+            assert_eq!(v.len(), self.n, "near-null-space vector of the solver's size");
+            let mut w = v.clone();
+            for _ in 0..2 {
+                for b in &basis {
+                    let d: f64 = w.iter().zip(b).map(|(x, y)| x * y).sum();
+                    w.iter_mut().zip(b).for_each(|(x, y)| *x -= d * y);
+                }
+            }
+            let norm = w.iter().map(|x| x * x).sum::<f64>().sqrt();
+            let scale = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if norm > 1e-8 * scale && norm > 0.0 {
+                w.iter_mut().for_each(|x| *x /= norm);
+                basis.push(w);
+            }
+        }
+        if basis.is_empty() {
+            return Ok(());
+        }
+        let _guard = lock();
+        let mut vecs: Vec<sys::Vec> = Vec::with_capacity(basis.len());
+        // SAFETY: the matrix and `self.x` are live; each duplicate is written through the
+        // array PETSc lends (n values, valid until the restore); MatNullSpaceCreate takes its
+        // own references to the vectors and MatSetNearNullSpace its own to the null space, so
+        // ours are destroyed here (also on an error, by the closure's caller below).
+        let result = (|| unsafe {
+            for b in &basis {
+                let mut v: sys::Vec = ptr::null_mut();
+                check("VecDuplicate", sys::VecDuplicate(self.x, &mut v))?;
+                vecs.push(v);
+                let mut a: *mut f64 = ptr::null_mut();
+                check("VecGetArray", sys::VecGetArray(v, &mut a))?;
+                if self.n > 0 {
+                    std::slice::from_raw_parts_mut(a, self.n).copy_from_slice(b);
+                }
+                check("VecRestoreArray", sys::VecRestoreArray(v, &mut a))?;
+            }
+            let mut space: sys::MatNullSpace = ptr::null_mut();
+            check(
+                "MatNullSpaceCreate",
+                sys::MatNullSpaceCreate(
+                    sys::PETSC_COMM_WORLD,
+                    sys::PetscBool::PETSC_FALSE,
+                    vecs.len() as sys::PetscInt,
+                    vecs.as_ptr(),
+                    &mut space,
+                ),
+            )?;
+            let set = check("MatSetNearNullSpace", sys::MatSetNearNullSpace(self.mat, space));
+            sys::MatNullSpaceDestroy(&mut space);
+            set
+        })();
+        for v in &mut vecs {
+            // SAFETY: each is a live vector created above, destroyed once.
+            unsafe { sys::VecDestroy(v) };
+        }
+        result
+    }
+
     /// Sets the KSP and PC from `settings`, then applies this solver's options (which
     /// override them).
     pub fn configure(&mut self, settings: &KrylovSettings) -> Result<(), Error> {
