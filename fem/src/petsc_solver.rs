@@ -8,6 +8,8 @@
 //! the nodes as its near null space (`Assembler::rigid_body_modes`); the relative tolerance
 //! [`PETSC_RELATIVE_TOLERANCE`] on the unpreconditioned residual `‖b − A x‖/‖b‖`, so that
 //! Newton takes the direct solver's path; at most [`PETSC_MAX_ITERATIONS`] iterations.
+//! A CG solve that fails (GAMG's Chebyshev smoothers can make the preconditioner indefinite:
+//! `DIVERGED_INDEFINITE_PC`) is repeated by GMRES, which then serves the rest of the pattern.
 //! [`PetscOptions`] (the case file's `solver.petsc_options`) override any of it
 //! (`-ksp_type`, `-pc_type`, `-ksp_rtol`, …); `-pc_type hypre` is BoomerAMG and the value
 //! `mumps` of `-pc_type` stands for `-pc_type lu -pc_factor_mat_solver_type mumps` (MUMPS's
@@ -51,6 +53,9 @@ pub(crate) struct PetscSolver {
     ksp_given: bool,
     /// Whether the KSP was configured for a symmetric matrix (`None`: not yet configured).
     configured_symmetric: Option<bool>,
+    /// Set once CG failed on this pattern (e.g. an indefinite preconditioner): GMRES from
+    /// then on, as the direct solver turns to LU after a failed Cholesky.
+    cg_failed: bool,
 }
 
 fn petsc_error(e: loam_petsc::Error) -> LinearSolverError {
@@ -97,7 +102,7 @@ impl PetscSolver {
         if settings.pc_type == "gamg" && near_null_space.iter().all(|v| v.len() == pattern.num_equations()) {
             krylov.set_near_null_space(near_null_space).map_err(petsc_error)?;
         }
-        Ok(Self { krylov, settings, ksp_given, configured_symmetric: None })
+        Ok(Self { krylov, settings, ksp_given, configured_symmetric: None, cg_failed: false })
     }
 
     /// Solves `A x = b` in place (`rhs`: `b` on entry, `x` on exit) for the matrix with the
@@ -110,27 +115,20 @@ impl PetscSolver {
         timings: &mut SolverTimings,
     ) -> Result<(), LinearSolverError> {
         let t = Instant::now();
-        let symmetric = !self.ksp_given && pattern.is_symmetric(values, 1e-10);
-        if self.configured_symmetric != Some(symmetric) {
-            let mut settings = self.settings.clone();
-            if !self.ksp_given {
-                settings.ksp_type = if symmetric { "cg" } else { "gmres" }.into();
-            }
-            // right preconditioning (the true residual in the test) where the method has it
-            settings.right_preconditioning =
-                matches!(settings.ksp_type.as_str(), "gmres" | "fgmres" | "lgmres" | "bcgs" | "dgmres");
-            self.krylov.configure(&settings).map_err(petsc_error)?;
-            self.configured_symmetric = Some(symmetric);
-        }
+        let symmetric = !self.ksp_given && !self.cg_failed && pattern.is_symmetric(values, 1e-10);
+        self.configure(symmetric)?;
         let transpose = pattern.transpose_positions();
         self.krylov.set_values(|k| values[transpose[k]]).map_err(petsc_error)?;
         // the symmetry check and the copy of the values count with the preconditioner's set-up
         timings.factorisation += t.elapsed().as_secs_f64();
-        let report = self.krylov.solve(rhs).map_err(petsc_error)?;
-        timings.factorisation += report.setup_seconds;
-        timings.solve += report.solve_seconds;
-        timings.factorisations += 1;
-        timings.krylov_iterations += report.iterations;
+        let mut report = self.run(rhs, timings)?;
+        if !report.converged && symmetric {
+            // CG failed (an indefinite preconditioner, or the limit): GMRES on the same
+            // matrix, and from then on for this pattern (`rhs` is unchanged after a failure)
+            self.cg_failed = true;
+            self.configure(false)?;
+            report = self.run(rhs, timings)?;
+        }
         if !report.converged {
             return Err(LinearSolverError::NotConverged {
                 iterations: report.iterations,
@@ -139,5 +137,37 @@ impl PetscSolver {
         }
         timings.krylov_solves += 1;
         Ok(())
+    }
+
+    /// Configures the KSP for a symmetric matrix (CG) or not (GMRES) unless it already is (or
+    /// the options fix the type).
+    fn configure(&mut self, symmetric: bool) -> Result<(), LinearSolverError> {
+        if self.configured_symmetric == Some(symmetric) {
+            return Ok(());
+        }
+        let mut settings = self.settings.clone();
+        if !self.ksp_given {
+            settings.ksp_type = if symmetric { "cg" } else { "gmres" }.into();
+        }
+        // right preconditioning (the true residual in the test) where the method has it
+        settings.right_preconditioning =
+            matches!(settings.ksp_type.as_str(), "gmres" | "fgmres" | "lgmres" | "bcgs" | "dgmres");
+        self.krylov.configure(&settings).map_err(petsc_error)?;
+        self.configured_symmetric = Some(symmetric);
+        Ok(())
+    }
+
+    /// One Krylov solve with the current matrix, its timings and iterations counted.
+    fn run(
+        &mut self,
+        rhs: &mut [f64],
+        timings: &mut SolverTimings,
+    ) -> Result<loam_petsc::SolveReport, LinearSolverError> {
+        let report = self.krylov.solve(rhs).map_err(petsc_error)?;
+        timings.factorisation += report.setup_seconds;
+        timings.solve += report.solve_seconds;
+        timings.factorisations += 1;
+        timings.krylov_iterations += report.iterations;
+        Ok(report)
     }
 }
