@@ -577,4 +577,20 @@ mod tests {
         assert_eq!(reason_name(r.reason), "DIVERGED_ITS");
         assert_eq!(b, vec![1.0; 50], "rhs unchanged after a failure");
     }
+
+    /// A near null space (the constant, given twice and so once dropped as dependent) is
+    /// accepted by GAMG, which then still solves the Laplacian.
+    #[test]
+    fn near_null_space_is_orthonormalised_and_used() {
+        let n = 100;
+        let (ptr, idx, val) = laplacian(n);
+        let mut s = KrylovSolver::new(&ptr, &idx, &[]).expect("solver");
+        s.set_near_null_space(&[vec![1.0; n], vec![2.0; n]]).expect("near null space");
+        s.configure(&settings("cg", "gamg", None)).expect("configured");
+        s.set_values(|k| val[k]).expect("values");
+        let mut b: Vec<f64> = (0..n).map(|i| if i == 0 || i == n - 1 { 1.0 } else { 0.0 }).collect();
+        let r = s.solve(&mut b).expect("solves");
+        assert!(r.converged, "{}", reason_name(r.reason));
+        assert!(b.iter().all(|x| (x - 1.0).abs() < 1e-8));
+    }
 }
