@@ -71,6 +71,23 @@ fn cantilever_mpm_petsc_matches_beam_theory_and_the_direct_solver() {
     assert_same_monitors("cantilever_mpm", &sim, &h, &direct);
 }
 
+/// Benchmark 1 in 3D (`cases/cantilever_fem_3d.json`, hex8 56 × 8 × 8, 13 608 equations, two
+/// load steps): the tip deflection against Timoshenko within 3 % (BENCHMARKS.md, FEM; as
+/// `fem_validation::hex8_cantilever_matches_beam_theory`), CG + GAMG with the rigid-body
+/// modes in at most 40 iterations per solve (measured 23), and every monitor equal to the
+/// direct solver's.
+#[test]
+fn cantilever_3d_petsc_matches_beam_theory_and_the_direct_solver() {
+    let (sim, h) = run(parse(with_petsc(case_json("cantilever_fem_3d.json"), json!({}))));
+    let (_, direct) = run(parse(case_json("cantilever_fem_3d.json")));
+    report("3D hex8 cantilever tip_uy (PETSc) vs Timoshenko [m]", last(&sim, &h, "tip_uy"), timoshenko(7.0), 0.03);
+    let t = sim.model.solver_timings();
+    let per_solve = t.krylov_iterations as f64 / t.krylov_solves.max(1) as f64;
+    println!("{} solves, {per_solve:.1} CG iterations per solve", t.krylov_solves);
+    assert!(t.krylov_solves > 0 && per_solve <= 40.0, "GAMG with the rigid-body modes: {per_solve} per solve");
+    assert_same_monitors("cantilever_fem_3d", &sim, &h, &direct);
+}
+
 /// The other preconditioners and a user's Krylov type (consistency checks on the FEM
 /// cantilever): BoomerAMG (`-pc_type hypre`), MUMPS's direct LU (`-pc_type mumps`, one
 /// iteration per solve), BiCGStab with GAMG.
