@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use loam_fem::amplitude::Amplitude;
 use loam_fem::element::ElementType;
 use loam_fem::formulation::Formulation;
+use loam_fem::linear_solver::PetscOptions;
 use loam_fem::model::NewtonSettings;
 use loam_fem::scheme::TimeScheme;
 use loam_laws::MaterialSpec;
@@ -86,6 +87,11 @@ pub struct Case {
     /// Newton and linear-solver settings.
     #[serde(default)]
     pub solver: NewtonSettings,
+    /// `solver.petsc_options`: extra PETSc options of `solver.linear_solver: "petsc"`, in the
+    /// order of their names (taken out of the `solver` object before it is read as the `Copy`
+    /// [`NewtonSettings`]; see [`Case::parse`]).
+    #[serde(skip)]
+    pub petsc_options: PetscOptions,
     /// Output settings.
     #[serde(default)]
     pub output: OutputSpec,
@@ -1137,7 +1143,11 @@ impl Case {
     /// Parses case JSON text strictly (duplicate keys and text after the object are
     /// refused; see [`crate::input`]). A missing top-level key has the location `""`.
     pub fn parse(text: &str) -> Result<Case, CaseError> {
-        let (case, value): (Case, serde_json::Value) = crate::input::parse(text)?;
+        let mut value = crate::input::parse_value(text)?;
+        crate::input::check_object(&value)?;
+        let petsc_options = take_petsc_options(&mut value)?;
+        let mut case: Case = crate::input::from_value(&value)?;
+        case.petsc_options = petsc_options;
         case.check_given_keys(&value)?;
         Ok(case)
     }
@@ -1157,6 +1167,48 @@ impl Case {
         }
         Ok(())
     }
+}
+
+/// Takes `solver.petsc_options` out of the case's JSON (the rest of `solver` is read as
+/// [`NewtonSettings`]): an object of PETSc option names, with or without the leading `-`,
+/// and their values (a string or a number; `true` or `null` for a flag, `false` as the
+/// value `false`).
+fn take_petsc_options(value: &mut serde_json::Value) -> Result<PetscOptions, CaseError> {
+    let Some(given) = value.get_mut("solver").and_then(|s| s.as_object_mut()).and_then(|s| s.remove("petsc_options"))
+    else {
+        return Ok(PetscOptions::default());
+    };
+    let serde_json::Value::Object(map) = given else {
+        return Err(CaseError::new(
+            "solver.petsc_options",
+            "must be an object of PETSc options, e.g. {\"-ksp_type\": \"bcgs\", \"-pc_type\": \"hypre\"}",
+        ));
+    };
+    let mut options = Vec::with_capacity(map.len());
+    for (key, v) in map {
+        let name = key.trim();
+        let bare = name.trim_start_matches('-');
+        if bare.is_empty() || bare.chars().any(|c| c.is_whitespace() || c.is_control()) {
+            return Err(CaseError::new(
+                format!("solver.petsc_options.{key}"),
+                "is not a PETSc option name (e.g. \"-ksp_type\")",
+            ));
+        }
+        let value = match v {
+            serde_json::Value::String(s) => Some(s),
+            serde_json::Value::Number(n) => Some(n.to_string()),
+            serde_json::Value::Bool(true) | serde_json::Value::Null => None,
+            serde_json::Value::Bool(false) => Some("false".to_string()),
+            _ => {
+                return Err(CaseError::new(
+                    format!("solver.petsc_options.{key}"),
+                    "must be a string, a number, true or null (a flag)",
+                ))
+            }
+        };
+        options.push((format!("-{bare}"), value));
+    }
+    Ok(PetscOptions { options })
 }
 
 /// The case's name for output files (`<case>.pvd`, the default `out/<case>`) from its file

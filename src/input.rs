@@ -139,12 +139,18 @@ pub fn read_strict<T: DeserializeOwned>(path: &Path, what: &str) -> Result<T, Ca
 /// path (module doc). A missing key at the top level has the location `""`.
 pub fn parse<T: DeserializeOwned>(text: &str) -> Result<(T, Value), CaseError> {
     let value = parse_value(text)?;
-    if !value.is_object() {
-        let got = describe(&value).unwrap_or_default().replace("unit value", "null").replace("sequence", "an array");
-        return Err(CaseError::new("", format!("must be one JSON object {{ ... }}, got {got}")));
-    }
+    check_object(&value)?;
     let typed = from_value(&value)?;
     Ok((typed, value))
+}
+
+/// The error of a file whose top level is not one JSON object.
+pub fn check_object(value: &Value) -> Result<(), CaseError> {
+    if !value.is_object() {
+        let got = describe(value).unwrap_or_default().replace("unit value", "null").replace("sequence", "an array");
+        return Err(CaseError::new("", format!("must be one JSON object {{ ... }}, got {got}")));
+    }
+    Ok(())
 }
 
 /// Deserializes a `T` from `value` (stage 2 of the module doc).

@@ -105,10 +105,34 @@ fn bad_input_exits_2_naming_the_json_path() {
         &["solver", "max_iteration"],
     );
     // issue 26: the PETSc solver needs the `petsc` feature; a default build refuses it
+    if cfg!(not(feature = "petsc")) {
+        expect_bad(
+            "petsc without the feature",
+            check_edited("petsc", |j| j["solver"]["linear_solver"] = json!("petsc")),
+            &["solver.linear_solver", "petsc", "feature"],
+        );
+    }
+    // PETSc options apply to the petsc solver only, and are an object of names and values
     expect_bad(
-        "petsc without the feature",
-        check_edited("petsc", |j| j["solver"]["linear_solver"] = json!("petsc")),
-        &["solver.linear_solver", "petsc", "feature"],
+        "petsc_options without petsc",
+        check_edited("petsc-options", |j| j["solver"]["petsc_options"] = json!({"-ksp_type": "cg"})),
+        &["solver.petsc_options", "linear_solver"],
+    );
+    expect_bad(
+        "petsc_options of the wrong type",
+        check_edited("petsc-options-type", |j| {
+            j["solver"]["linear_solver"] = json!("petsc");
+            j["solver"]["petsc_options"] = json!("-ksp_type cg");
+        }),
+        &["solver.petsc_options", "object"],
+    );
+    expect_bad(
+        "petsc_options value of the wrong type",
+        check_edited("petsc-options-value", |j| {
+            j["solver"]["linear_solver"] = json!("petsc");
+            j["solver"]["petsc_options"] = json!({"-ksp_type": ["cg"]});
+        }),
+        &["solver.petsc_options.-ksp_type", "string"],
     );
     expect_bad("unknown top key", check_edited("unknown-top", |j| j["gravityy"] = json!(1)), &["gravityy"]);
     expect_bad(

@@ -32,7 +32,9 @@ use crate::convergence::BlockNorms;
 use crate::dofs::{Block, DofMap, DofTie, NodeRole, CONSTRAINED};
 use crate::domain::{AssemblyInput, Domain, DomainError};
 use crate::friction::NodalFriction;
-use crate::linear_solver::{CholeskyFactorisation, LinearSolver, LinearSolverError, LinearSolverKind, SolverTimings};
+use crate::linear_solver::{
+    CholeskyFactorisation, LinearSolver, LinearSolverError, LinearSolverKind, PetscOptions, SolverTimings,
+};
 use crate::slip::{axis_normal_dofs, Slip, SlipRotations};
 
 /// What decides the equations of a model: nodes, roles, constraints and ties.
@@ -57,6 +59,8 @@ pub struct SystemLayout<'a> {
     pub solver: LinearSolverKind,
     /// How its Cholesky-type factorisations are organised.
     pub cholesky: CholeskyFactorisation,
+    /// Extra options of the `petsc` solver.
+    pub petsc_options: &'a PetscOptions,
 }
 
 /// The global system of one sparsity pattern (see the module doc).
@@ -134,6 +138,9 @@ impl Assembler {
             }
         }
         let mut solver = LinearSolver::new(system.solver, system.cholesky);
+        if system.solver == LinearSolverKind::Petsc {
+            solver.set_petsc_options(system.petsc_options.clone());
+        }
         if !scale.is_empty() {
             let mut signs = vec![1i8; n_eq];
             for (g, &e) in dofs.equations().iter().enumerate() {
@@ -193,6 +200,65 @@ impl Assembler {
     /// Accumulated linear-solver timings of this pattern.
     pub fn solver_timings(&self) -> SolverTimings {
         self.solver.timings
+    }
+
+    /// The rigid-body motions of the nodes at `positions`, written per equation (local frames
+    /// at slip nodes, pressure equations 0): the `dim` translations and the rotations (one in
+    /// 2D, three in 3D) about the centroid of the nodes that carry an equation, scaled by their
+    /// RMS distance from it. The near null space of PETSc's smoothed-aggregation AMG
+    /// ([`Assembler::set_near_null_space`]).
+    pub fn rigid_body_modes(&self, positions: &[[f64; 3]]) -> Vec<Vec<f64>> {
+        let dim = self.dofs.dim();
+        let nodes = self.dofs.displacement_dofs() / dim;
+        let carries = |k: usize| (0..dim).any(|i| self.dofs.equation(k * dim + i) != CONSTRAINED);
+        let free: Vec<usize> = (0..nodes.min(positions.len())).filter(|&k| carries(k)).collect();
+        if free.is_empty() {
+            return Vec::new();
+        }
+        let mut c = [0.0; 3];
+        for &k in &free {
+            for i in 0..dim {
+                c[i] += positions[k][i] / free.len() as f64;
+            }
+        }
+        let r2: f64 = free.iter().map(|&k| (0..dim).map(|i| (positions[k][i] - c[i]).powi(2)).sum::<f64>()).sum();
+        let r = (r2 / free.len() as f64).sqrt().max(f64::MIN_POSITIVE);
+        let planes: &[(usize, usize)] = if dim == 2 { &[(0, 1)] } else { &[(1, 2), (2, 0), (0, 1)] };
+        let mut fulls: Vec<Vec<f64>> = Vec::with_capacity(dim + planes.len());
+        for t in 0..dim {
+            let mut full = vec![0.0; self.residual.len()];
+            for &k in &free {
+                full[k * dim + t] = 1.0;
+            }
+            fulls.push(full);
+        }
+        for &(a, b) in planes {
+            let mut full = vec![0.0; self.residual.len()];
+            for &k in &free {
+                full[k * dim + a] = -(positions[k][b] - c[b]) / r;
+                full[k * dim + b] = (positions[k][a] - c[a]) / r;
+            }
+            fulls.push(full);
+        }
+        fulls
+            .into_iter()
+            .map(|mut full| {
+                self.rotations.to_local(&mut full);
+                let mut v = vec![0.0; self.dofs.num_equations()];
+                for (g, &e) in self.dofs.equations().iter().enumerate().take(nodes * dim) {
+                    if e != CONSTRAINED {
+                        v[e] = full[g];
+                    }
+                }
+                v
+            })
+            .collect()
+    }
+
+    /// Gives the linear solver the near null space of its matrices (PETSc's GAMG; the other
+    /// solvers ignore it), e.g. [`Assembler::rigid_body_modes`].
+    pub fn set_near_null_space(&mut self, vectors: Vec<Vec<f64>>) {
+        self.solver.set_near_null_space(vectors);
     }
 
     /// Rotates a full DOF vector to the local frames of the slip nodes.

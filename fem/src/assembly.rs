@@ -234,6 +234,14 @@ impl AssemblyPattern {
         })
     }
 
+    /// For every stored nonzero `k` at `(i, j)`, the position of `(j, i)`: with the
+    /// column pointers and row indices (the pattern is structurally symmetric) it gives the
+    /// compressed-row order of the matrix, row `i`'s entry `(i, j)` at position
+    /// `transpose_positions()[k]` of the values.
+    pub fn transpose_positions(&self) -> &[usize] {
+        &self.transpose
+    }
+
     /// A faer view of the matrix with `values`.
     pub fn matrix<'a>(&'a self, values: &'a [f64]) -> SparseColMatRef<'a, usize, f64> {
         SparseColMatRef::new(self.symbolic.as_ref(), values)

@@ -30,6 +30,8 @@ pub mod mixed_kernel;
 pub mod model;
 pub mod newton;
 pub mod pattern_lu;
+#[cfg(feature = "petsc")]
+mod petsc_solver;
 pub mod rigid_modes;
 pub mod scheme;
 pub mod slip;

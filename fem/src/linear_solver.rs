@@ -93,9 +93,10 @@ pub enum LinearSolverKind {
     /// is not positive definite or GMRES does not converge. Pays in mass-dominated steps
     /// (small Δt), where the skew part is small beside `M/(βΔt²)`.
     SymmetricPartGmres,
-    /// PETSc's Krylov solvers with algebraic multigrid (issue 26, docs/distributed.md). Only
-    /// a build with the `petsc` Cargo feature has it; the case loader refuses it otherwise,
-    /// and [`LinearSolver::solve`] returns an error.
+    /// PETSc's Krylov solvers with algebraic multigrid (issue 26, docs/distributed.md): CG or
+    /// GMRES with GAMG by default, tuned by [`PetscOptions`] (`crate::petsc_solver`). Only a
+    /// build with the `petsc` Cargo feature has it; the case loader refuses it otherwise, and
+    /// [`LinearSolver::solve`] returns an error.
     Petsc,
 }
 
@@ -137,6 +138,25 @@ pub enum LinearSolverError {
     /// The solution contains NaN or infinity.
     #[error("linear solver: singular system (non-finite solution)")]
     NonFinite,
+    /// An iterative solve (`petsc`) stopped without reaching its tolerance.
+    #[error("linear solver: the Krylov iterations did not converge ({reason} after {iterations} iterations)")]
+    NotConverged {
+        /// Krylov iterations done.
+        iterations: usize,
+        /// Why they stopped (PETSc's `KSPConvergedReason`, e.g. `DIVERGED_ITS`).
+        reason: String,
+    },
+}
+
+/// Extra PETSc options of `linear_solver: "petsc"` (the case file's `solver.petsc_options`):
+/// each an option name with its leading `-` (`-ksp_type`) and its value, or
+/// `None` for a flag. Kept beside [`crate::newton::NewtonSettings`] (which is `Copy`), and
+/// used only by a build with the `petsc` feature (`crate::petsc_solver`'s module doc lists
+/// the defaults they override).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct PetscOptions {
+    /// `(name, value)` pairs.
+    pub options: Vec<(String, Option<String>)>,
 }
 
 /// Seconds spent in the solver phases, accumulated.
@@ -364,6 +384,13 @@ pub struct LinearSolver {
     gmres: Gmres,
     /// The factors the last successful solve left.
     kept: KeptFactors,
+    /// Options of the `petsc` kind.
+    petsc_options: PetscOptions,
+    /// Near null space of the matrices (the `petsc` kind's GAMG), one vector per mode.
+    near_null_space: Vec<Vec<f64>>,
+    /// The PETSc solver of this pattern (`petsc` kind, after the first solve).
+    #[cfg(feature = "petsc")]
+    petsc: Option<crate::petsc_solver::PetscSolver>,
     /// Accumulated timings.
     pub timings: SolverTimings,
 }
@@ -388,8 +415,24 @@ impl LinearSolver {
             symmetric_values: Vec::new(),
             gmres: Gmres::default(),
             kept: KeptFactors::None,
+            petsc_options: PetscOptions::default(),
+            near_null_space: Vec::new(),
+            #[cfg(feature = "petsc")]
+            petsc: None,
             timings: SolverTimings::default(),
         }
+    }
+
+    /// Sets the near null space of this pattern's matrices (vectors per equation, e.g. the
+    /// rigid-body modes), which the `petsc` kind gives its GAMG preconditioner (before the
+    /// first solve); the direct solvers do not use it.
+    pub fn set_near_null_space(&mut self, vectors: Vec<Vec<f64>>) {
+        self.near_null_space = vectors;
+    }
+
+    /// Sets the extra PETSc options of the `petsc` kind (before the first solve).
+    pub fn set_petsc_options(&mut self, options: PetscOptions) {
+        self.petsc_options = options;
     }
 
     /// What this solver has learnt about its pattern's matrices.
@@ -427,6 +470,10 @@ impl LinearSolver {
         self.llt = None;
         self.ldlt = None;
         self.kept = KeptFactors::None;
+        #[cfg(feature = "petsc")]
+        {
+            self.petsc = None;
+        }
         self.llt_failed = false;
         self.ldlt_backoff = 0;
         self.ldlt_skip = 0;
@@ -472,9 +519,7 @@ impl LinearSolver {
         let n = pattern.num_equations();
         self.kept = KeptFactors::None;
         if self.kind == LinearSolverKind::Petsc {
-            return Err(LinearSolverError::Factorisation(
-                "`petsc` is not in this build (it needs the `petsc` Cargo feature)".into(),
-            ));
+            return self.solve_petsc(pattern, values, rhs);
         }
         if n == 0 {
             return Ok(());
@@ -535,6 +580,37 @@ impl LinearSolver {
             self.symmetric_part_failed = true;
         }
         self.solve_lu(pattern, values, rhs)
+    }
+
+    /// The `petsc` kind: PETSc's Krylov solver of this pattern ([`crate::petsc_solver`]),
+    /// created at the first solve.
+    #[cfg(feature = "petsc")]
+    fn solve_petsc(
+        &mut self,
+        pattern: &AssemblyPattern,
+        values: &[f64],
+        rhs: &mut [f64],
+    ) -> Result<(), LinearSolverError> {
+        if pattern.num_equations() == 0 {
+            return Ok(());
+        }
+        if self.petsc.is_none() {
+            let t = Instant::now();
+            self.petsc =
+                Some(crate::petsc_solver::PetscSolver::new(pattern, &self.petsc_options, &self.near_null_space)?);
+            self.timings.symbolic += t.elapsed().as_secs_f64();
+        }
+        let solver = self.petsc.as_mut().expect("PETSc solver present");
+        solver.solve(pattern, values, rhs, &mut self.timings)?;
+        check_finite(rhs)
+    }
+
+    /// The `petsc` kind in a build without the feature: an error.
+    #[cfg(not(feature = "petsc"))]
+    fn solve_petsc(&mut self, _: &AssemblyPattern, _: &[f64], _: &mut [f64]) -> Result<(), LinearSolverError> {
+        Err(LinearSolverError::Factorisation(
+            "`petsc` is not in this build (it needs the `petsc` Cargo feature)".into(),
+        ))
     }
 
     /// Sparse LU: on the symmetric pattern ([`PatternLu`]) unless the kind is `lu` or it

@@ -24,7 +24,7 @@ use crate::convergence::BlockNorms;
 pub use crate::convergence::ConvergenceCriterion;
 use crate::dofs::{DofTie, NodeRole};
 use crate::domain::{AssemblyInput, Domain, DomainError, NamedOutput, NodalState};
-use crate::linear_solver::{LinearSolverError, SolverMemory, SolverTimings};
+use crate::linear_solver::{LinearSolverError, PetscOptions, SolverMemory, SolverTimings};
 pub use crate::newton::NewtonSettings;
 use crate::newton::{assembly_input, NewtonStrategy, StepProblem};
 use crate::rigid_modes::{free_rigid_motion, short, FreeMotion};
@@ -264,6 +264,9 @@ pub struct Model {
     pub scheme: TimeScheme,
     /// Newton settings.
     pub settings: NewtonSettings,
+    /// Extra PETSc options of `settings.linear_solver == Petsc` (the case's
+    /// `solver.petsc_options`; kept apart because [`NewtonSettings`] is `Copy`).
+    pub petsc_options: PetscOptions,
     /// Current iterate (equal to `committed` between steps).
     pub state: NodalState,
     /// Last converged state.
@@ -304,6 +307,7 @@ impl Model {
             gravity: ([0.0; 3], Amplitude::default()),
             scheme,
             settings,
+            petsc_options: PetscOptions::default(),
             state: NodalState::zeros(n),
             committed: NodalState::zeros(n),
             time: 0.0,
@@ -412,8 +416,14 @@ impl Model {
             pressure_scales: &self.pressure_scales,
             solver: self.settings.linear_solver,
             cholesky: self.settings.cholesky_factorisation,
+            petsc_options: &self.petsc_options,
         };
         let mut assembler = Assembler::new(&system, &self.domains);
+        if self.settings.linear_solver == crate::linear_solver::LinearSolverKind::Petsc {
+            // the near null space of PETSc's AMG: rigid-body modes at the step's start
+            let modes = assembler.rigid_body_modes(&self.positions());
+            assembler.set_near_null_space(modes);
+        }
         if let Some(memory) = self.restored_solver_memory.take() {
             assembler.remember(memory);
         }
@@ -933,5 +943,51 @@ impl Linearisation<'_> {
 impl Drop for Linearisation<'_> {
     fn drop(&mut self) {
         self.model.state.clone_from(&self.model.committed);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use loam_laws::neo_hookean::NeoHookean;
+
+    use super::{Model, NewtonSettings};
+    use crate::element::ElementType;
+    use crate::formulation::Formulation;
+    use crate::mesh::Mesh;
+    use crate::scheme::TimeScheme;
+    use crate::solid_domain::FemDomain;
+
+    /// Issue 26: the rigid-body modes per equation that PETSc's GAMG gets as its near null
+    /// space ([`crate::assembler::Assembler::rigid_body_modes`]) are in the null space of the
+    /// tangent of a free, unstressed block (`‖K r‖ ≤ 1e-9 max|K_ij| ‖r‖`, 3 modes in 2D, 6 in
+    /// 3D), and have one entry per equation.
+    #[test]
+    fn rigid_body_modes_span_the_null_space_of_a_free_block() {
+        for (mesh, dim) in [
+            (Mesh::rectangle([0.0, 0.0], [4.0, 1.0], [8, 2], ElementType::Quad4), 2),
+            (Mesh::cuboid([0.0; 3], [2.0, 1.0, 1.0], [4, 2, 2], ElementType::Hex8), 3),
+        ] {
+            let n = mesh.coords.len();
+            let formulation = if dim == 2 { Formulation::PlaneStrain } else { Formulation::ThreeD };
+            let law = Arc::new(NeoHookean::new(1000.0, 9e7, 0.3));
+            let domain = FemDomain::new("block", mesh.clone(), (0..n).collect(), formulation, 1.0, law, false).unwrap();
+            let mut model = Model::new(dim, mesh.coords.clone(), TimeScheme::Static, NewtonSettings::default());
+            model.domains.push(Box::new(domain));
+            let mut lin = model.linearise(1.0).expect("linearises");
+            let m = lin.num_equations();
+            let (_, k) = lin.evaluate(&vec![0.0; m]).expect("assembles");
+            let modes = lin.model.assembler.as_ref().expect("prepared").rigid_body_modes(&mesh.coords);
+            assert_eq!(modes.len(), if dim == 2 { 3 } else { 6 });
+            let kmax = k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            for (j, r) in modes.iter().enumerate() {
+                assert_eq!(r.len(), m);
+                let rn = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+                let kr = (0..m).map(|i| (0..m).map(|c| k[i * m + c] * r[c]).sum::<f64>().powi(2)).sum::<f64>().sqrt();
+                println!("{dim}D mode {j}: ‖K r‖ / (max|K| ‖r‖) = {:.1e}", kr / (kmax * rn));
+                assert!(kr <= 1e-9 * kmax * rn, "{dim}D mode {j} is not rigid");
+            }
+        }
     }
 }

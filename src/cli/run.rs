@@ -184,8 +184,14 @@ fn run_case(
             let t = &sim.stats.timings;
             let solver = sim.model.solver_timings();
             let gmres = if solver.krylov_iterations > 0 {
+                let (setups, method) =
+                    if sim.model.settings.linear_solver == loam_fem::linear_solver::LinearSolverKind::Petsc {
+                        ("preconditioner set-ups", "PETSc Krylov")
+                    } else {
+                        ("factorisations", "GMRES")
+                    };
                 format!(
-                    "; {} factorisations, {} solves by GMRES ({} iterations)",
+                    "; {} {setups}, {} solves by {method} ({} iterations)",
                     solver.factorisations, solver.krylov_solves, solver.krylov_iterations
                 )
             } else {

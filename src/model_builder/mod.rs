@@ -96,6 +96,7 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     let laws = materials(case)?;
     let discretisation = meshes::discretise(case, &laws)?;
     let mut model = Model::new(dim, discretisation.coords.clone(), scheme, case.solver);
+    model.petsc_options = case.petsc_options.clone();
     model.roles.clone_from(&discretisation.roles);
     let regions = regions::select_all(case, &model.coords, &discretisation.groups)?;
     let mut parts = discretisation.parts;

@@ -66,7 +66,14 @@ pub(super) fn check(case: &Case) -> Result<TimeScheme, CaseError> {
             ),
         ));
     }
-    if case.solver.linear_solver == loam_fem::linear_solver::LinearSolverKind::Petsc {
+    let petsc = case.solver.linear_solver == loam_fem::linear_solver::LinearSolverKind::Petsc;
+    if !petsc && !case.petsc_options.options.is_empty() {
+        return Err(CaseError::new(
+            "solver.petsc_options",
+            "applies only to solver.linear_solver \"petsc\" (PETSc's Krylov solvers)",
+        ));
+    }
+    if petsc && cfg!(not(feature = "petsc")) {
         return Err(CaseError::new(
             "solver.linear_solver",
             "`petsc` (Krylov + AMG, issue 26) is not in this build: it needs the `petsc` Cargo feature \

@@ -109,9 +109,9 @@ pub struct LinearSolverReport {
     /// Solves with the kept factors of an earlier tangent (`solver.tangent_reuse`).
     #[serde(default)]
     pub reused_factorisations: usize,
-    /// Solves done by GMRES.
+    /// Solves done by a Krylov method (GMRES of `symmetric_part_gmres`, or PETSc's).
     pub krylov_solves: usize,
-    /// GMRES iterations.
+    /// Krylov iterations of those solves (failed ones included).
     pub krylov_iterations: usize,
     /// Saddle-point systems (mixed u–p) solved by LU, after a symmetric indefinite
     /// factorisation that failed or on an unsymmetric matrix (the others by `L B Lᵀ`).

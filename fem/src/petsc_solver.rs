@@ -1,0 +1,173 @@
+//! `linear_solver: "petsc"` (issue 26, `docs/distributed.md`): PETSc's Krylov solvers with
+//! algebraic multigrid on one process, through the safe layer of `loam-petsc`. Built only with
+//! the `petsc` Cargo feature.
+//!
+//! **Defaults.** CG when the assembled tangent is symmetric (the check `auto` makes, to
+//! `1e-10` relative), GMRES (restart 100, right preconditioning) otherwise; the
+//! preconditioner is PETSc's smoothed-aggregation AMG `gamg`, with the rigid-body modes of
+//! the nodes as its near null space (`Assembler::rigid_body_modes`); the relative tolerance
+//! [`PETSC_RELATIVE_TOLERANCE`] on the unpreconditioned residual `‖b − A x‖/‖b‖`, so that
+//! Newton takes the direct solver's path; at most [`PETSC_MAX_ITERATIONS`] iterations.
+//! A CG solve that fails (GAMG's Chebyshev smoothers can make the preconditioner indefinite:
+//! `DIVERGED_INDEFINITE_PC`) is repeated by GMRES, which then serves the rest of the pattern.
+//! [`PetscOptions`] (the case file's `solver.petsc_options`) override any of it
+//! (`-ksp_type`, `-pc_type`, `-ksp_rtol`, …); `-pc_type hypre` is BoomerAMG and the value
+//! `mumps` of `-pc_type` stands for `-pc_type lu -pc_factor_mat_solver_type mumps` (MUMPS's
+//! sparse direct LU).
+//!
+//! **Pattern.** One PETSc `SeqAIJ` matrix per sparsity pattern (the assembler, and so this
+//! solver, lives while the pattern holds): the preallocation is the pattern's, each solve
+//! only writes the values in place. The assembly pattern is column-compressed and
+//! structurally symmetric, so its column pointers and row indices are the row pointers and
+//! column indices of the compressed-row matrix, and row `i`'s entry `(i, j)` is the stored
+//! entry at the transpose position of `(j, i)`.
+//!
+//! **Failure.** A Krylov solve that PETSc reports as diverged (iteration limit, breakdown,
+//! an indefinite preconditioner) is [`LinearSolverError::NotConverged`] with the iterations
+//! and PETSc's reason: the step fails and is retried with a shorter one, as after a failed
+//! factorisation.
+
+use std::time::Instant;
+
+use loam_petsc::{reason_name, KrylovSettings, KrylovSolver};
+
+use crate::assembly::AssemblyPattern;
+use crate::linear_solver::{LinearSolverError, PetscOptions, SolverTimings};
+
+/// Default relative tolerance of the Krylov iterations (`-ksp_rtol` overrides it): below
+/// the Newton tolerances by orders of magnitude, so Newton's path does not depend on the
+/// solver.
+pub const PETSC_RELATIVE_TOLERANCE: f64 = 1e-10;
+/// Default largest number of Krylov iterations of one solve (`-ksp_max_it`).
+pub const PETSC_MAX_ITERATIONS: usize = 1000;
+/// GMRES restart length (`-ksp_gmres_restart`).
+pub const PETSC_GMRES_RESTART: usize = 100;
+
+/// PETSc's Krylov solver bound to one sparsity pattern.
+#[derive(Debug)]
+pub(crate) struct PetscSolver {
+    krylov: KrylovSolver,
+    /// The settings before the options (KSP type from the symmetry unless given).
+    settings: KrylovSettings,
+    /// Whether the options fix the KSP type (then the symmetry is not checked).
+    ksp_given: bool,
+    /// Whether the KSP was configured for a symmetric matrix (`None`: not yet configured).
+    configured_symmetric: Option<bool>,
+    /// Set once CG failed on this pattern (e.g. an indefinite preconditioner): GMRES from
+    /// then on, as the direct solver turns to LU after a failed Cholesky.
+    cg_failed: bool,
+}
+
+fn petsc_error(e: loam_petsc::Error) -> LinearSolverError {
+    LinearSolverError::Factorisation(e.to_string())
+}
+
+impl PetscSolver {
+    /// The solver of `pattern` with the case's extra `options` and the near null space of
+    /// its matrices (the rigid-body modes per equation, for GAMG; may be empty).
+    pub(crate) fn new(
+        pattern: &AssemblyPattern,
+        options: &PetscOptions,
+        near_null_space: &[Vec<f64>],
+    ) -> Result<Self, LinearSolverError> {
+        let mut settings = KrylovSettings {
+            ksp_type: "gmres".into(),
+            pc_type: "gamg".into(),
+            factor_package: None,
+            relative_tolerance: PETSC_RELATIVE_TOLERANCE,
+            max_iterations: PETSC_MAX_ITERATIONS,
+            gmres_restart: PETSC_GMRES_RESTART,
+            right_preconditioning: true,
+        };
+        let mut ksp_given = false;
+        let mut passed = Vec::with_capacity(options.options.len());
+        for (name, value) in &options.options {
+            match (name.as_str(), value.as_deref()) {
+                ("-pc_type", Some("mumps")) => {
+                    settings.pc_type = "lu".into();
+                    settings.factor_package = Some("mumps".into());
+                    continue;
+                }
+                ("-pc_type", Some(pc)) => settings.pc_type = pc.to_string(),
+                ("-ksp_type", Some(ksp)) => {
+                    settings.ksp_type = ksp.to_string();
+                    ksp_given = true;
+                }
+                _ => {}
+            }
+            passed.push((name.clone(), value.clone()));
+        }
+        let symbolic = pattern.symbolic();
+        let mut krylov = KrylovSolver::new(symbolic.col_ptr(), symbolic.row_idx(), &passed).map_err(petsc_error)?;
+        if settings.pc_type == "gamg" && near_null_space.iter().all(|v| v.len() == pattern.num_equations()) {
+            krylov.set_near_null_space(near_null_space).map_err(petsc_error)?;
+        }
+        Ok(Self { krylov, settings, ksp_given, configured_symmetric: None, cg_failed: false })
+    }
+
+    /// Solves `A x = b` in place (`rhs`: `b` on entry, `x` on exit) for the matrix with the
+    /// column-compressed `values` on `pattern`; timings and Krylov iterations go to `timings`.
+    pub(crate) fn solve(
+        &mut self,
+        pattern: &AssemblyPattern,
+        values: &[f64],
+        rhs: &mut [f64],
+        timings: &mut SolverTimings,
+    ) -> Result<(), LinearSolverError> {
+        let t = Instant::now();
+        let symmetric = !self.ksp_given && !self.cg_failed && pattern.is_symmetric(values, 1e-10);
+        self.configure(symmetric)?;
+        let transpose = pattern.transpose_positions();
+        self.krylov.set_values(|k| values[transpose[k]]).map_err(petsc_error)?;
+        // the symmetry check and the copy of the values count with the preconditioner's set-up
+        timings.factorisation += t.elapsed().as_secs_f64();
+        let mut report = self.run(rhs, timings)?;
+        if !report.converged && symmetric {
+            // CG failed (an indefinite preconditioner, or the limit): GMRES on the same
+            // matrix, and from then on for this pattern (`rhs` is unchanged after a failure)
+            self.cg_failed = true;
+            self.configure(false)?;
+            report = self.run(rhs, timings)?;
+        }
+        if !report.converged {
+            return Err(LinearSolverError::NotConverged {
+                iterations: report.iterations,
+                reason: reason_name(report.reason).to_string(),
+            });
+        }
+        timings.krylov_solves += 1;
+        Ok(())
+    }
+
+    /// Configures the KSP for a symmetric matrix (CG) or not (GMRES) unless it already is (or
+    /// the options fix the type).
+    fn configure(&mut self, symmetric: bool) -> Result<(), LinearSolverError> {
+        if self.configured_symmetric == Some(symmetric) {
+            return Ok(());
+        }
+        let mut settings = self.settings.clone();
+        if !self.ksp_given {
+            settings.ksp_type = if symmetric { "cg" } else { "gmres" }.into();
+        }
+        // right preconditioning (the true residual in the test) where the method has it
+        settings.right_preconditioning =
+            matches!(settings.ksp_type.as_str(), "gmres" | "fgmres" | "lgmres" | "bcgs" | "dgmres");
+        self.krylov.configure(&settings).map_err(petsc_error)?;
+        self.configured_symmetric = Some(symmetric);
+        Ok(())
+    }
+
+    /// One Krylov solve with the current matrix, its timings and iterations counted.
+    fn run(
+        &mut self,
+        rhs: &mut [f64],
+        timings: &mut SolverTimings,
+    ) -> Result<loam_petsc::SolveReport, LinearSolverError> {
+        let report = self.krylov.solve(rhs).map_err(petsc_error)?;
+        timings.factorisation += report.setup_seconds;
+        timings.solve += report.solve_seconds;
+        timings.factorisations += 1;
+        timings.krylov_iterations += report.iterations;
+        Ok(report)
+    }
+}
