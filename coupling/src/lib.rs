@@ -25,3 +25,4 @@
 pub mod interface;
 pub mod mesh_motion;
 pub mod tie;
+pub mod tie_interface;

@@ -99,11 +99,13 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     model.roles.clone_from(&discretisation.roles);
     let regions = regions::select_all(case, &model.coords, &discretisation.groups)?;
     let mut parts = discretisation.parts;
+    let ties = discretisation.ties;
     meshes::assign_pressure_dofs(case, &mut model, &mut parts);
     let bcs = conditions::boundary_conditions(case, &mut model, &regions, &mut parts)?;
     conditions::check_supported(case, &model)?;
     interfaces::attach(case, &mut model, &mut parts)?;
     meshes::place_domains(case, &mut model, parts)?;
+    model.domains.extend(ties.into_iter().map(|t| Box::new(t) as Box<dyn loam_fem::domain::Domain>));
     let load_of_load = conditions::loads(case, &mut model, &regions)?;
     conditions::gravity(case, &mut model)?;
     let monitors = monitors::build(case, &model, &regions, &discretisation.interfaces)?;
