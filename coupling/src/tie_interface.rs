@@ -382,3 +382,131 @@ impl Domain for TieInterface {
         Vec::new()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use loam_fem::element::ElementType;
+    use std::sync::{Arc, RwLock};
+
+    /// Dense global residual and tangent of a tie domain at `input` (DOFs `0..n`).
+    fn assembled(tie: &mut TieInterface, input: &AssemblyInput<'_>, n: usize) -> (Vec<f64>, Vec<f64>) {
+        let mut layout = BlockLayout::default();
+        tie.blocks(&mut layout);
+        let (mut m, mut v) = (vec![0.0; layout.matrix_len()], vec![0.0; layout.vector_len()]);
+        tie.assemble(input, &mut m, &mut v).unwrap();
+        let (mut r, mut k) = (vec![0.0; n], vec![0.0; n * n]);
+        for b in 0..layout.num_blocks() {
+            let dofs = &layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]];
+            let nd = dofs.len();
+            for (i, &p) in dofs.iter().enumerate() {
+                r[p] += v[layout.dof_ptr[b] + i];
+                for (j, &q) in dofs.iter().enumerate() {
+                    k[p * n + q] += m[layout.matrix_offset[b] + i * nd + j];
+                }
+            }
+        }
+        (r, k)
+    }
+
+    fn input<'a>(state: &'a NodalState, committed: &'a NodalState) -> AssemblyInput<'a> {
+        AssemblyInput {
+            state,
+            committed,
+            inertial_acceleration: None,
+            mass_coefficient: 0.0,
+            gravity: [0.0; 3],
+            time_step: 1.0,
+            gamma: 0.5,
+            time: 1.0,
+            with_tangent: true,
+            stiffness: true,
+        }
+    }
+
+    /// A bilinear grid of 4 × 2 cells (h = 0.1) and an inclined two-facet structure
+    /// boundary across it, displaced at the start of the step, with a carried gap from a
+    /// first step: the assembled tangent of the whole domain against central differences
+    /// of its residual; and the force on the structure equal and opposite to the grid's.
+    #[test]
+    fn assembled_tangent_matches_central_differences() {
+        let grid = Grid::new([0.0; 3], [0.4, 0.2, 0.0], [4, 2, 1], ElementType::Quad4);
+        let grid_nodes = grid.mesh.coords.len();
+        let ids: Vec<usize> = (0..grid_nodes).collect();
+        let soil: SoilNodes = Arc::new(RwLock::new(vec![true; grid_nodes]));
+        let s = grid_nodes;
+        let reference = [[0.13, 0.02], [0.19, 0.09], [0.27, 0.17]];
+        let facets = vec![
+            TieFacet { nodes: [s, s + 1], reference: [reference[0], reference[1]] },
+            TieFacet { nodes: [s + 1, s + 2], reference: [reference[1], reference[2]] },
+        ];
+        let mut tie = TieInterface::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil, facets, 3.0e9);
+        let n = 2 * (grid_nodes + 3);
+        let wave = |k: usize, a: f64| a * ((k * 7 + 3) as f64).sin();
+        // step 1 from rest, committed: a gap to carry
+        let mut committed = NodalState::zeros(n);
+        assert!(tie.begin_step(&mut committed).unwrap(), "the first pattern");
+        let mut state = committed.clone();
+        state.u.iter_mut().enumerate().for_each(|(k, u)| *u = wave(k, 0.004));
+        tie.commit(&input(&state, &committed));
+        assert!(tie.gaps.iter().any(|g| g[0].abs() > 1e-4), "a gap is carried");
+        // step 2: the structure at its committed place, the grid reset
+        committed.u.clone_from(&state.u);
+        committed.u[..2 * grid_nodes].fill(0.0);
+        tie.begin_step(&mut committed).unwrap();
+        assert_eq!(tie.num_points(), (4, 4));
+        let mut u = committed.clone();
+        u.u.iter_mut().enumerate().for_each(|(k, v)| *v += wave(k + 5, 0.003));
+        let (r, k) = assembled(&mut tie, &input(&u, &committed), n);
+        let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut worst = 0.0f64;
+        let h = 1e-7;
+        for q in 0..n {
+            let (mut p, mut m) = (u.clone(), u.clone());
+            p.u[q] += h;
+            m.u[q] -= h;
+            let (rp, _) = assembled(&mut tie, &input(&p, &committed), n);
+            let (rm, _) = assembled(&mut tie, &input(&m, &committed), n);
+            for i in 0..n {
+                worst = worst.max(((rp[i] - rm[i]) / (2.0 * h) - k[i * n + q]).abs() / kmax);
+            }
+        }
+        println!("tie domain: assembled tangent vs central differences, relative error {worst:.2e}");
+        assert!(worst < 1e-7, "{worst:.2e}");
+        // the soil's and the structure's forces balance
+        for c in 0..2 {
+            let grid_sum: f64 = (0..grid_nodes).map(|a| r[2 * a + c]).sum();
+            let structure_sum: f64 = (grid_nodes..grid_nodes + 3).map(|a| r[2 * a + c]).sum();
+            assert!((grid_sum + structure_sum).abs() < 1e-9 * grid_sum.abs().max(1.0), "{grid_sum} vs {structure_sum}");
+        }
+    }
+
+    /// A point whose grid nodes the soil does not reach is not tied (no block), and the
+    /// pattern changes when the soil comes.
+    #[test]
+    fn points_beside_empty_nodes_are_skipped() {
+        let grid = Grid::new([0.0; 3], [0.4, 0.2, 0.0], [4, 2, 1], ElementType::Quad4);
+        let grid_nodes = grid.mesh.coords.len();
+        let mut reached = vec![true; grid_nodes];
+        reached[grid_nodes - 1] = false; // the top right corner (0.4, 0.2)
+        let soil: SoilNodes = Arc::new(RwLock::new(reached));
+        let facets = vec![TieFacet { nodes: [grid_nodes, grid_nodes + 1], reference: [[0.05, 0.05], [0.39, 0.19]] }];
+        let mut tie = TieInterface::new(
+            "cut",
+            Formulation::PlaneStrain,
+            1.0,
+            grid,
+            (0..grid_nodes).collect(),
+            soil.clone(),
+            facets,
+            1.0,
+        );
+        let mut committed = NodalState::zeros(2 * (grid_nodes + 2));
+        tie.begin_step(&mut committed).unwrap();
+        assert_eq!(tie.num_points(), (2, 1), "the point in the corner cell is skipped");
+        assert!(!tie.begin_step(&mut committed).unwrap(), "same pattern");
+        soil.write().unwrap()[grid_nodes - 1] = true;
+        assert!(tie.begin_step(&mut committed).unwrap(), "the soil reached the corner");
+        assert_eq!(tie.num_points(), (2, 2));
+    }
+}
