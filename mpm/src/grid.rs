@@ -1223,7 +1223,7 @@ mod tests {
             for x in points {
                 let f = grid.functions_with_hessian(&x).expect("inside");
                 let step = 1e-6;
-                let mut at = |dx: [f64; 2]| {
+                let at = |dx: [f64; 2]| {
                     let xs = [x[0] + dx[0], x[1] + dx[1], 0.0];
                     let g = grid.functions_with_hessian(&xs).expect("inside");
                     f.iter()
