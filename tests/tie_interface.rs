@@ -59,3 +59,32 @@ fn tie_penalty_error_falls_like_its_inverse() {
     assert!((8.0..14.0).contains(&ratio), "{ratio}");
     report("tip at the default penalty vs factor 1000 [m]", tips[1], tips[2], 2e-4);
 }
+
+/// Split the other way (`cases/coupled_beam_split_mpm_clamped.json` made non-conforming):
+/// material points clamped on [0, 3.95] on a grid of h = 0.1 m, FEM (h = 0.05 m) free on
+/// [3.95, 8], tied at x = 3.95 between grid lines: the tip node within 1.5 % of Timoshenko
+/// and within 1 % of the shared-node split (grid h = 0.05 m); the clamp carries the whole
+/// weight and the tie the FEM half's 4.05 m of it, to 1e-9.
+#[test]
+fn tied_split_mpm_clamped_fem_free() {
+    let mut json = case_json("coupled_beam_split_mpm_clamped.json");
+    json["domains"][0]["grid"] =
+        serde_json::json!({ "origin": [0.0, -0.6], "size": [5.0, 2.1], "cells": [50, 21], "element": "quad4" });
+    let body = &mut json["domains"][0]["material_points"]["cells"]["mesh"]["rectangle"];
+    body["size"] = serde_json::json!([3.95, 1.0]);
+    body["cells"] = serde_json::json!([79, 20]);
+    let structure = &mut json["domains"][1]["mesh"]["rectangle"];
+    structure["origin"] = serde_json::json!([3.95, 0.0]);
+    structure["size"] = serde_json::json!([4.05, 1.0]);
+    structure["cells"] = serde_json::json!([81, 20]);
+    json["interfaces"][0]["coupling"] = serde_json::json!("tie");
+    json["regions"]["cut"] = serde_json::json!({ "segment": { "from": [3.95, 0.0], "to": [3.95, 1.0] } });
+    json["monitors"][1]["point"] = serde_json::json!([3.95, 0.5]);
+    let (sim, h) = run(parse(json));
+    let tip = last(&sim, &h, "tip_uy");
+    report("tied tip deflection (node (8, 0.5)) vs Timoshenko [m]", tip, -0.67806, 0.015);
+    let (shared, hs) = run(case("coupled_beam_split_mpm_clamped.json"));
+    report("tied tip deflection vs shared nodes, grid and FEM h = 0.05 m [m]", tip, last(&shared, &hs, "tip_uy"), 0.01);
+    report("clamp reaction = weight of the beam [N]", last(&sim, &h, "clamp_reaction_y"), 78480.0, 1e-9);
+    report("tie force = weight of the FEM half [N]", last(&sim, &h, "interface_force_y"), 1000.0 * 9.81 * 4.05, 1e-9);
+}
