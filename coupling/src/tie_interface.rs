@@ -43,12 +43,15 @@
 //! `DEFAULT_TIE_PENALTY_FACTOR · E_soil / h` (the stiffest body's Young's modulus over the
 //! grid's cell size; see the model builder).
 //!
+//! Output: the points as a point cloud named after the interface (`gap`, `traction`,
+//! `tied`: [`Domain::outputs`]).
+//!
 //! The domain's residual at the structure's facet nodes is the force the soil exerts on the
 //! structure (`−r`), so it reports itself as soil ([`Domain::is_soil`]): the model's
 //! `soil_forces`, and the `interface_force` monitor over the facet nodes, include it.
 
 use loam_fem::assembly::BlockLayout;
-use loam_fem::domain::{AssemblyInput, Domain, DomainError, NamedOutput, NodalState};
+use loam_fem::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NamedOutput, NodalState};
 use loam_fem::formulation::Formulation;
 use loam_mpm::grid::{Grid, GridFunction};
 use loam_mpm::mpm_domain::SoilNodes;
@@ -378,8 +381,29 @@ impl Domain for TieInterface {
         Ok(())
     }
 
-    fn outputs(&self, _committed: &NodalState, _with_grid: bool) -> Vec<NamedOutput> {
-        Vec::new()
+    /// The interface points as a point cloud named after the interface, at their committed
+    /// positions: `gap` (m), `traction` on the structure `β g` (Pa) and `tied` (1 where the
+    /// point was active in the last step).
+    fn outputs(&self, committed: &NodalState, _with_grid: bool) -> Vec<NamedOutput> {
+        let n = self.points.len();
+        let points = (0..n).map(|p| self.committed_position(p, committed)).collect();
+        let vector = |scale: f64| self.gaps.iter().flat_map(|g| [scale * g[0], scale * g[1], 0.0]).collect();
+        let mut tied = vec![0.0; n];
+        for p in &self.active {
+            tied[p.point] = 1.0;
+        }
+        let field = |name: &str, components: usize, values: Vec<f64>| Field { name: name.into(), components, values };
+        let output = DomainOutput {
+            points,
+            cells: None,
+            point_fields: vec![
+                field("gap", 3, vector(1.0)),
+                field("traction", 3, vector(self.penalty)),
+                field("tied", 1, tied),
+            ],
+            cell_fields: Vec::new(),
+        };
+        vec![NamedOutput { name: self.name.clone(), output }]
     }
 }
 

@@ -164,7 +164,7 @@ fn check_file_name(location: &str, name: &str) -> Result<(), CaseError> {
     }
 }
 
-/// The names of the case's output series (domains, bodies, penalty walls; with
+/// The names of the case's output series (domains, bodies, penalty walls, ties; with
 /// `output.grid` also `<domain>_grid`) must be valid file names ([`check_file_name`]) and
 /// distinct even where case does not count (`Soil` and `soil` are one file on Windows
 /// and macOS).
@@ -182,6 +182,11 @@ fn check_output_names(case: &Case) -> Result<(), CaseError> {
     };
     for (k, d) in case.domains.iter().enumerate() {
         add(format!("domains[{k}].name"), &d.name)?;
+    }
+    for (k, interface) in case.interfaces.iter().enumerate() {
+        if interface.coupling == crate::case::InterfaceCoupling::Tie {
+            add(format!("interfaces[{k}].name"), &interface.name)?;
+        }
     }
     for (k, bc) in case.boundary_conditions.iter().enumerate() {
         if bc.penalty.is_some() {
