@@ -31,12 +31,15 @@
 //! second derivatives of the grid functions, is for a grid whose field is total.)
 //!
 //! **Empty grid nodes.** The MPM domain gives equations only to the grid nodes its points'
-//! functions reach (others keep their place by identity rows or are out of the system). A
-//! tie point is active at a step only if every grid node whose function is non-zero at it
-//! is reached by the soil ([`loam_mpm::mpm_domain::SoilNodes`]); otherwise it is skipped
-//! for the step and its carried gap reset to zero (there is no soil there to tie to), so
-//! the tie never gives a grid node its only equation and the system cannot be singular
-//! from it. The set of active points and their nodes is the domain's sparsity pattern:
+//! functions reach (others keep their place by identity rows or are out of the system), and
+//! the tie must not give a grid node its only equation. A point whose non-zero functions
+//! all reach soil nodes ([`loam_mpm::mpm_domain::SoilNodes`]) uses them. Where the soil ends
+//! at the structure inside a cell, the cell's nodes on the structure's side are empty: on the
+//! linear basis the point then takes the functions of the nearest cell around its own (one
+//! ring, nearest centre) whose nodes the soil all reaches, extrapolated to the point (the
+//! cell's map inverted outside it: exact for linear fields, a partition of unity). Otherwise
+//! (no such cell, or a smooth basis) the point is skipped for the step and its carried gap
+//! reset to zero: there is no soil there to tie to. The set of active points and their nodes is the domain's sparsity pattern:
 //! `begin_step` reports a change.
 //!
 //! **Penalty.** `β` (Pa/m) is the case's `interfaces[].penalty`, by default
@@ -66,6 +69,11 @@ pub const DEFAULT_TIE_PENALTY_FACTOR: f64 = 100.0;
 
 /// Functions smaller than this at a point do not tie it to their node.
 const NEGLIGIBLE_FUNCTION: f64 = 1e-12;
+
+/// The functions of `functions` that are not negligible.
+fn significant(functions: Vec<(usize, f64)>) -> Vec<(usize, f64)> {
+    functions.into_iter().filter(|(_, v)| v.abs() > NEGLIGIBLE_FUNCTION).collect()
+}
 
 /// A 2-node interface facet of the structure.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -205,6 +213,27 @@ impl TieInterface {
         tie_point_block(&functions, self.gaps[p.point], grid_du, &point.phi, facet_du, self.penalty, point.weight)
     }
 
+    /// On the linear basis, the functions at `x` of the cell nearest to `x` (by its centre)
+    /// among those sharing a node with the cell holding `x`, whose nodes the soil all
+    /// reaches, extrapolated (module doc); `None` without such a cell or on a smooth basis.
+    fn extrapolated(&self, x: &[f64; 3], reached: &[bool]) -> Option<Vec<(usize, f64)>> {
+        if self.grid.basis().is_smooth() {
+            return None;
+        }
+        let (cell, _) = self.grid.locate(x)?;
+        let distance = |c: usize| {
+            let centre = self.grid.reference_centre(c);
+            (centre[0] - x[0]).hypot(centre[1] - x[1])
+        };
+        let nearest = self
+            .grid
+            .dilate(&[cell])
+            .into_iter()
+            .filter(|&c| self.grid.mesh.cell(c).iter().all(|&a| reached[a]))
+            .min_by(|&a, &b| distance(a).total_cmp(&distance(b)))?;
+        self.grid.cell_functions_at(nearest, x).map(significant)
+    }
+
     /// Position of point `p` at the committed state `x_p^n = Σ_a φ_a (X_a + u_a^n)`.
     fn committed_position(&self, p: usize, committed: &NodalState) -> [f64; 3] {
         let point = &self.points[p];
@@ -277,16 +306,21 @@ impl Domain for TieInterface {
         let mut active = Vec::with_capacity(self.points.len());
         for p in 0..self.points.len() {
             let x = self.committed_position(p, committed);
-            let functions = self.grid.functions_with_hessian(&x).unwrap_or_default();
-            let (nodes, values): (Vec<usize>, Vec<f64>) = functions
-                .iter()
-                .filter(|(_, f)| f.value.abs() > NEGLIGIBLE_FUNCTION)
-                .map(|(a, f)| (*a, f.value))
-                .unzip();
-            if nodes.is_empty() || nodes.iter().any(|&a| !reached[a]) {
+            let functions: Vec<(usize, f64)> = self
+                .grid
+                .functions_with_hessian(&x)
+                .unwrap_or_default()
+                .into_iter()
+                .map(|(a, f)| (a, f.value))
+                .collect();
+            let soil = |f: &[(usize, f64)]| !f.is_empty() && f.iter().all(|&(a, _)| reached[a]);
+            let functions = significant(functions);
+            let functions = if soil(&functions) { Some(functions) } else { self.extrapolated(&x, &reached) };
+            let Some(functions) = functions.filter(|f| soil(f)) else {
                 self.gaps[p] = [0.0; 2];
                 continue;
-            }
+            };
+            let (nodes, values) = functions.into_iter().unzip();
             active.push(ActivePoint { point: p, nodes, values });
         }
         let changed = active.len() != self.active.len()
@@ -505,32 +539,43 @@ mod tests {
         }
     }
 
-    /// A point whose grid nodes the soil does not reach is not tied (no block), and the
-    /// pattern changes when the soil comes.
+    /// A point in a cell with a node the soil does not reach: on the linear basis it takes
+    /// the functions of the nearest neighbouring cell that the soil fills, extrapolated (a
+    /// partition of unity reproducing `x`); on B-splines it is skipped; the pattern changes
+    /// when the soil reaches the node.
     #[test]
-    fn points_beside_empty_nodes_are_skipped() {
-        let grid = Grid::new([0.0; 3], [0.4, 0.2, 0.0], [4, 2, 1], ElementType::Quad4);
-        let grid_nodes = grid.mesh.coords.len();
-        let mut reached = vec![true; grid_nodes];
-        reached[grid_nodes - 1] = false; // the top right corner (0.4, 0.2)
-        let soil: SoilNodes = Arc::new(RwLock::new(reached));
-        let facets = vec![TieFacet { nodes: [grid_nodes, grid_nodes + 1], reference: [[0.05, 0.05], [0.39, 0.19]] }];
-        let mut tie = TieInterface::new(
-            "cut",
-            Formulation::PlaneStrain,
-            1.0,
-            grid,
-            (0..grid_nodes).collect(),
-            soil.clone(),
-            facets,
-            1.0,
-        );
-        let mut committed = NodalState::zeros(2 * (grid_nodes + 2));
-        tie.begin_step(&mut committed).unwrap();
-        assert_eq!(tie.num_points(), (2, 1), "the point in the corner cell is skipped");
-        assert!(!tie.begin_step(&mut committed).unwrap(), "same pattern");
-        soil.write().unwrap()[grid_nodes - 1] = true;
-        assert!(tie.begin_step(&mut committed).unwrap(), "the soil reached the corner");
-        assert_eq!(tie.num_points(), (2, 2));
+    fn points_beside_empty_nodes_extrapolate_or_are_skipped() {
+        for basis in [loam_mpm::basis::Basis::Linear, loam_mpm::basis::Basis::Bspline2] {
+            let mut grid = Grid::new([0.0; 3], [0.4, 0.2, 0.0], [4, 2, 1], ElementType::Quad4);
+            grid.set_basis(basis).unwrap();
+            let coords = grid.mesh.coords.clone();
+            let grid_nodes = coords.len();
+            let mut reached = vec![true; grid_nodes];
+            reached[grid_nodes - 1] = false; // the top right corner (0.4, 0.2)
+            let soil: SoilNodes = Arc::new(RwLock::new(reached));
+            let facets =
+                vec![TieFacet { nodes: [grid_nodes, grid_nodes + 1], reference: [[0.05, 0.05], [0.39, 0.19]] }];
+            let ids = (0..grid_nodes).collect();
+            let mut tie = TieInterface::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil.clone(), facets, 1.0);
+            let mut committed = NodalState::zeros(2 * (grid_nodes + 2));
+            tie.begin_step(&mut committed).unwrap();
+            if basis.is_smooth() {
+                assert_eq!(tie.num_points(), (2, 1), "the point beside the empty corner is skipped");
+            } else {
+                assert_eq!(tie.num_points(), (2, 2));
+                let corner = &tie.active[1];
+                assert!(!corner.nodes.contains(&(grid_nodes - 1)), "{:?}", corner.nodes);
+                let x = tie.committed_position(corner.point, &committed);
+                let sum: f64 = corner.values.iter().sum();
+                let xs: Vec<f64> = (0..2)
+                    .map(|k| corner.nodes.iter().zip(&corner.values).map(|(&a, v)| v * coords[a][k]).sum())
+                    .collect();
+                assert!((sum - 1.0).abs() < 1e-12 && (xs[0] - x[0]).abs() < 1e-12 && (xs[1] - x[1]).abs() < 1e-12);
+            }
+            assert!(!tie.begin_step(&mut committed).unwrap(), "same pattern");
+            soil.write().unwrap()[grid_nodes - 1] = true;
+            assert!(tie.begin_step(&mut committed).unwrap(), "the soil reached the corner");
+            assert_eq!(tie.num_points(), (2, 2));
+        }
     }
 }

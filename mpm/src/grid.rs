@@ -432,6 +432,16 @@ impl Grid {
         )
     }
 
+    /// The linear functions of `cell` at `x`, also outside the cell (the cell's map
+    /// extrapolated: exact for linear fields), per node (grid numbering); `None` if the map
+    /// is singular.
+    pub fn cell_functions_at(&self, cell: usize, x: &[f64; 3]) -> Option<Vec<(usize, f64)>> {
+        let xi = self.local_coordinates(cell, x)?;
+        let mut n = [0.0; MAX_NODES];
+        self.mesh.element.shape_functions(&xi, &mut n);
+        Some(self.mesh.cell(cell).iter().zip(n).map(|(&a, v)| (a, v)).collect())
+    }
+
     /// The Gauss rule of support `s` in the step's configuration on which a u–p support
     /// integrates its pressure projection ([`loam_fem::mixed_kernel`]): the cell's
     /// [`ElementType::gauss_points_mixed`], or a 3 × 3 rule over a smooth support's region.
