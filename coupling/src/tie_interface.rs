@@ -64,7 +64,7 @@ use crate::tie::tie_point_block;
 
 /// Penalty `β = factor · E_soil / h` of a tie when the case gives none (see the module doc;
 /// the tip of benchmark 12 changes by less than 0.1 % between factors 10 and 1000, see
-/// docs/methods.md).
+/// docs/coupling.md).
 pub const DEFAULT_TIE_PENALTY_FACTOR: f64 = 100.0;
 
 /// Functions smaller than this at a point do not tie it to their node.
@@ -257,7 +257,7 @@ pub fn tie_facets(
     region: &[usize],
     grid: &Grid,
 ) -> Result<(Vec<[usize; 2]>, f64), InterfaceError> {
-    let fail = |message: String| InterfaceError { interface: Some(0), message };
+    let fail = |message: String| InterfaceError { interface: None, message };
     let mesh = structure.mesh;
     if mesh.element.dim() != 2 {
         return Err(fail("a tie is 2D only so far (issue 25)".into()));
