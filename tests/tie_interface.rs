@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{case, case_json, last, parse, report, run};
+use common::{case, case_json, frequency, last, monitor, parse, report, run};
 
 /// Last `tip_uy` of the tied beam with `edit` applied to its case.
 fn tied_tip(edit: impl FnOnce(&mut serde_json::Value)) -> f64 {
@@ -104,4 +104,44 @@ fn tied_tip_does_not_depend_on_where_the_grid_lines_fall() {
         let tip = tied_tip(|json| json["domains"][1]["grid"]["origin"][0] = serde_json::json!(3.0 + shift));
         report(&format!("tied tip with the grid shifted by {shift} m vs unshifted [m]"), tip, reference, 5e-4);
     }
+}
+
+/// Benchmark 12 dynamic (gravity applied suddenly, `cases/coupled_beam_split_dynamic.json`
+/// made non-conforming as the static case: FEM h = 0.05 m on [0, 4.05], material points on
+/// [4.05, 8], grid h = 0.1 m from x = 3): the first frequency of the tip within 1 % of the
+/// beam as one FEM domain at h = 0.05 m with the same time step.
+#[test]
+fn tied_beam_dynamic_frequency() {
+    let mut json = case_json("coupled_beam_split_dynamic.json");
+    json["domains"][0]["mesh"]["rectangle"]["size"] = serde_json::json!([4.05, 1.0]);
+    json["domains"][0]["mesh"]["rectangle"]["cells"] = serde_json::json!([81, 20]);
+    json["domains"][1]["grid"] =
+        serde_json::json!({ "origin": [3.0, -1.8], "size": [5.5, 3.3], "cells": [55, 33], "element": "quad4" });
+    let body = &mut json["domains"][1]["material_points"]["cells"]["mesh"]["rectangle"];
+    body["origin"] = serde_json::json!([4.05, 0.0]);
+    body["size"] = serde_json::json!([3.95, 1.0]);
+    body["cells"] = serde_json::json!([79, 20]);
+    json["interfaces"][0]["coupling"] = serde_json::json!("tie");
+    json["regions"]["cut"] = serde_json::json!({ "segment": { "from": [4.05, 0.0], "to": [4.05, 1.0] } });
+    json["monitors"][1]["point"] = serde_json::json!([4.05, 0.5]);
+    json["output"] = serde_json::json!({ "vtk": false });
+    let mut single = case_json("coupled_beam_split_dynamic.json");
+    single["domains"].as_array_mut().unwrap().truncate(1);
+    single["domains"][0]["mesh"]["rectangle"]["size"] = serde_json::json!([8.0, 1.0]);
+    single["domains"][0]["mesh"]["rectangle"]["cells"] = serde_json::json!([160, 20]);
+    single["interfaces"] = serde_json::json!([]);
+    single["monitors"] =
+        serde_json::json!([{ "name": "tip_uy", "type": "displacement", "point": [8.0, 0.5], "component": "y" }]);
+    single["output"] = serde_json::json!({ "vtk": false });
+    let tip_frequency = |json: serde_json::Value| {
+        let (sim, h) = run(parse(json));
+        let k = monitor(&sim, "tip_uy");
+        frequency(&h.iter().map(|r| (r.0, r.1[k])).collect::<Vec<_>>())
+    };
+    report(
+        "first frequency, tied beam vs one FEM domain (h = 0.05 m) [Hz]",
+        tip_frequency(json),
+        tip_frequency(single),
+        0.01,
+    );
 }
