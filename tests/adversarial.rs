@@ -621,6 +621,20 @@ fn named_inputs(dir: &Path, inputs: &mut Vec<Input>) {
         bad("interfaces[0].penalty"),
     );
     case(
+        "tie and shared nodes on one grid",
+        "check",
+        &tied,
+        &|v| {
+            let shared = json!({ "name": "cut2", "soil": "beam_mpm", "structure": "beam_fem", "region": "cut" });
+            v["interfaces"].as_array_mut().unwrap().push(shared);
+        },
+        Expect::Bad {
+            path: "interfaces[0].coupling".into(),
+            exact: true,
+            mention: Some("one kind of interface per grid".into()),
+        },
+    );
+    case(
         "tie facets outside the grid",
         "check",
         &tied,

@@ -5,7 +5,9 @@
 //! they have at the same position (a multi-material structure); MPM domains whose grids are
 //! specified identically are bodies on one grid; a grid node is a structure node only where
 //! an interface says so (tied), or the partner of one (slip). Any other contact between an
-//! FEM mesh and a grid is refused (`loam_coupling::interface`).
+//! FEM mesh and a grid is refused (`loam_coupling::interface`), but for a non-conforming tie
+//! (`"coupling": "tie"`), whose structure lies in the grid, keeps its own nodes and is
+//! joined to the soil by a [`TieInterface`] placed after every part.
 
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
