@@ -34,12 +34,15 @@
 //! functions reach (others keep their place by identity rows or are out of the system), and
 //! the tie must not give a grid node its only equation. A point whose non-zero functions
 //! all reach soil nodes ([`loam_mpm::mpm_domain::SoilNodes`]) uses them. Where the soil ends
-//! at the structure inside a cell, the cell's nodes on the structure's side are empty: on the
-//! linear basis the point then takes the functions of the nearest cell around its own (one
-//! ring, nearest centre) whose nodes the soil all reaches, extrapolated to the point (the
-//! cell's map inverted outside it: exact for linear fields, a partition of unity). Otherwise
-//! (no such cell, or a smooth basis) the point is skipped for the step and its carried gap
-//! reset to zero: there is no soil there to tie to. The set of active points and their nodes is the domain's sparsity pattern:
+//! at the structure inside a cell (or a smooth support), the nodes on the structure's side
+//! are empty, and the soil's field is extrapolated to the point from the nodes it reaches:
+//! on the linear basis the point takes the functions of the nearest cell around its own
+//! (one ring, nearest centre) whose nodes the soil all reaches, the cell's map inverted
+//! outside it; on a smooth basis the empty nodes' functions are folded into the support's
+//! other nodes as those of a hole's removed nodes ([`loam_mpm::basis`]). Both reproduce
+//! linear fields and keep the partition of unity. Otherwise (no such cell; a support
+//! without soil) the point is skipped for the step and its carried gap reset to zero: there
+//! is no soil there to tie to. The set of active points and their nodes is the domain's sparsity pattern:
 //! `begin_step` reports a change.
 //!
 //! **Penalty.** `β` (Pa/m) is the case's `interfaces[].penalty`, by default
@@ -213,12 +216,14 @@ impl TieInterface {
         tie_point_block(&functions, self.gaps[p.point], grid_du, &point.phi, facet_du, self.penalty, point.weight)
     }
 
-    /// On the linear basis, the functions at `x` of the cell nearest to `x` (by its centre)
-    /// among those sharing a node with the cell holding `x`, whose nodes the soil all
-    /// reaches, extrapolated (module doc); `None` without such a cell or on a smooth basis.
+    /// The functions at `x` extrapolated from the nodes the soil reaches (module doc): on
+    /// the linear basis those of the cell nearest to `x` (by its centre) among those sharing
+    /// a node with the cell holding `x` whose nodes the soil all reaches; on a smooth basis
+    /// the point's own with the empty nodes' functions folded into the others. `None`
+    /// without such a cell, or a support without soil.
     fn extrapolated(&self, x: &[f64; 3], reached: &[bool]) -> Option<Vec<(usize, f64)>> {
         if self.grid.basis().is_smooth() {
-            return None;
+            return self.grid.functions_without(x, |a| !reached[a]).map(significant);
         }
         let (cell, _) = self.grid.locate(x)?;
         let distance = |c: usize| {
@@ -540,11 +545,12 @@ mod tests {
     }
 
     /// A point in a cell with a node the soil does not reach: on the linear basis it takes
-    /// the functions of the nearest neighbouring cell that the soil fills, extrapolated (a
-    /// partition of unity reproducing `x`); on B-splines it is skipped; the pattern changes
-    /// when the soil reaches the node.
+    /// the functions of the nearest neighbouring cell that the soil fills, extrapolated; on
+    /// B-splines the empty node's function is folded into the others; both a partition of
+    /// unity reproducing `x` without the empty node. The pattern changes when the soil
+    /// reaches the node; without any soil the points are skipped.
     #[test]
-    fn points_beside_empty_nodes_extrapolate_or_are_skipped() {
+    fn points_beside_empty_nodes_take_the_soil_field_extrapolated() {
         for basis in [loam_mpm::basis::Basis::Linear, loam_mpm::basis::Basis::Bspline2] {
             let mut grid = Grid::new([0.0; 3], [0.4, 0.2, 0.0], [4, 2, 1], ElementType::Quad4);
             grid.set_basis(basis).unwrap();
@@ -559,23 +565,21 @@ mod tests {
             let mut tie = TieInterface::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil.clone(), facets, 1.0);
             let mut committed = NodalState::zeros(2 * (grid_nodes + 2));
             tie.begin_step(&mut committed).unwrap();
-            if basis.is_smooth() {
-                assert_eq!(tie.num_points(), (2, 1), "the point beside the empty corner is skipped");
-            } else {
-                assert_eq!(tie.num_points(), (2, 2));
-                let corner = &tie.active[1];
-                assert!(!corner.nodes.contains(&(grid_nodes - 1)), "{:?}", corner.nodes);
-                let x = tie.committed_position(corner.point, &committed);
-                let sum: f64 = corner.values.iter().sum();
-                let xs: Vec<f64> = (0..2)
-                    .map(|k| corner.nodes.iter().zip(&corner.values).map(|(&a, v)| v * coords[a][k]).sum())
-                    .collect();
-                assert!((sum - 1.0).abs() < 1e-12 && (xs[0] - x[0]).abs() < 1e-12 && (xs[1] - x[1]).abs() < 1e-12);
-            }
+            assert_eq!(tie.num_points(), (2, 2));
+            let corner = &tie.active[1];
+            assert!(!corner.nodes.contains(&(grid_nodes - 1)), "{:?}", corner.nodes);
+            let x = tie.committed_position(corner.point, &committed);
+            let sum: f64 = corner.values.iter().sum();
+            let xs: Vec<f64> =
+                (0..2).map(|k| corner.nodes.iter().zip(&corner.values).map(|(&a, v)| v * coords[a][k]).sum()).collect();
+            assert!((sum - 1.0).abs() < 1e-12 && (xs[0] - x[0]).abs() < 1e-12 && (xs[1] - x[1]).abs() < 1e-12);
             assert!(!tie.begin_step(&mut committed).unwrap(), "same pattern");
             soil.write().unwrap()[grid_nodes - 1] = true;
             assert!(tie.begin_step(&mut committed).unwrap(), "the soil reached the corner");
             assert_eq!(tie.num_points(), (2, 2));
+            soil.write().unwrap().fill(false);
+            assert!(tie.begin_step(&mut committed).unwrap(), "the soil left");
+            assert_eq!(tie.num_points(), (2, 0));
         }
     }
 }

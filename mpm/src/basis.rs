@@ -348,6 +348,19 @@ impl SmoothLattice {
     /// The support holding lattice coordinates `s` and, per node of it, `(N, ∂N/∂s_x,
     /// ∂N/∂s_y)` with the derivatives per lattice cell; `half_cells` is GIMP's `l_p,d / h_d`.
     pub fn functions_at(&self, s: [f64; 2], half_cells: [f64; 2]) -> (usize, [[f64; 3]; SUPPORT_NODES]) {
+        self.functions_without(s, half_cells, |_| false).expect("a support holding a point keeps a node")
+    }
+
+    /// [`SmoothLattice::functions_at`] with the functions of the support's grid nodes for
+    /// which `absent` holds folded into the others as those of a hole's removed nodes are
+    /// (`fold_missing`: a linear field extrapolated from the nodes kept): for a point beside
+    /// which the soil ends before those nodes. `None` if the support keeps no node.
+    pub fn functions_without(
+        &self,
+        s: [f64; 2],
+        half_cells: [f64; 2],
+        absent: impl Fn(usize) -> bool,
+    ) -> Option<(usize, [[f64; 3]; SUPPORT_NODES])> {
         let (wx, fx) = self.basis.window_1d(s[0], self.cells[0], half_cells[0]);
         let (wy, fy) = self.basis.window_1d(s[1], self.cells[1], half_cells[1]);
         let mut values = [[0.0; 3]; SUPPORT_NODES];
@@ -357,10 +370,19 @@ impl SmoothLattice {
             }
         }
         let support = wy * (self.cells[0] - 1) + wx;
-        if let Some(&mask) = self.missing.get(support).filter(|&&m| m != 0) {
+        let mut mask = self.missing.get(support).copied().unwrap_or(0);
+        for (k, &a) in self.support(support).iter().enumerate() {
+            if absent(a) {
+                mask |= 1 << k;
+            }
+        }
+        if mask == (1 << SUPPORT_NODES) - 1 {
+            return None;
+        }
+        if mask != 0 {
             fold_missing(&mut values, mask, [s[0] - wx as f64, s[1] - wy as f64]);
         }
-        (support, values)
+        Some((support, values))
     }
 
     /// The support holding lattice coordinates `s` of the whole lattice and, per node of it,

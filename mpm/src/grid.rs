@@ -432,6 +432,17 @@ impl Grid {
         )
     }
 
+    /// On a smooth basis (fixed lattice without holes), the functions at `x` (GIMP: `l = 0`)
+    /// per node with those of the nodes for which `absent` holds folded into the others by
+    /// the extrapolation of a linear field ([`SmoothLattice::functions_without`]); `None`
+    /// outside the lattice, on the linear basis, or if the support keeps no node.
+    pub fn functions_without(&self, x: &[f64; 3], absent: impl Fn(usize) -> bool) -> Option<Vec<(usize, f64)>> {
+        let lattice = self.smooth.as_ref().filter(|_| !self.has_moved())?;
+        let s = lattice.lattice_coordinates(x)?;
+        let (support, values) = lattice.functions_without(s, [0.0; 2], absent)?;
+        Some(lattice.support(support).iter().zip(values).map(|(&a, v)| (a, v[0])).collect())
+    }
+
     /// The linear functions of `cell` at `x`, also outside the cell (the cell's map
     /// extrapolated: exact for linear fields), per node (grid numbering); `None` if the map
     /// is singular.
