@@ -459,6 +459,26 @@ pub struct InterfaceSpec {
     /// cells).
     #[serde(default)]
     pub band: Option<f64>,
+    /// How soil and structure are joined (default shared nodes).
+    #[serde(default)]
+    pub coupling: InterfaceCoupling,
+    /// Penalty β (Pa/m) of a tie (default `DEFAULT_TIE_PENALTY_FACTOR · E_soil / h`).
+    #[serde(default)]
+    pub penalty: Option<f64>,
+}
+
+/// How an interface joins soil and structure.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InterfaceCoupling {
+    /// The grid conforms to the structure and shares its interface nodes (its cells inside
+    /// the structure removed, a band of it moving with the structure).
+    #[default]
+    SharedNodes,
+    /// Non-conforming penalty tie: the structure's facets carry quadrature points tied to
+    /// the soil interpolated on the fixed grid, which keeps all its cells
+    /// (`loam_coupling::tie_interface`).
+    Tie,
 }
 
 /// Prescribed displacement on a region.

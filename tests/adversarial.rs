@@ -595,6 +595,56 @@ fn named_inputs(dir: &Path, inputs: &mut Vec<Input>) {
         &|v| v["interfaces"][0]["band"] = json!(-1e300),
         bad("interfaces[0].band"),
     );
+    // the non-conforming tie (issue 25)
+    let tied = read("coupled_beam_split_tied.json");
+    case(
+        "interface coupling unknown",
+        "check",
+        &tied,
+        &|v| v["interfaces"][0]["coupling"] = json!("glue"),
+        bad("interfaces[0].coupling"),
+    );
+    case("tie with slip", "check", &tied, &|v| v["interfaces"][0]["slip"] = json!(true), bad("interfaces[0].slip"));
+    case("tie with a band", "check", &tied, &|v| v["interfaces"][0]["band"] = json!(0.5), bad("interfaces[0].band"));
+    case(
+        "tie penalty negative",
+        "check",
+        &tied,
+        &|v| v["interfaces"][0]["penalty"] = json!(-1.0),
+        bad("interfaces[0].penalty"),
+    );
+    case(
+        "penalty on shared nodes",
+        "check",
+        &coupled,
+        &|v| v["interfaces"][0]["penalty"] = json!(1e9),
+        bad("interfaces[0].penalty"),
+    );
+    case(
+        "tie and shared nodes on one grid",
+        "check",
+        &tied,
+        &|v| {
+            let shared = json!({ "name": "cut2", "soil": "beam_mpm", "structure": "beam_fem", "region": "cut" });
+            v["interfaces"].as_array_mut().unwrap().push(shared);
+        },
+        Expect::Bad {
+            path: "interfaces[0].coupling".into(),
+            exact: true,
+            mention: Some("one kind of interface per grid".into()),
+        },
+    );
+    case(
+        "tie facets outside the grid",
+        "check",
+        &tied,
+        &|v| v["regions"]["cut"] = json!({"segment": {"from": [0.0, 0.0], "to": [0.0, 1.0]}}),
+        Expect::Bad {
+            path: "interfaces[0].region".into(),
+            exact: true,
+            mention: Some("outside the soil's grid".into()),
+        },
+    );
     // whole files
     let mut file = |name: &str, contents: &[u8], expect: Expect| {
         let f = dir.join(format!("file_{}.json", inputs.len()));

@@ -112,6 +112,13 @@ fn coupled_beam_resumes_bit_for_bit() {
     resume_equals_uninterrupted("coupled_beam_split_dynamic", 100, 200, |_| {});
 }
 
+/// The beam tied across a non-conforming interface (static, 4 steps), resumed after step
+/// 2: the tie's carried gaps come back with the checkpoint.
+#[test]
+fn tied_beam_resumes_bit_for_bit() {
+    resume_equals_uninterrupted("coupled_beam_split_tied", 1, 2, |_| {});
+}
+
 /// The Bui column collapsing onto the rubber plate (coupled, adaptive, to rest), resumed
 /// after step 300. Long (two runs of about 40 s).
 #[test]

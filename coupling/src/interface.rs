@@ -53,6 +53,9 @@ pub struct InterfaceSummary {
     pub measure: f64,
     /// Whether it is a slip interface.
     pub slip: bool,
+    /// The penalty β (Pa/m) of a non-conforming tie ([`crate::tie_interface`]); `None` for
+    /// shared nodes.
+    pub tie_penalty: Option<f64>,
 }
 
 /// A grid node on an interface.
@@ -210,7 +213,13 @@ pub fn couple(
                 }
             }
         }
-        summaries.push(InterfaceSummary { name: req.name.to_string(), nodes: nodes.len(), measure, slip: req.slip });
+        summaries.push(InterfaceSummary {
+            name: req.name.to_string(),
+            nodes: nodes.len(),
+            measure,
+            slip: req.slip,
+            tie_penalty: None,
+        });
     }
     for map in &mut on_interface {
         for (_, n) in map.values_mut() {

@@ -22,6 +22,13 @@
 //! the Newton log reports, and the soil's residual at the interface nodes is the force that
 //! the soil exerts on the structure.
 
+//!
+//! The second form, for structures that do not fit the grid, is a **non-conforming tie**
+//! ([`tie_interface`]): quadrature points on the structure's interface facets, located in
+//! the fixed grid, each an element block over its grid nodes and its facet's nodes
+//! (penalty; [`tie`] gives the block of one point).
+
 pub mod interface;
 pub mod mesh_motion;
 pub mod tie;
+pub mod tie_interface;

@@ -7,10 +7,11 @@
 //! the point minus the structure's,
 //!
 //! ```text
-//! g = Σ_I N_I(x) u_I − Σ_a φ_a u_a,
+//! g = g₀ + Σ_I N_I(x) u_I − Σ_a φ_a u_a,
 //! ```
 //!
-//! and the tie is the penalty energy `Π = ½ β w |g|²` (β the penalty per unit area, w the
+//! (`g₀` a gap carried in, e.g. the committed gap when `u` are the increments of a step) and
+//! the tie is the penalty energy `Π = ½ β w |g|²` (β the penalty per unit area, w the
 //! point's weight: Gauss weight × facet Jacobian, reference configuration). Its residual is
 //! `f_I = β w N_I g` on the grid nodes and `f_a = −β w φ_a g` on the facet nodes (the traction
 //! on the structure is `t = β g = β (u_grid(x) − u_S)`). The tangent is the exact second
@@ -26,23 +27,17 @@
 //! so it is symmetric, and the second derivatives `∂_ij N_I` of the grid functions enter
 //! (non-zero for the bilinear basis: `∂_xy N_I`).
 
-/// The grid functions at an interface point: value, gradient and second derivatives
-/// `[∂xx, ∂xy, ∂yy]` for each grid node of the point's support.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GridFunction {
-    /// `N_I(x)`.
-    pub value: f64,
-    /// `∇N_I(x)`.
-    pub gradient: [f64; 2],
-    /// `[∂xx, ∂xy, ∂yy] N_I(x)`.
-    pub hessian: [f64; 3],
-}
+pub use loam_mpm::grid::GridFunction;
 
 /// The element block of one tie point. DOFs are ordered grid nodes first (`2 I + k`), then
 /// facet nodes (`2 (n + a) + k`), `n = grid.len()`. Returns the residual (the internal force
-/// `∂Π/∂u`) and the row-major tangent `∂²Π/∂u²`, and the gap `g`.
+/// `∂Π/∂u`) and the row-major tangent `∂²Π/∂u²`, and the gap `g`. `initial_gap` is `g₀`.
+/// Functions given with zero gradient and hessian make the point fixed in the grid (its
+/// `N_I` do not follow the structure): the tangent is then `β w (∂g/∂u)ᵀ(∂g/∂u)` with
+/// `∂g/∂u_b = −φ_b I`.
 pub fn tie_point_block(
     grid: &[GridFunction],
+    initial_gap: [f64; 2],
     grid_displacement: &[[f64; 2]],
     facet_functions: &[f64],
     facet_displacement: &[[f64; 2]],
@@ -52,7 +47,7 @@ pub fn tie_point_block(
     let n = grid.len();
     let m = facet_functions.len();
     let dofs = 2 * (n + m);
-    let mut gap = [0.0; 2];
+    let mut gap = initial_gap;
     let mut h = [[0.0; 2]; 2];
     for (f, u) in grid.iter().zip(grid_displacement) {
         for k in 0..2 {
@@ -157,7 +152,7 @@ mod tests {
                 x[k] += phi[a] * (reference[a][k] + facet_u[a][k]);
             }
         }
-        let (r, k, _) = tie_point_block(&bilinear(x, 0.1), &grid_u, &phi, &facet_u, 3.0e7, 0.02);
+        let (r, k, _) = tie_point_block(&bilinear(x, 0.1), [0.0; 2], &grid_u, &phi, &facet_u, 3.0e7, 0.02);
         (r, k)
     }
 

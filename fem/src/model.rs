@@ -786,7 +786,11 @@ impl Model {
     /// and makes the converged state the committed one at `t`.
     fn commit_step(&mut self, assembler: &Assembler, dt: f64, t: f64, gravity: [f64; 3]) {
         assembler.reactions(&mut self.reactions);
-        if self.roles.contains(&NodeRole::Interface) || !self.ties.is_empty() {
+        // shared nodes, slip pairs, or soil terms on structure nodes (a non-conforming tie)
+        let soil_on_structure = self.roles.contains(&NodeRole::Structure)
+            && self.roles.contains(&NodeRole::Grid)
+            && self.domains.iter().any(|d| d.is_soil());
+        if self.roles.contains(&NodeRole::Interface) || !self.ties.is_empty() || soil_on_structure {
             assembler.soil_forces(&self.domains, &self.roles, &self.ties, &mut self.soil_forces);
         }
         let mut inertial = vec![0.0; self.num_dofs()];

@@ -119,22 +119,57 @@ impl Basis {
         }
     }
 
+    /// `d²N/dr²` of the function of a node at distance `r` (as [`Basis::function_1d`]):
+    /// B-splines `−2` for `|r| < ½`, `1` for `½ ≤ |r| < 3/2`; GIMP `−1/l`, `0`, `1/(2l)` on
+    /// its three pieces; 0 for the hat (its kinks carry no second derivative).
+    pub fn second_derivative_1d(self, r: f64, half_length: f64) -> f64 {
+        let a = r.abs();
+        match self {
+            Self::Bspline2 => {
+                if a < 0.5 {
+                    -2.0
+                } else if a < 1.5 {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            Self::Gimp | Self::Linear => {
+                let l = if self == Self::Gimp { half_length.clamp(0.0, 0.5) } else { 0.0 };
+                if l == 0.0 || (l..1.0 - l).contains(&a) || a >= 1.0 + l {
+                    0.0
+                } else if a < l {
+                    -1.0 / l
+                } else {
+                    0.5 / l
+                }
+            }
+        }
+    }
+
     /// The three functions of a point at lattice coordinate `s = (x − x_0)/h ∈ [0, n]` on a
     /// lattice of `n ≥ 2` cells in one direction: the window's first node `w` and
     /// `(N_k, dN_k/ds)` of the nodes `w + k`, with the edges folded (module doc).
     pub fn window_1d(self, s: f64, cells: usize, half_length: f64) -> (usize, [(f64, f64); 3]) {
+        let (w, values) = self.window_1d_derivatives(s, cells, half_length);
+        (w, values.map(|v| (v[0], v[1])))
+    }
+
+    /// [`Basis::window_1d`] with the second derivatives: `[N_k, dN_k/ds, d²N_k/ds²]`.
+    pub fn window_1d_derivatives(self, s: f64, cells: usize, half_length: f64) -> (usize, [[f64; 3]; 3]) {
         let nearest = (s.round().max(0.0) as usize).min(cells);
         let w = nearest.saturating_sub(1).min(cells - 2);
-        let mut values = [(0.0, 0.0); 3];
-        for (k, v) in values.iter_mut().enumerate() {
-            *v = self.function_1d(s - (w + k) as f64, half_length);
-        }
+        let at = |r: f64| {
+            let (n, dn) = self.function_1d(r, half_length);
+            [n, dn, self.second_derivative_1d(r, half_length)]
+        };
+        let mut values: [[f64; 3]; 3] = std::array::from_fn(|k| at(s - (w + k) as f64));
         let mut fold = |ghost: f64, edge: usize, inner: usize| {
-            let (n, dn) = self.function_1d(s - ghost, half_length);
-            values[edge].0 += 2.0 * n;
-            values[edge].1 += 2.0 * dn;
-            values[inner].0 -= n;
-            values[inner].1 -= dn;
+            let f = at(s - ghost);
+            for i in 0..3 {
+                values[edge][i] += 2.0 * f[i];
+                values[inner][i] -= f[i];
+            }
         };
         if nearest == 0 {
             fold(-1.0, 0, 1);
@@ -313,6 +348,19 @@ impl SmoothLattice {
     /// The support holding lattice coordinates `s` and, per node of it, `(N, ∂N/∂s_x,
     /// ∂N/∂s_y)` with the derivatives per lattice cell; `half_cells` is GIMP's `l_p,d / h_d`.
     pub fn functions_at(&self, s: [f64; 2], half_cells: [f64; 2]) -> (usize, [[f64; 3]; SUPPORT_NODES]) {
+        self.functions_without(s, half_cells, |_| false).expect("a support holding a point keeps a node")
+    }
+
+    /// [`SmoothLattice::functions_at`] with the functions of the support's grid nodes for
+    /// which `absent` holds folded into the others as those of a hole's removed nodes are
+    /// (`fold_missing`: a linear field extrapolated from the nodes kept): for a point beside
+    /// which the soil ends before those nodes. `None` if the support keeps no node.
+    pub fn functions_without(
+        &self,
+        s: [f64; 2],
+        half_cells: [f64; 2],
+        absent: impl Fn(usize) -> bool,
+    ) -> Option<(usize, [[f64; 3]; SUPPORT_NODES])> {
         let (wx, fx) = self.basis.window_1d(s[0], self.cells[0], half_cells[0]);
         let (wy, fy) = self.basis.window_1d(s[1], self.cells[1], half_cells[1]);
         let mut values = [[0.0; 3]; SUPPORT_NODES];
@@ -322,10 +370,40 @@ impl SmoothLattice {
             }
         }
         let support = wy * (self.cells[0] - 1) + wx;
-        if let Some(&mask) = self.missing.get(support).filter(|&&m| m != 0) {
+        let mut mask = self.missing.get(support).copied().unwrap_or(0);
+        for (k, &a) in self.support(support).iter().enumerate() {
+            if absent(a) {
+                mask |= 1 << k;
+            }
+        }
+        if mask == (1 << SUPPORT_NODES) - 1 {
+            return None;
+        }
+        if mask != 0 {
             fold_missing(&mut values, mask, [s[0] - wx as f64, s[1] - wy as f64]);
         }
-        (support, values)
+        Some((support, values))
+    }
+
+    /// The support holding lattice coordinates `s` of the whole lattice and, per node of it,
+    /// `[N, ∂N/∂s_x, ∂N/∂s_y, ∂²N/∂s_x², ∂²N/∂s_x∂s_y, ∂²N/∂s_y²]` (derivatives per lattice
+    /// cell); `None` on a lattice with holes, whose folded functions are not kept to second
+    /// order.
+    pub fn functions_with_hessian(
+        &self,
+        s: [f64; 2],
+        half_cells: [f64; 2],
+    ) -> Option<(usize, [[f64; 6]; SUPPORT_NODES])> {
+        if !self.missing.is_empty() {
+            return None;
+        }
+        let (wx, fx) = self.basis.window_1d_derivatives(s[0], self.cells[0], half_cells[0]);
+        let (wy, fy) = self.basis.window_1d_derivatives(s[1], self.cells[1], half_cells[1]);
+        let values = std::array::from_fn(|k| {
+            let (x, y) = (fx[k % 3], fy[k / 3]);
+            [x[0] * y[0], x[1] * y[0], x[0] * y[1], x[2] * y[0], x[1] * y[1], x[0] * y[2]]
+        });
+        Some((wy * (self.cells[0] - 1) + wx, values))
     }
 
     /// The support of a point at `x` of the fixed lattice whose domain has the half lengths

@@ -139,6 +139,17 @@ enum Locator {
     Bins(Bins),
 }
 
+/// A grid function at a point in 2D: value, gradient and second derivatives.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GridFunction {
+    /// `N_I(x)`.
+    pub value: f64,
+    /// `∇N_I(x)`.
+    pub gradient: [f64; 2],
+    /// `[∂xx, ∂xy, ∂yy] N_I(x)`.
+    pub hessian: [f64; 3],
+}
+
 /// The isoparametric map of an affine cell, `x = x₀ + J ξ`.
 #[derive(Debug, Clone, Copy)]
 struct AffineCell {
@@ -331,6 +342,115 @@ impl Grid {
         )
         .expect("located points lie in cells that are not inverted");
         Some((cell, g))
+    }
+
+    /// The grid functions at `x` (2D) with their first and second derivatives, per node
+    /// (grid numbering) of the support holding `x`, in the grid's current configuration;
+    /// `None` outside the grid, in 3D, and for a smooth basis on a lattice that moved or lost
+    /// cells. A smooth basis is evaluated as at a point without a domain (GIMP: `l = 0`, the
+    /// hat, whose kinks carry no second derivative).
+    ///
+    /// On a linear cell the second derivatives follow from differentiating `∇_ξ N = Jᵀ ∇_x N`
+    /// once more (`J = ∂x/∂ξ`): `∂²N/∂ξ_k∂ξ_l = (Jᵀ ∇²_x N J)_kl + ∇_x N · ∂²x/∂ξ_k∂ξ_l`, so
+    ///
+    /// ```text
+    /// ∇²_x N = J⁻ᵀ (∇²_ξ N − Σ_m ∂_m N ∇²_ξ x_m) J⁻¹,
+    /// ```
+    ///
+    /// where quad4 has only the mixed local derivatives `∂²N_a/∂ξ∂η = ¼ ξ_a η_a` and
+    /// `∂²x/∂ξ∂η = Σ_a x_a ∂²N_a/∂ξ∂η` (zero on a parallelogram: then `∂_xy N` is the
+    /// bilinear function's only second derivative), and tri3 none.
+    pub fn functions_with_hessian(&self, x: &[f64; 3]) -> Option<Vec<(usize, GridFunction)>> {
+        let element = self.mesh.element;
+        if element.dim() != 2 {
+            return None;
+        }
+        if let Some(lattice) = &self.smooth {
+            if self.has_moved() {
+                return None;
+            }
+            let s = lattice.lattice_coordinates(x)?;
+            let (support, values) = lattice.functions_with_hessian(s, [0.0; 2])?;
+            let h = lattice.spacing();
+            let nodes = lattice.support(support);
+            return Some(
+                nodes
+                    .iter()
+                    .zip(values)
+                    .map(|(&a, v)| {
+                        let f = GridFunction {
+                            value: v[0],
+                            gradient: [v[1] / h[0], v[2] / h[1]],
+                            hessian: [v[3] / (h[0] * h[0]), v[4] / (h[0] * h[1]), v[5] / (h[1] * h[1])],
+                        };
+                        (a, f)
+                    })
+                    .collect(),
+            );
+        }
+        let (cell, xi) = self.locate(x)?;
+        let coords = self.cell_coords(cell);
+        let nn = element.num_nodes();
+        let mut n = [0.0; MAX_NODES];
+        let mut dn = [[0.0; 3]; MAX_NODES];
+        element.shape_functions(&xi, &mut n);
+        element.shape_gradients(&xi, &mut dn);
+        // ∂²N_a/∂ξ∂η: dN/dξ is linear in η on quad4
+        let mut mixed = [0.0; MAX_NODES];
+        if element == ElementType::Quad4 {
+            let (mut up, mut down) = ([[0.0; 3]; MAX_NODES], [[0.0; 3]; MAX_NODES]);
+            element.shape_gradients(&[xi[0], 1.0, 0.0], &mut up);
+            element.shape_gradients(&[xi[0], -1.0, 0.0], &mut down);
+            for a in 0..nn {
+                mixed[a] = 0.5 * (up[a][0] - down[a][0]);
+            }
+        }
+        let (mut j, mut d) = ([[0.0; 2]; 2], [0.0; 2]);
+        for a in 0..nn {
+            for m in 0..2 {
+                for k in 0..2 {
+                    j[m][k] += coords[a][m] * dn[a][k];
+                }
+                d[m] += coords[a][m] * mixed[a];
+            }
+        }
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        // J⁻¹ (ξ_k per x_i)
+        let inv = [[j[1][1] / det, -j[0][1] / det], [-j[1][0] / det, j[0][0] / det]];
+        Some(
+            (0..nn)
+                .map(|a| {
+                    let gradient: [f64; 2] = std::array::from_fn(|i| inv[0][i] * dn[a][0] + inv[1][i] * dn[a][1]);
+                    // ∇²_ξ N − Σ_m ∂_m N ∇²_ξ x_m: only the mixed entry
+                    let c = mixed[a] - gradient[0] * d[0] - gradient[1] * d[1];
+                    // (J⁻ᵀ A J⁻¹)_ij with A = [[0, c], [c, 0]]
+                    let entry = |i: usize, k: usize| c * (inv[0][i] * inv[1][k] + inv[1][i] * inv[0][k]);
+                    let f = GridFunction { value: n[a], gradient, hessian: [entry(0, 0), entry(0, 1), entry(1, 1)] };
+                    (self.mesh.cell(cell)[a], f)
+                })
+                .collect(),
+        )
+    }
+
+    /// On a smooth basis (fixed lattice without holes), the functions at `x` (GIMP: `l = 0`)
+    /// per node with those of the nodes for which `absent` holds folded into the others by
+    /// the extrapolation of a linear field ([`SmoothLattice::functions_without`]); `None`
+    /// outside the lattice, on the linear basis, or if the support keeps no node.
+    pub fn functions_without(&self, x: &[f64; 3], absent: impl Fn(usize) -> bool) -> Option<Vec<(usize, f64)>> {
+        let lattice = self.smooth.as_ref().filter(|_| !self.has_moved())?;
+        let s = lattice.lattice_coordinates(x)?;
+        let (support, values) = lattice.functions_without(s, [0.0; 2], absent)?;
+        Some(lattice.support(support).iter().zip(values).map(|(&a, v)| (a, v[0])).collect())
+    }
+
+    /// The linear functions of `cell` at `x`, also outside the cell (the cell's map
+    /// extrapolated: exact for linear fields), per node (grid numbering); `None` if the map
+    /// is singular.
+    pub fn cell_functions_at(&self, cell: usize, x: &[f64; 3]) -> Option<Vec<(usize, f64)>> {
+        let xi = self.local_coordinates(cell, x)?;
+        let mut n = [0.0; MAX_NODES];
+        self.mesh.element.shape_functions(&xi, &mut n);
+        Some(self.mesh.cell(cell).iter().zip(n).map(|(&a, v)| (a, v)).collect())
     }
 
     /// The Gauss rule of support `s` in the step's configuration on which a u–p support
@@ -1092,6 +1212,72 @@ mod tests {
                     "{basis:?} {label}: largest change of a function between neighbouring samples {largest_jump:.4}"
                 );
                 assert!(largest_jump < 1.0 / 64.0 + 2e-3, "{basis:?} {label}: a function jumps by {largest_jump}");
+            }
+        }
+    }
+
+    /// The second derivatives of [`Grid::functions_with_hessian`] against central
+    /// differences of its gradients (and the gradients against differences of the values),
+    /// relative to the largest entry: the bilinear lattice (`∂xy N ≠ 0`), a rotated lattice,
+    /// a distorted quad4 mesh (not a parallelogram: `∂xx N`, `∂yy N ≠ 0`), tri3, GIMP (the
+    /// hat) and B-splines, at points off the kinks.
+    #[test]
+    fn hessian_matches_central_differences_of_the_gradient() {
+        let mut distorted = Mesh::rectangle([0.0, 0.0], [2.0, 1.0], [2, 1], ElementType::Quad4);
+        distorted.coords[1] = [1.15, -0.1, 0.0];
+        distorted.coords[4] = [0.9, 1.2, 0.0];
+        let mut grids = vec![
+            ("bilinear lattice", Grid::new([0.0; 3], [2.0, 1.0, 0.0], [4, 2, 1], ElementType::Quad4)),
+            ("rotated lattice", Grid::rotated([0.0; 3], [2.0, 1.0, 0.0], [4, 2, 1], ElementType::Quad4, 0.4)),
+            ("distorted quad4", Grid::unstructured(distorted)),
+            ("tri3 lattice", Grid::new([0.0; 3], [2.0, 1.0, 0.0], [4, 2, 1], ElementType::Tri3)),
+        ];
+        for basis in [Basis::Gimp, Basis::Bspline2] {
+            let mut g = Grid::new([0.0; 3], [2.0, 1.0, 0.0], [4, 2, 1], ElementType::Quad4);
+            g.set_basis(basis).unwrap();
+            grids.push((basis.name(), g));
+        }
+        let points = [[0.61, 0.33, 0.0], [1.12, 0.71, 0.0], [0.21, 0.12, 0.0]];
+        for (label, grid) in &grids {
+            let mut worst = (0.0f64, 0.0f64);
+            let mut mixed = 0.0f64;
+            for x in points {
+                let f = grid.functions_with_hessian(&x).expect("inside");
+                let step = 1e-6;
+                let at = |dx: [f64; 2]| {
+                    let xs = [x[0] + dx[0], x[1] + dx[1], 0.0];
+                    let g = grid.functions_with_hessian(&xs).expect("inside");
+                    f.iter()
+                        .map(|(a, _)| g.iter().find(|(b, _)| b == a).map_or(GridFunction::default(), |(_, v)| *v))
+                        .collect::<Vec<_>>()
+                };
+                let (xp, xm, yp, ym) = (at([step, 0.0]), at([-step, 0.0]), at([0.0, step]), at([0.0, -step]));
+                let scale_g = f.iter().fold(0.0f64, |m, (_, v)| m.max(v.gradient[0].abs()).max(v.gradient[1].abs()));
+                // (floor: the gradients per cell size, for tri3 whose second derivatives vanish)
+                let scale_h = f.iter().fold(scale_g / 0.5, |m, (_, v)| v.hessian.iter().fold(m, |m, h| m.max(h.abs())));
+                for (k, (_, v)) in f.iter().enumerate() {
+                    let dx = |p: &[GridFunction], m: &[GridFunction], get: &dyn Fn(&GridFunction) -> f64| {
+                        (get(&p[k]) - get(&m[k])) / (2.0 * step)
+                    };
+                    let fd_gradient = [dx(&xp, &xm, &|g| g.value), dx(&yp, &ym, &|g| g.value)];
+                    let fd_hessian = [
+                        dx(&xp, &xm, &|g| g.gradient[0]),
+                        0.5 * (dx(&yp, &ym, &|g| g.gradient[0]) + dx(&xp, &xm, &|g| g.gradient[1])),
+                        dx(&yp, &ym, &|g| g.gradient[1]),
+                    ];
+                    for i in 0..2 {
+                        worst.0 = worst.0.max((fd_gradient[i] - v.gradient[i]).abs() / scale_g);
+                    }
+                    for i in 0..3 {
+                        worst.1 = worst.1.max((fd_hessian[i] - v.hessian[i]).abs() / scale_h);
+                    }
+                    mixed = mixed.max(v.hessian[1].abs());
+                }
+            }
+            println!("{label}: gradient vs FD {:.2e}, hessian vs FD of the gradient {:.2e}", worst.0, worst.1);
+            assert!(worst.0 < 1e-6 && worst.1 < 1e-5, "{label}: {worst:?}");
+            if !label.starts_with("tri3") {
+                assert!(mixed > 0.1, "{label}: the mixed derivative must not vanish ({mixed})");
             }
         }
     }

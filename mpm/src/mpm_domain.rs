@@ -26,6 +26,7 @@
 //! start value (`r = p − p_n`, unit diagonal).
 
 use std::ops::Range;
+use std::sync::{Arc, RwLock};
 
 use loam_fem::assembly::BlockLayout;
 use loam_fem::domain::{
@@ -54,7 +55,7 @@ const MAX_BLOCK: usize = loam_fem::mixed_kernel::MAX_MIXED_DOFS;
 
 /// Young's modulus `E = μ (3λ + 2μ)/(λ + μ)` of small-strain constants `(λ, μ)` (`3μ` for
 /// an incompressible material, `λ = ∞`).
-fn young_modulus((lambda, mu): (f64, f64)) -> f64 {
+pub fn young_modulus((lambda, mu): (f64, f64)) -> f64 {
     if lambda.is_finite() {
         mu * (3.0 * lambda + 2.0 * mu) / (lambda + mu)
     } else {
@@ -85,6 +86,14 @@ struct CellBlocks {
     /// set and is rebuilt whenever it changes).
     rings: usize,
 }
+
+/// Per grid node (grid numbering), whether a material point's function reaches it at the
+/// current step, so that the soil's own terms give it an equation (the others keep their
+/// place by an identity row, or are outside the system): written by
+/// [`MpmDomain::update_pattern`], read by the coupling terms that act on the grid from
+/// outside (a non-conforming tie, `loam_coupling::tie_interface`), whose `begin_step` runs
+/// after this domain's.
+pub type SoilNodes = Arc<RwLock<Vec<bool>>>;
 
 /// What an MPM domain carries from step to step beside the nodal unknowns.
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -122,6 +131,8 @@ pub struct MpmDomain {
     worst_cell_quality: f64,
     /// The mesh motion's reach after each time it was widened.
     widenings: Vec<String>,
+    /// The nodes the soil's points reach at the current step.
+    soil_nodes: SoilNodes,
 }
 
 impl MpmDomain {
@@ -146,7 +157,13 @@ impl MpmDomain {
             ghost: None,
             worst_cell_quality: 1.0,
             widenings: Vec::new(),
+            soil_nodes: Arc::new(RwLock::new(vec![false; nodes])),
         }
+    }
+
+    /// The grid nodes the soil's points reach at the current step (see [`SoilNodes`]).
+    pub fn soil_nodes(&self) -> SoilNodes {
+        Arc::clone(&self.soil_nodes)
     }
 
     /// Worst quality (smallest corner `det J` over its reference value) of the grid's cells
@@ -358,6 +375,7 @@ impl MpmDomain {
             }
         }
         let reached = live.clone();
+        self.soil_nodes.write().expect("no writer panicked").clone_from(&reached);
         let mut live_pressure = live.clone();
         cb.first_body.clear();
         cb.orphans.clear();

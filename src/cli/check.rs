@@ -25,7 +25,11 @@ pub fn check_command(case: &Path) -> ExitCode {
                 println!(
                     "  interface '{}': {}, {} nodes, {} {:.6} {}",
                     i.name,
-                    if i.slip { "frictionless slip" } else { "tied" },
+                    match (i.tie_penalty, i.slip) {
+                        (Some(beta), _) => format!("non-conforming tie, penalty {beta:.6e} Pa/m"),
+                        (None, true) => "frictionless slip".into(),
+                        (None, false) => "tied".into(),
+                    },
                     i.nodes,
                     measure.0,
                     i.measure,

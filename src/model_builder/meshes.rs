@@ -5,12 +5,15 @@
 //! they have at the same position (a multi-material structure); MPM domains whose grids are
 //! specified identically are bodies on one grid; a grid node is a structure node only where
 //! an interface says so (tied), or the partner of one (slip). Any other contact between an
-//! FEM mesh and a grid is refused (`loam_coupling::interface`).
+//! FEM mesh and a grid is refused (`loam_coupling::interface`), but for a non-conforming tie
+//! (`"coupling": "tie"`), whose structure lies in the grid, keeps its own nodes and is
+//! joined to the soil by a [`TieInterface`] placed after every part.
 
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use loam_coupling::interface::{self as coupling, InterfaceNode, InterfaceRequest, InterfaceSummary, Structure};
+use loam_coupling::tie_interface::{self, TieFacet, TieInterface, DEFAULT_TIE_PENALTY_FACTOR};
 use loam_fem::dofs::NodeRole;
 use loam_fem::element::ElementType;
 use loam_fem::formulation::Formulation;
@@ -22,7 +25,7 @@ use loam_laws::{ConstitutiveLaw, Kinematics, TangentRequest};
 use loam_mpm::body::{Body, VelocityBlend};
 use loam_mpm::grid::Grid;
 use loam_mpm::material_points::{self, MaterialPoints};
-use loam_mpm::mpm_domain::MpmDomain;
+use loam_mpm::mpm_domain::{young_modulus, MpmDomain};
 use loam_mpm::quadrature::PointQuadrature;
 use nalgebra::Matrix3;
 
@@ -30,7 +33,7 @@ use super::regions::{line_tolerance, select_region};
 use super::{check_len, check_positive, unknown_name};
 use crate::case::{
     AnalysisType, BodySpec, Case, CaseError, DomainKind, ElementFormulation, GridSpec, InitialStressSpec,
-    InitialVelocity, MassMatrix, MeshSpec, Quadrature, DEFAULT_GHOST_PENALTY,
+    InitialVelocity, InterfaceCoupling, MassMatrix, MeshSpec, Quadrature, DEFAULT_GHOST_PENALTY,
 };
 
 /// A part of the model: an FEM domain, or a grid with its bodies.
@@ -77,6 +80,20 @@ pub(super) struct Discretisation {
     pub groups: BTreeMap<String, Vec<usize>>,
     pub parts: Vec<Part>,
     pub interfaces: Vec<ResolvedInterface>,
+    /// The non-conforming ties, placed after every part (their initialisation phase reads
+    /// what their grid's soil reaches).
+    pub ties: Vec<TieInterface>,
+}
+
+/// A non-conforming tie of a grid, before numbering.
+struct TieRequest {
+    /// Case index of the interface.
+    interface: usize,
+    /// Case index of the structure.
+    structure: usize,
+    /// Its facets (the structure mesh's numbering) and their length.
+    facets: Vec<[usize; 2]>,
+    length: f64,
 }
 
 /// How a grid is specified: domains with equal specs share the grid.
@@ -96,6 +113,7 @@ struct GridGroup<'a> {
     /// Case indices of the structures of `coupled.on_interface[..].structure`.
     structures: Vec<usize>,
     interfaces: Vec<usize>,
+    ties: Vec<TieRequest>,
 }
 
 /// Builds the mesh described by `spec` (at JSON path `loc`).
@@ -651,6 +669,7 @@ pub(super) fn discretise(
                             coupled: None,
                             structures: Vec::new(),
                             interfaces: Vec::new(),
+                            ties: Vec::new(),
                         });
                         groups.len() - 1
                     }
@@ -754,6 +773,35 @@ fn couple_grids(
                 };
                 CaseError::new(format!("{loc}.region"), message)
             })?;
+        if spec.coupling == InterfaceCoupling::Tie {
+            let refuse = |key: &str, why: &str| Err(CaseError::new(format!("{loc}.{key}"), why.to_string()));
+            if spec.slip {
+                return refuse(
+                    "slip",
+                    "a tie (coupling \"tie\") is bilateral and without slip; slip is for shared nodes",
+                );
+            }
+            if spec.band.is_some() {
+                return refuse(
+                    "band",
+                    "a tie leaves the grid fixed: band is for shared nodes (coupling \"shared_nodes\")",
+                );
+            }
+            if let Some(beta) = spec.penalty {
+                check_positive(&format!("{loc}.penalty"), beta)?;
+            }
+            let view = Structure { name: &spec.structure, mesh };
+            let (facets, length) = tie_interface::tie_facets(&view, &nodes, &groups[g].grid)
+                .map_err(|e| CaseError::new(format!("{loc}.region"), e.message))?;
+            groups[g].ties.push(TieRequest { interface: k, structure, facets, length });
+            continue;
+        }
+        if spec.penalty.is_some() {
+            return Err(CaseError::new(
+                format!("{loc}.penalty"),
+                "only a tie (coupling \"tie\") takes a penalty; shared nodes need none",
+            ));
+        }
         if let Some(band) = spec.band {
             check_band(&format!("{loc}.band"), band, &groups[g].grid)?;
         }
@@ -761,6 +809,24 @@ fn couple_grids(
     }
     for (g, group) in groups.iter_mut().enumerate() {
         let soil = &case.domains[group.bodies[0].0].name;
+        if let (Some(tie), Some(shared)) = (group.ties.first(), requests[g].first()) {
+            return Err(CaseError::new(
+                format!("interfaces[{}].coupling", tie.interface),
+                format!(
+                    "a tie needs a fixed grid, and '{soil}' is attached to a structure by shared nodes (interfaces[{}]): one kind of interface per grid",
+                    shared.0
+                ),
+            ));
+        }
+        let tied: Vec<usize> = group.ties.iter().map(|t| t.structure).collect();
+        if !tied.is_empty() {
+            let views: Vec<Structure<'_>> =
+                tied.iter().map(|&s| Structure { name: &case.domains[s].name, mesh: &fem_meshes[&s] }).collect();
+            for (k, points) in &group.bodies {
+                coupling::check_points_outside(&case.domains[*k].name, &points.position, &views)
+                    .map_err(|e| CaseError::new(format!("domains[{k}].material_points"), e.message))?;
+            }
+        }
         if !requests[g].is_empty() {
             let mut structures: Vec<usize> = requests[g].iter().map(|r| r.1).collect();
             structures.sort_unstable();
@@ -791,7 +857,7 @@ fn couple_grids(
         }
         let grid = group.coupled.as_ref().map_or(&group.grid, |c| &c.grid);
         for (&s, mesh) in fem_meshes {
-            if group.structures.contains(&s) {
+            if group.structures.contains(&s) || tied.contains(&s) {
                 continue;
             }
             coupling::check_no_overlap(soil, grid, &Structure { name: &case.domains[s].name, mesh })
@@ -822,6 +888,7 @@ fn number(
     }
     let mut parts: Vec<(usize, Part)> = Vec::new();
     let mut interfaces: Vec<Option<ResolvedInterface>> = (0..case.interfaces.len()).map(|_| None).collect();
+    let mut ties = Vec::new();
     for group in groups {
         let (grid, on_interface) = match group.coupled {
             Some(c) => (c.grid, Some((c.on_interface, c.summaries))),
@@ -863,7 +930,47 @@ fn number(
                     Some(ResolvedInterface { summary, part: part_key, soil_nodes: std::mem::take(&mut soil_nodes[i]) });
             }
         }
+        let tie_grid = (!group.ties.is_empty()).then(|| (grid.clone(), node_ids.clone()));
         let (domain, bodies) = grid_domain(case, laws, grid, node_ids, group.bodies)?;
+        if let Some((grid, node_ids)) = tie_grid {
+            let modulus = domain.bodies().iter().map(|b| young_modulus(b.law().elastic_lame())).fold(0.0, f64::max);
+            let default_penalty = DEFAULT_TIE_PENALTY_FACTOR * modulus / mean_cell_size(&grid.mesh);
+            for t in group.ties {
+                let spec = &case.interfaces[t.interface];
+                let penalty = spec.penalty.unwrap_or(default_penalty);
+                let ids = ids_of_structure[&t.structure];
+                let mesh = &meshes[fem_list.iter().position(|(k, _)| *k == t.structure).expect("an fem domain")];
+                let facets: Vec<TieFacet> = t
+                    .facets
+                    .iter()
+                    .map(|f| TieFacet {
+                        nodes: f.map(|a| ids[a]),
+                        reference: f.map(|a| [mesh.coords[a][0], mesh.coords[a][1]]),
+                    })
+                    .collect();
+                let mut nodes: Vec<usize> = facets.iter().flat_map(|f| f.nodes).collect();
+                nodes.sort_unstable();
+                nodes.dedup();
+                let summary = InterfaceSummary {
+                    name: spec.name.clone(),
+                    nodes: nodes.len(),
+                    measure: t.length,
+                    slip: false,
+                    tie_penalty: Some(penalty),
+                };
+                interfaces[t.interface] = Some(ResolvedInterface { summary, part: part_key, soil_nodes: nodes });
+                ties.push(TieInterface::new(
+                    &spec.name,
+                    case.formulation,
+                    case.thickness,
+                    grid.clone(),
+                    node_ids.clone(),
+                    domain.soil_nodes(),
+                    facets,
+                    penalty,
+                ));
+            }
+        }
         parts.push((part_key, Part::Grid(Box::new(GridPart { domain, bodies, coupling }))));
     }
     for ((k, mesh), ids) in fem_list.into_iter().zip(fem_ids) {
@@ -904,6 +1011,7 @@ fn number(
         groups: node_groups,
         parts: parts.into_iter().map(|(_, p)| p).collect(),
         interfaces,
+        ties,
     })
 }
 

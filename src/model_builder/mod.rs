@@ -100,11 +100,13 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     model.roles.clone_from(&discretisation.roles);
     let regions = regions::select_all(case, &model.coords, &discretisation.groups)?;
     let mut parts = discretisation.parts;
+    let ties = discretisation.ties;
     meshes::assign_pressure_dofs(case, &mut model, &mut parts);
     let bcs = conditions::boundary_conditions(case, &mut model, &regions, &mut parts)?;
     conditions::check_supported(case, &model)?;
     interfaces::attach(case, &mut model, &mut parts)?;
     meshes::place_domains(case, &mut model, parts)?;
+    model.domains.extend(ties.into_iter().map(|t| Box::new(t) as Box<dyn loam_fem::domain::Domain>));
     let load_of_load = conditions::loads(case, &mut model, &regions)?;
     conditions::gravity(case, &mut model)?;
     let monitors = monitors::build(case, &model, &regions, &discretisation.interfaces)?;
@@ -163,7 +165,7 @@ fn check_file_name(location: &str, name: &str) -> Result<(), CaseError> {
     }
 }
 
-/// The names of the case's output series (domains, bodies, penalty walls; with
+/// The names of the case's output series (domains, bodies, penalty walls, ties; with
 /// `output.grid` also `<domain>_grid`) must be valid file names ([`check_file_name`]) and
 /// distinct even where case does not count (`Soil` and `soil` are one file on Windows
 /// and macOS).
@@ -181,6 +183,11 @@ fn check_output_names(case: &Case) -> Result<(), CaseError> {
     };
     for (k, d) in case.domains.iter().enumerate() {
         add(format!("domains[{k}].name"), &d.name)?;
+    }
+    for (k, interface) in case.interfaces.iter().enumerate() {
+        if interface.coupling == crate::case::InterfaceCoupling::Tie {
+            add(format!("interfaces[{k}].name"), &interface.name)?;
+        }
     }
     for (k, bc) in case.boundary_conditions.iter().enumerate() {
         if bc.penalty.is_some() {

@@ -1,0 +1,585 @@
+//! A non-conforming tie between the facets of a structure and the soil of a fixed
+//! background grid (issue 25, the tie law): a [`Domain`] of interface quadrature points.
+//!
+//! The structure's interface facets (2-node, 2D) carry two Gauss points each, of weight
+//! `w = ½ L₀ t` (Gauss weight on `[0, 1]` × reference facet length × the formulation's
+//! thickness, `2πr` in axisymmetry). The grid is fixed and need not conform: it keeps its
+//! cells inside and around the structure, and the structure's nodes are never grid nodes.
+//!
+//! **Kinematics.** The soil's grid is reset at every step (updated Lagrangian: the grid
+//! nodes' displacements are the step's increments `Δu_I`, measured from the grid's
+//! reference position) and a material point moves by `Σ_I N_I(x_p^n) Δu_I`, its functions
+//! taken where it was at the start of the step. The tie is written the same way: point `p`
+//! of a facet, at `x_p^n = Σ_a φ_a (X_a + u_a^n)` at the start of the step, is located there
+//! once ([`Domain::begin_step`]), and its gap is
+//!
+//! ```text
+//! g = g_n + Σ_I N_I(x_p^n) Δu_I − Σ_a φ_a Δu_a,      Δu = u − u_n,
+//! ```
+//!
+//! the soil material that was at the point at `t_n` moved by the grid's field there, the
+//! structure's point by its own increment; `g_n` is the gap committed at the end of the
+//! last step (the penalty's elastic offset that carries the interface force). The penalty
+//! energy `Π = Σ_p ½ β w_p |g|²` gives the residual `β w N_I g` on the grid nodes and
+//! `−β w φ_a g` on the facet nodes, and the exact tangent `β w (∂g/∂u)ᵀ(∂g/∂u)`
+//! ([`crate::tie::tie_point_block`] with the functions frozen: zero gradients). Because
+//! `N_I` is taken at `x_p^n`, the point does not move in the grid within the step and the
+//! tangent needs no `∂N/∂x`: this is the MPM's own convention, not a simplification of it.
+//! (Evaluating `N_I` at the current position `x_p^n + Δu_S` instead would tie the soil
+//! that started where the structure ends, a different material point, off by
+//! `∇Δu · Δu_S` per step; the moving-point tangent of [`crate::tie`], which needs the
+//! second derivatives of the grid functions, is for a grid whose field is total.)
+//!
+//! **Empty grid nodes.** The MPM domain gives equations only to the grid nodes its points'
+//! functions reach (others keep their place by identity rows or are out of the system), and
+//! the tie must not give a grid node its only equation. A point whose non-zero functions
+//! all reach soil nodes ([`loam_mpm::mpm_domain::SoilNodes`]) uses them. Where the soil ends
+//! at the structure inside a cell (or a smooth support), the nodes on the structure's side
+//! are empty, and the soil's field is extrapolated to the point from the nodes it reaches:
+//! on the linear basis the point takes the functions of the nearest cell around its own
+//! (one ring, nearest centre) whose nodes the soil all reaches, the cell's map inverted
+//! outside it; on a smooth basis the empty nodes' functions are folded into the support's
+//! other nodes as those of a hole's removed nodes ([`loam_mpm::basis`]). Both reproduce
+//! linear fields and keep the partition of unity. Otherwise (no such cell; a support
+//! without soil) the point is skipped for the step and its carried gap reset to zero: there
+//! is no soil there to tie to. The set of active points and their nodes is the domain's sparsity pattern:
+//! `begin_step` reports a change.
+//!
+//! **Penalty.** `β` (Pa/m) is the case's `interfaces[].penalty`, by default
+//! `DEFAULT_TIE_PENALTY_FACTOR · E_soil / h` (the stiffest body's Young's modulus over the
+//! grid's cell size; see the model builder).
+//!
+//! Output: the points as a point cloud named after the interface (`gap`, `traction`,
+//! `tied`: [`Domain::outputs`]).
+//!
+//! The domain's residual at the structure's facet nodes is the force the soil exerts on the
+//! structure (`−r`), so it reports itself as soil ([`Domain::is_soil`]): the model's
+//! `soil_forces`, and the `interface_force` monitor over the facet nodes, include it.
+
+use loam_fem::assembly::BlockLayout;
+use loam_fem::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NamedOutput, NodalState};
+use loam_fem::formulation::Formulation;
+use loam_mpm::grid::{Grid, GridFunction};
+use loam_mpm::mpm_domain::SoilNodes;
+
+use crate::interface::{InterfaceError, Structure};
+use crate::tie::tie_point_block;
+
+/// Penalty `β = factor · E_soil / h` of a tie when the case gives none (see the module doc;
+/// the tip of benchmark 12 changes by less than 0.1 % between factors 10 and 1000, see
+/// docs/coupling.md).
+pub const DEFAULT_TIE_PENALTY_FACTOR: f64 = 100.0;
+
+/// Functions smaller than this at a point do not tie it to their node.
+const NEGLIGIBLE_FUNCTION: f64 = 1e-12;
+
+/// The functions of `functions` that are not negligible.
+fn significant(functions: Vec<(usize, f64)>) -> Vec<(usize, f64)> {
+    functions.into_iter().filter(|(_, v)| v.abs() > NEGLIGIBLE_FUNCTION).collect()
+}
+
+/// A 2-node interface facet of the structure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TieFacet {
+    /// Global node ids.
+    pub nodes: [usize; 2],
+    /// Reference coordinates of the nodes.
+    pub reference: [[f64; 2]; 2],
+}
+
+/// An interface quadrature point: its facet, facet functions `φ_a` and weight `w`.
+#[derive(Debug, Clone, Copy)]
+struct TiePoint {
+    facet: usize,
+    phi: [f64; 2],
+    weight: f64,
+}
+
+/// A point active at this step: the grid nodes (grid numbering) whose functions are non-zero
+/// at its position at the start of the step, and those functions' values.
+#[derive(Debug, Clone, PartialEq)]
+struct ActivePoint {
+    point: usize,
+    nodes: Vec<usize>,
+    values: Vec<f64>,
+}
+
+/// The committed state beyond the nodal unknowns.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct TieState {
+    gaps: Vec<[f64; 2]>,
+    force: [f64; 2],
+    energy: f64,
+}
+
+/// A penalty tie between a structure's facets and a fixed grid (see the module doc).
+pub struct TieInterface {
+    name: String,
+    formulation: Formulation,
+    thickness: f64,
+    grid: Grid,
+    grid_ids: Vec<usize>,
+    soil_nodes: SoilNodes,
+    facets: Vec<TieFacet>,
+    points: Vec<TiePoint>,
+    penalty: f64,
+    /// Per point, the gap `g_n` committed at the end of the last step.
+    gaps: Vec<[f64; 2]>,
+    /// The points active at this step, in block order.
+    active: Vec<ActivePoint>,
+    /// Force (N) the soil exerted on the structure through the tie in the last converged
+    /// step, `Σ_p β w_p g_p`.
+    force: [f64; 2],
+    /// Penalty energy `Σ_p ½ β w_p |g_p|²` at the last converged step.
+    energy: f64,
+}
+
+impl TieInterface {
+    /// A tie named `name` of the structure's `facets` to the soil on `grid` (fixed, not
+    /// attached to any structure), whose node `a` is global node `grid_ids[a]` and whose
+    /// reached nodes `soil_nodes` reports, with penalty `β` (Pa/m). 2D only.
+    pub fn new(
+        name: &str,
+        formulation: Formulation,
+        thickness: f64,
+        grid: Grid,
+        grid_ids: Vec<usize>,
+        soil_nodes: SoilNodes,
+        facets: Vec<TieFacet>,
+        penalty: f64,
+    ) -> Self {
+        debug_assert_eq!(grid.mesh.element.dim(), 2, "a tie is 2D");
+        let a = 0.5 / 3f64.sqrt();
+        let mut points = Vec::with_capacity(2 * facets.len());
+        for (f, facet) in facets.iter().enumerate() {
+            let [x0, x1] = facet.reference;
+            let length = (x1[0] - x0[0]).hypot(x1[1] - x0[1]);
+            for xi in [0.5 - a, 0.5 + a] {
+                let radius = (1.0 - xi) * x0[0] + xi * x1[0];
+                let weight = 0.5 * length * formulation.measure_factor(thickness, radius);
+                points.push(TiePoint { facet: f, phi: [1.0 - xi, xi], weight });
+            }
+        }
+        let n = points.len();
+        Self {
+            name: name.to_string(),
+            formulation,
+            thickness,
+            grid,
+            grid_ids,
+            soil_nodes,
+            facets,
+            points,
+            penalty,
+            gaps: vec![[0.0; 2]; n],
+            active: Vec::new(),
+            force: [0.0; 2],
+            energy: 0.0,
+        }
+    }
+
+    /// The penalty `β` (Pa/m).
+    pub fn penalty(&self) -> f64 {
+        self.penalty
+    }
+
+    /// Number of interface quadrature points, and of those active at this step.
+    pub fn num_points(&self) -> (usize, usize) {
+        (self.points.len(), self.active.len())
+    }
+
+    /// Force (N) the soil exerted on the structure through the tie in the last converged
+    /// step.
+    pub fn force(&self) -> [f64; 2] {
+        self.force
+    }
+
+    /// The global DOFs of an active point's block: its grid nodes, then its facet's nodes.
+    fn block_dofs<'a>(&'a self, p: &'a ActivePoint) -> impl Iterator<Item = usize> + 'a {
+        let facet = &self.facets[self.points[p.point].facet];
+        p.nodes.iter().map(|&a| self.grid_ids[a]).chain(facet.nodes).flat_map(|g| [2 * g, 2 * g + 1])
+    }
+
+    /// `Δu = u − u_n` at the DOFs of an active point's block, as `[x, y]` per node.
+    fn increments(&self, p: &ActivePoint, input: &AssemblyInput<'_>) -> Vec<[f64; 2]> {
+        let dofs: Vec<usize> = self.block_dofs(p).collect();
+        dofs.chunks(2).map(|d| std::array::from_fn(|k| input.state.u[d[k]] - input.committed.u[d[k]])).collect()
+    }
+
+    /// Residual, tangent and gap of an active point at the iterate of `input`.
+    fn point_block(&self, p: &ActivePoint, input: &AssemblyInput<'_>) -> (Vec<f64>, Vec<f64>, [f64; 2]) {
+        let point = &self.points[p.point];
+        let du = self.increments(p, input);
+        let (grid_du, facet_du) = du.split_at(p.nodes.len());
+        let functions: Vec<GridFunction> =
+            p.values.iter().map(|&value| GridFunction { value, ..GridFunction::default() }).collect();
+        tie_point_block(&functions, self.gaps[p.point], grid_du, &point.phi, facet_du, self.penalty, point.weight)
+    }
+
+    /// The functions at `x` extrapolated from the nodes the soil reaches (module doc): on
+    /// the linear basis those of the cell nearest to `x` (by its centre) among those sharing
+    /// a node with the cell holding `x` whose nodes the soil all reaches; on a smooth basis
+    /// the point's own with the empty nodes' functions folded into the others. `None`
+    /// without such a cell, or a support without soil.
+    fn extrapolated(&self, x: &[f64; 3], reached: &[bool]) -> Option<Vec<(usize, f64)>> {
+        if self.grid.basis().is_smooth() {
+            return self.grid.functions_without(x, |a| !reached[a]).map(significant);
+        }
+        let (cell, _) = self.grid.locate(x)?;
+        let distance = |c: usize| {
+            let centre = self.grid.reference_centre(c);
+            (centre[0] - x[0]).hypot(centre[1] - x[1])
+        };
+        let nearest = self
+            .grid
+            .dilate(&[cell])
+            .into_iter()
+            .filter(|&c| self.grid.mesh.cell(c).iter().all(|&a| reached[a]))
+            .min_by(|&a, &b| distance(a).total_cmp(&distance(b)))?;
+        self.grid.cell_functions_at(nearest, x).map(significant)
+    }
+
+    /// Position of point `p` at the committed state `x_p^n = Σ_a φ_a (X_a + u_a^n)`.
+    fn committed_position(&self, p: usize, committed: &NodalState) -> [f64; 3] {
+        let point = &self.points[p];
+        let facet = &self.facets[point.facet];
+        let mut x = [0.0; 3];
+        for (a, (&g, reference)) in facet.nodes.iter().zip(&facet.reference).enumerate() {
+            for k in 0..2 {
+                x[k] += point.phi[a] * (reference[k] + committed.u[2 * g + k]);
+            }
+        }
+        x
+    }
+}
+
+/// The facets of a tie: the boundary edges of the structure's mesh whose nodes all lie in
+/// `region` (mesh numbering), and their total reference length. Refused (naming the
+/// structure, and a coordinate): a 3D mesh, a region holding no boundary edge, a facet node
+/// outside the grid (the soil must surround the interface).
+pub fn tie_facets(
+    structure: &Structure<'_>,
+    region: &[usize],
+    grid: &Grid,
+) -> Result<(Vec<[usize; 2]>, f64), InterfaceError> {
+    let fail = |message: String| InterfaceError { interface: None, message };
+    let mesh = structure.mesh;
+    if mesh.element.dim() != 2 {
+        return Err(fail("a tie is 2D only so far (issue 25)".into()));
+    }
+    let region: std::collections::HashSet<usize> = region.iter().copied().collect();
+    let facets: Vec<[usize; 2]> = mesh
+        .boundary_facets()
+        .into_iter()
+        .filter(|f| f.iter().all(|a| region.contains(a)))
+        .map(|f| [f[0], f[1]])
+        .collect();
+    if facets.is_empty() {
+        return Err(fail(format!("its region contains no boundary edge of the mesh of '{}'", structure.name)));
+    }
+    let mut length = 0.0;
+    for f in &facets {
+        let [x0, x1] = f.map(|a| mesh.coords[a]);
+        length += (x1[0] - x0[0]).hypot(x1[1] - x0[1]);
+        if let Some(x) = [x0, x1].into_iter().find(|x| grid.locate(x).is_none()) {
+            return Err(fail(format!(
+                "the node of '{}' at ({}, {}) lies outside the soil's grid: a tie needs the grid around its facets",
+                structure.name, x[0], x[1]
+            )));
+        }
+    }
+    Ok((facets, length))
+}
+
+impl Domain for TieInterface {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn formulation(&self) -> Formulation {
+        self.formulation
+    }
+
+    fn thickness(&self) -> f64 {
+        self.thickness
+    }
+
+    /// Locates every point at its committed position and keeps those whose grid nodes the
+    /// soil reaches (module doc); `true` if the active points or their nodes changed.
+    fn begin_step(&mut self, committed: &mut NodalState) -> Result<bool, DomainError> {
+        let reached = self.soil_nodes.read().expect("no writer panicked").clone();
+        let mut active = Vec::with_capacity(self.points.len());
+        for p in 0..self.points.len() {
+            let x = self.committed_position(p, committed);
+            let functions: Vec<(usize, f64)> = self
+                .grid
+                .functions_with_hessian(&x)
+                .unwrap_or_default()
+                .into_iter()
+                .map(|(a, f)| (a, f.value))
+                .collect();
+            let soil = |f: &[(usize, f64)]| !f.is_empty() && f.iter().all(|&(a, _)| reached[a]);
+            let functions = significant(functions);
+            let functions = if soil(&functions) { Some(functions) } else { self.extrapolated(&x, &reached) };
+            let Some(functions) = functions.filter(|f| soil(f)) else {
+                self.gaps[p] = [0.0; 2];
+                continue;
+            };
+            let (nodes, values) = functions.into_iter().unzip();
+            active.push(ActivePoint { point: p, nodes, values });
+        }
+        let changed = active.len() != self.active.len()
+            || active.iter().zip(&self.active).any(|(a, b)| a.point != b.point || a.nodes != b.nodes);
+        self.active = active;
+        Ok(changed)
+    }
+
+    fn is_soil(&self) -> bool {
+        true
+    }
+
+    fn blocks(&self, layout: &mut BlockLayout) {
+        for p in &self.active {
+            layout.push(self.block_dofs(p));
+        }
+    }
+
+    fn assemble(
+        &mut self,
+        input: &AssemblyInput<'_>,
+        matrices: &mut [f64],
+        vectors: &mut [f64],
+    ) -> Result<(), DomainError> {
+        let (mut vector_at, mut matrix_at) = (0, 0);
+        for p in &self.active {
+            let (residual, tangent, _) = self.point_block(p, input);
+            let nd = residual.len();
+            vectors[vector_at..vector_at + nd].copy_from_slice(&residual);
+            if input.with_tangent {
+                let km = &mut matrices[matrix_at..matrix_at + nd * nd];
+                if input.stiffness {
+                    km.copy_from_slice(&tangent);
+                } else {
+                    km.fill(0.0);
+                }
+            }
+            vector_at += nd;
+            matrix_at += nd * nd;
+        }
+        Ok(())
+    }
+
+    fn commit(&mut self, input: &AssemblyInput<'_>) {
+        let (mut force, mut energy) = ([0.0; 2], 0.0);
+        let mut gaps = vec![[0.0; 2]; self.points.len()];
+        for p in &self.active {
+            let (_, _, gap) = self.point_block(p, input);
+            let bw = self.penalty * self.points[p.point].weight;
+            for k in 0..2 {
+                force[k] += bw * gap[k];
+            }
+            energy += 0.5 * bw * (gap[0] * gap[0] + gap[1] * gap[1]);
+            gaps[p.point] = gap;
+        }
+        self.gaps = gaps;
+        self.force = force;
+        self.energy = energy;
+    }
+
+    fn kinetic_energy(&self, _v: &[f64]) -> f64 {
+        0.0
+    }
+
+    /// The penalty energy stored in the tie.
+    fn strain_energy(&self) -> f64 {
+        self.energy
+    }
+
+    fn boundary_facets(&self) -> Vec<Vec<usize>> {
+        Vec::new()
+    }
+
+    fn save_state(&self) -> Vec<u8> {
+        let state = TieState { gaps: self.gaps.clone(), force: self.force, energy: self.energy };
+        bincode::serialize(&state).expect("a tie's state encodes")
+    }
+
+    fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
+        let state: TieState = bincode::deserialize(bytes).map_err(|e| format!("interface '{}': {e}", self.name))?;
+        if state.gaps.len() != self.points.len() {
+            return Err(format!(
+                "interface '{}': the checkpoint has {} tie points, the case {}",
+                self.name,
+                state.gaps.len(),
+                self.points.len()
+            ));
+        }
+        self.gaps = state.gaps;
+        self.force = state.force;
+        self.energy = state.energy;
+        Ok(())
+    }
+
+    /// The interface points as a point cloud named after the interface, at their committed
+    /// positions: `gap` (m), `traction` on the structure `β g` (Pa) and `tied` (1 where the
+    /// point was active in the last step).
+    fn outputs(&self, committed: &NodalState, _with_grid: bool) -> Vec<NamedOutput> {
+        let n = self.points.len();
+        let points = (0..n).map(|p| self.committed_position(p, committed)).collect();
+        let vector = |scale: f64| self.gaps.iter().flat_map(|g| [scale * g[0], scale * g[1], 0.0]).collect();
+        let mut tied = vec![0.0; n];
+        for p in &self.active {
+            tied[p.point] = 1.0;
+        }
+        let field = |name: &str, components: usize, values: Vec<f64>| Field { name: name.into(), components, values };
+        let output = DomainOutput {
+            points,
+            cells: None,
+            point_fields: vec![
+                field("gap", 3, vector(1.0)),
+                field("traction", 3, vector(self.penalty)),
+                field("tied", 1, tied),
+            ],
+            cell_fields: Vec::new(),
+        };
+        vec![NamedOutput { name: self.name.clone(), output }]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use loam_fem::element::ElementType;
+    use std::sync::{Arc, RwLock};
+
+    /// Dense global residual and tangent of a tie domain at `input` (DOFs `0..n`).
+    fn assembled(tie: &mut TieInterface, input: &AssemblyInput<'_>, n: usize) -> (Vec<f64>, Vec<f64>) {
+        let mut layout = BlockLayout::default();
+        tie.blocks(&mut layout);
+        let (mut m, mut v) = (vec![0.0; layout.matrix_len()], vec![0.0; layout.vector_len()]);
+        tie.assemble(input, &mut m, &mut v).unwrap();
+        let (mut r, mut k) = (vec![0.0; n], vec![0.0; n * n]);
+        for b in 0..layout.num_blocks() {
+            let dofs = &layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]];
+            let nd = dofs.len();
+            for (i, &p) in dofs.iter().enumerate() {
+                r[p] += v[layout.dof_ptr[b] + i];
+                for (j, &q) in dofs.iter().enumerate() {
+                    k[p * n + q] += m[layout.matrix_offset[b] + i * nd + j];
+                }
+            }
+        }
+        (r, k)
+    }
+
+    fn input<'a>(state: &'a NodalState, committed: &'a NodalState) -> AssemblyInput<'a> {
+        AssemblyInput {
+            state,
+            committed,
+            inertial_acceleration: None,
+            mass_coefficient: 0.0,
+            gravity: [0.0; 3],
+            time_step: 1.0,
+            gamma: 0.5,
+            time: 1.0,
+            with_tangent: true,
+            stiffness: true,
+        }
+    }
+
+    /// A bilinear grid of 4 × 2 cells (h = 0.1) and an inclined two-facet structure
+    /// boundary across it, displaced at the start of the step, with a carried gap from a
+    /// first step: the assembled tangent of the whole domain against central differences
+    /// of its residual; and the force on the structure equal and opposite to the grid's.
+    #[test]
+    fn assembled_tangent_matches_central_differences() {
+        let grid = Grid::new([0.0; 3], [0.4, 0.2, 0.0], [4, 2, 1], ElementType::Quad4);
+        let grid_nodes = grid.mesh.coords.len();
+        let ids: Vec<usize> = (0..grid_nodes).collect();
+        let soil: SoilNodes = Arc::new(RwLock::new(vec![true; grid_nodes]));
+        let s = grid_nodes;
+        let reference = [[0.13, 0.02], [0.19, 0.09], [0.27, 0.17]];
+        let facets = vec![
+            TieFacet { nodes: [s, s + 1], reference: [reference[0], reference[1]] },
+            TieFacet { nodes: [s + 1, s + 2], reference: [reference[1], reference[2]] },
+        ];
+        let mut tie = TieInterface::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil, facets, 3.0e9);
+        let n = 2 * (grid_nodes + 3);
+        let wave = |k: usize, a: f64| a * ((k * 7 + 3) as f64).sin();
+        // step 1 from rest, committed: a gap to carry
+        let mut committed = NodalState::zeros(n);
+        assert!(tie.begin_step(&mut committed).unwrap(), "the first pattern");
+        let mut state = committed.clone();
+        state.u.iter_mut().enumerate().for_each(|(k, u)| *u = wave(k, 0.004));
+        tie.commit(&input(&state, &committed));
+        assert!(tie.gaps.iter().any(|g| g[0].abs() > 1e-4), "a gap is carried");
+        // step 2: the structure at its committed place, the grid reset
+        committed.u.clone_from(&state.u);
+        committed.u[..2 * grid_nodes].fill(0.0);
+        tie.begin_step(&mut committed).unwrap();
+        assert_eq!(tie.num_points(), (4, 4));
+        let mut u = committed.clone();
+        u.u.iter_mut().enumerate().for_each(|(k, v)| *v += wave(k + 5, 0.003));
+        let (r, k) = assembled(&mut tie, &input(&u, &committed), n);
+        let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut worst = 0.0f64;
+        let h = 1e-7;
+        for q in 0..n {
+            let (mut p, mut m) = (u.clone(), u.clone());
+            p.u[q] += h;
+            m.u[q] -= h;
+            let (rp, _) = assembled(&mut tie, &input(&p, &committed), n);
+            let (rm, _) = assembled(&mut tie, &input(&m, &committed), n);
+            for i in 0..n {
+                worst = worst.max(((rp[i] - rm[i]) / (2.0 * h) - k[i * n + q]).abs() / kmax);
+            }
+        }
+        println!("tie domain: assembled tangent vs central differences, relative error {worst:.2e}");
+        assert!(worst < 1e-7, "{worst:.2e}");
+        // the soil's and the structure's forces balance
+        for c in 0..2 {
+            let grid_sum: f64 = (0..grid_nodes).map(|a| r[2 * a + c]).sum();
+            let structure_sum: f64 = (grid_nodes..grid_nodes + 3).map(|a| r[2 * a + c]).sum();
+            assert!((grid_sum + structure_sum).abs() < 1e-9 * grid_sum.abs().max(1.0), "{grid_sum} vs {structure_sum}");
+        }
+    }
+
+    /// A point in a cell with a node the soil does not reach: on the linear basis it takes
+    /// the functions of the nearest neighbouring cell that the soil fills, extrapolated; on
+    /// B-splines the empty node's function is folded into the others; both a partition of
+    /// unity reproducing `x` without the empty node. The pattern changes when the soil
+    /// reaches the node; without any soil the points are skipped.
+    #[test]
+    fn points_beside_empty_nodes_take_the_soil_field_extrapolated() {
+        for basis in [loam_mpm::basis::Basis::Linear, loam_mpm::basis::Basis::Bspline2] {
+            let mut grid = Grid::new([0.0; 3], [0.4, 0.2, 0.0], [4, 2, 1], ElementType::Quad4);
+            grid.set_basis(basis).unwrap();
+            let coords = grid.mesh.coords.clone();
+            let grid_nodes = coords.len();
+            let mut reached = vec![true; grid_nodes];
+            reached[grid_nodes - 1] = false; // the top right corner (0.4, 0.2)
+            let soil: SoilNodes = Arc::new(RwLock::new(reached));
+            let facets =
+                vec![TieFacet { nodes: [grid_nodes, grid_nodes + 1], reference: [[0.05, 0.05], [0.39, 0.19]] }];
+            let ids = (0..grid_nodes).collect();
+            let mut tie = TieInterface::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil.clone(), facets, 1.0);
+            let mut committed = NodalState::zeros(2 * (grid_nodes + 2));
+            tie.begin_step(&mut committed).unwrap();
+            assert_eq!(tie.num_points(), (2, 2));
+            let corner = &tie.active[1];
+            assert!(!corner.nodes.contains(&(grid_nodes - 1)), "{:?}", corner.nodes);
+            let x = tie.committed_position(corner.point, &committed);
+            let sum: f64 = corner.values.iter().sum();
+            let xs: Vec<f64> =
+                (0..2).map(|k| corner.nodes.iter().zip(&corner.values).map(|(&a, v)| v * coords[a][k]).sum()).collect();
+            assert!((sum - 1.0).abs() < 1e-12 && (xs[0] - x[0]).abs() < 1e-12 && (xs[1] - x[1]).abs() < 1e-12);
+            assert!(!tie.begin_step(&mut committed).unwrap(), "same pattern");
+            soil.write().unwrap()[grid_nodes - 1] = true;
+            assert!(tie.begin_step(&mut committed).unwrap(), "the soil reached the corner");
+            assert_eq!(tie.num_points(), (2, 2));
+            soil.write().unwrap().fill(false);
+            assert!(tie.begin_step(&mut committed).unwrap(), "the soil left");
+            assert_eq!(tie.num_points(), (2, 0));
+        }
+    }
+}
