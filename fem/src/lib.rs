@@ -34,6 +34,7 @@ pub mod pattern_lu;
 mod petsc_solver;
 pub mod rigid_modes;
 pub mod scheme;
+pub mod simd_state;
 pub mod slip;
 pub mod solid_domain;
 

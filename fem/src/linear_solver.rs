@@ -509,8 +509,21 @@ impl LinearSolver {
     /// `symmetric_part_gmres`, GMRES preconditioned by the Cholesky factors of the symmetric
     /// part `(A + Aᵀ)/2` (far cheaper than LU, whose column ordering fills in more), and LU
     /// with partial pivoting otherwise, or if that part is not positive definite or GMRES
-    /// does not converge (then LU for the rest of this pattern).
+    /// does not converge (then LU for the rest of this pattern). The SIMD state faer's
+    /// kernels leave is cleared before returning ([`crate::simd_state`]).
     pub fn solve(
+        &mut self,
+        pattern: &AssemblyPattern,
+        values: &[f64],
+        rhs: &mut [f64],
+    ) -> Result<(), LinearSolverError> {
+        let result = self.solve_any(pattern, values, rhs);
+        crate::simd_state::clear_upper_state();
+        result
+    }
+
+    /// [`LinearSolver::solve`] before the SIMD state is cleared.
+    fn solve_any(
         &mut self,
         pattern: &AssemblyPattern,
         values: &[f64],
@@ -662,6 +675,7 @@ impl LinearSolver {
                 Default::default(),
             )
             .map_err(|e| LinearSolverError::Factorisation(format!("LU failed: {e}")))?;
+        crate::simd_state::clear_upper_state();
         self.timings.factorisation += t.elapsed().as_secs_f64();
         self.timings.factorisations += 1;
         let t = Instant::now();
@@ -724,6 +738,7 @@ impl LinearSolver {
                 st.solve_in_place(rhs, pivoting, par);
             }
         }
+        crate::simd_state::clear_upper_state();
         self.timings.solve += t.elapsed().as_secs_f64();
         self.timings.reused_factors += 1;
         check_finite(rhs).map(|()| true)
@@ -804,10 +819,14 @@ impl LinearSolver {
                 return Ok(false);
             }
         }
+        crate::simd_state::clear_upper_state();
         self.timings.factorisation += t.elapsed().as_secs_f64();
         self.timings.factorisations += 1;
         let t = Instant::now();
-        let accurate = refined_solve(pattern, values, rhs, |x| st.solve_in_place(x, pivoting, par));
+        let accurate = refined_solve(pattern, values, rhs, |x| {
+            st.solve_in_place(x, pivoting, par);
+            crate::simd_state::clear_upper_state();
+        });
         self.timings.solve += t.elapsed().as_secs_f64();
         Ok(accurate)
     }
@@ -840,6 +859,7 @@ impl LinearSolver {
             MemStack::new(&mut st.scratch),
             Default::default(),
         );
+        crate::simd_state::clear_upper_state();
         self.timings.factorisation += t.elapsed().as_secs_f64();
         self.timings.factorisations += 1;
         Ok(factor.is_ok())

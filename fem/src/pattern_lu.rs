@@ -262,6 +262,7 @@ impl PatternLu {
                 self.pending.push((s, start));
             }
         }
+        crate::simd_state::clear_upper_state();
         Ok(())
     }
 
