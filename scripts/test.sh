@@ -4,6 +4,8 @@
 #   scripts/test.sh               the default suite (12–14 minutes on 2 cores)
 #   LOAM_LONG=1 scripts/test.sh   also the long validation runs: every test marked
 #                                 #[ignore = "long ..."] (about 25 minutes in all)
+#   LOAM_PETSC=1 scripts/test.sh  also the `petsc` feature's tests (needs scripts/install_petsc.sh;
+#                                 the feature's build adds 1.5-2.5 minutes)
 # The Rust part needs no Python: the Rust tests that need the .venv (the meshio reading of VTK
 # files, the FMU tutorial's fmpy loop) are #[ignore]d there and run in the Python part, with
 # the .venv's interpreter.
@@ -18,6 +20,16 @@ if [ "${LOAM_LONG:-0}" = "1" ]; then
     --skip tutorial_6_fmu_python
 else
   cargo test --release --workspace
+fi
+
+if [ "${LOAM_PETSC:-0}" = "1" ]; then
+  if ! pkg-config --exists petsc 2>/dev/null; then
+    echo "LOAM_PETSC=1: PETSc not found by pkg-config; run scripts/install_petsc.sh" >&2
+    exit 1
+  fi
+  echo "== Rust: the petsc feature (PETSc found by pkg-config)"
+  cargo test --release --features petsc --test petsc
+  cargo test --release --manifest-path petsc/Cargo.toml --target-dir target
 fi
 
 echo "== Python: virtual environment for meshio/fmpy checks (.venv)"
