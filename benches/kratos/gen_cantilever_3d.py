@@ -10,7 +10,10 @@ MPMUpdatedLagrangian3D4N, ppc = 1 or 4). With nu = 0 the beam bends as the plane
 gen_cantilever.py.
 usage: gen_cantilever_3d.py OUTDIR --n 2 [--L 7] [--W 1] [--ppc 8] [--tets] [--solver amgcl|sparse_lu]
 """
-import argparse, itertools, json, os
+import argparse, itertools, json, os, sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import kratos_case  # noqa: E402  (the processes shared with the other generator)
 
 ap = argparse.ArgumentParser()
 ap.add_argument("out")
@@ -104,18 +107,7 @@ solver = {"solver_type": "Static", "model_part_name": "MPM_Material", "domain_si
           "pressure_dofs": False}
 if a.solver == "sparse_lu":
     solver["linear_solver_settings"] = {"solver_type": "LinearSolversApplication.sparse_lu"}
-params = {"problem_data": {"problem_name": "cantilever_3d", "parallel_type": "OpenMP", "start_time": 0.0,
-                           "end_time": 1.0, "echo_level": 0},
-          "solver_settings": solver,
-          "processes": {"constraints_process_list": [{
-              "python_module": "assign_vector_variable_process", "kratos_module": "KratosMultiphysics",
-              "Parameters": {"model_part_name": "Background_Grid.DISPLACEMENT_Support", "variable_name": "DISPLACEMENT",
-                             "constrained": [True, True, True], "value": [0.0, 0.0, 0.0], "interval": [0.0, "End"]}}],
-              "gravity": [{"python_module": "assign_gravity_to_material_point_process",
-                           "kratos_module": "KratosMultiphysics.MPMApplication",
-                           "process_name": "AssignGravityToMaterialPointProcess",
-                           "Parameters": {"model_part_name": "MPM_Material", "modulus": g,
-                                          "direction": [0.0, -1.0, 0.0]}}]}}
+params = kratos_case.project_parameters("cantilever_3d", solver, 1.0, g)
 json.dump(params, open(os.path.join(a.out, "ProjectParameters.json"), "w"), indent=4)
 
 # the grid node at the tip, top, mid-width (x = L, y = H, z = W/2) and its displacement

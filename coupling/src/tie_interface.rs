@@ -473,18 +473,7 @@ mod tests {
     }
 
     fn input<'a>(state: &'a NodalState, committed: &'a NodalState) -> AssemblyInput<'a> {
-        AssemblyInput {
-            state,
-            committed,
-            inertial_acceleration: None,
-            mass_coefficient: 0.0,
-            gravity: [0.0; 3],
-            time_step: 1.0,
-            gamma: 0.5,
-            time: 1.0,
-            with_tangent: true,
-            stiffness: true,
-        }
+        AssemblyInput::static_tangent(state, committed)
     }
 
     /// A bilinear grid of 4 × 2 cells (h = 0.1) and an inclined two-facet structure

@@ -54,6 +54,25 @@ pub struct AssemblyInput<'a> {
     pub stiffness: bool,
 }
 
+impl<'a> AssemblyInput<'a> {
+    /// A static assembly with the stiffness tangent at `state` (time 1 s, unit step, no
+    /// gravity, no inertia): what a domain's tests differentiate against central differences.
+    pub fn static_tangent(state: &'a NodalState, committed: &'a NodalState) -> Self {
+        Self {
+            state,
+            committed,
+            inertial_acceleration: None,
+            mass_coefficient: 0.0,
+            gravity: [0.0; 3],
+            time_step: 1.0,
+            gamma: 0.5,
+            time: 1.0,
+            with_tangent: true,
+            stiffness: true,
+        }
+    }
+}
+
 /// Failure while a domain assembles.
 #[derive(Debug, Clone, thiserror::Error, PartialEq)]
 #[error("domain '{domain}', element {element}: {message}")]
