@@ -452,3 +452,21 @@ fn cosimulation_without_interface_does_not_run() {
     assert!(!o.status.success(), "a run without the tie must fail");
     assert!(stderr.contains("no interface joins them"), "{stderr}");
 }
+
+/// A co-simulation solver the importer does not couple: exit code 2, one line naming the file
+/// and the key.
+#[test]
+fn cosimulation_unknown_solver_refused() {
+    let dir = edited_copy("mpm_fem_beam", "cosim-fluid", "cosim_mpm_fem_beam_parameters.json", |t| {
+        t.replace(
+            "solver_wrappers.kratos.structural_mechanics_wrapper",
+            "solver_wrappers.kratos.fluid_dynamics_wrapper",
+        )
+    });
+    let stderr = refused_import(&dir);
+    assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
+    assert!(
+        stderr.contains("cosim_mpm_fem_beam_parameters.json: solver_settings.solvers.structure.type: \"solver_wrappers.kratos.fluid_dynamics_wrapper\""),
+        "{stderr}"
+    );
+}

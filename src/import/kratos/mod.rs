@@ -7,7 +7,9 @@
 //! positions, `material_points.cells`) and one for the grid (`grid_mesh`, with the grid's sub
 //! model parts as physical groups, i.e. regions) ([`msh`]). What is not taken over, or only
 //! approximately, is returned as notes, one line per key or block; what cannot be expressed
-//! is refused with an [`ImportError`]. The mapping of names: `docs/kratos.md`.
+//! is refused with an [`ImportError`]. A CoSimulation folder of one MPM and one structural
+//! solver is imported as one case, the structure an FEM domain tied to the grid ([`cosim`]).
+//! The mapping of names: `docs/kratos.md`.
 
 pub mod cosim;
 pub mod json;
