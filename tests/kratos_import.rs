@@ -361,6 +361,8 @@ fn run_on_a_kratos_folder_imports_on_the_fly() {
 ///   MP_1757 (y0 = 0.521) −0.6534 / −0.6541 m, FEM node 26 (4, 0.5) −0.2374 m. Kratos 10.4.4
 ///   itself lands 2.4 % below the stored tip (README), so the stored values are checked to 3 %.
 ///
+/// - the same beam all FEM (quad4, h = 0.1 m): the tie must give the one-piece beam (0.5 %).
+///
 /// An import that loses the interface leaves the MPM half unsupported: the run fails or its
 /// tip is far off.
 #[test]
@@ -418,6 +420,38 @@ fn mpm_fem_beam_cosimulation_as_one_system() {
     assert!(rel(i, kratos_interface) <= 0.02, "interface {i} vs Kratos 10.4.4 {kratos_interface}");
     assert!(rel(i, stored_interface) <= 0.02, "interface {i} vs stored {stored_interface}");
     assert!(rel(m["clamp"], 78480.0) <= 1e-6, "the clamp carries the whole beam: {}", m["clamp"]);
+
+    // the same beam all FEM (quad4, h = 0.1 m as both halves, the structure's material)
+    let fem = json.parent().unwrap().join("fem_only.json");
+    let fem_case = json!({
+        "description": "mpm_fem_beam all FEM",
+        "formulation": "plane_strain",
+        "materials": { "beam": case["materials"]["structure"] },
+        "domains": [{ "name": "beam", "type": "fem", "material": "beam",
+            "mesh": { "rectangle": { "origin": [0.0, 0.0], "size": [8.0, 1.0], "cells": [80, 10], "element": "quad4" } } }],
+        "regions": { "clamp": { "x": 0.0 } },
+        "boundary_conditions": [{ "region": "clamp", "displacement": [0.0, 0.0] }],
+        "gravity": case["gravity"],
+        "analysis": case["analysis"],
+        "solver": case["solver"]
+    });
+    std::fs::write(&fem, serde_json::to_string_pretty(&fem_case).unwrap()).unwrap();
+    let f = run(
+        &fem,
+        vec![
+            json!({ "name": "tip", "type": "displacement", "point": [8.0, 0.5], "component": "y" }),
+            json!({ "name": "interface", "type": "displacement", "point": [4.0, 0.5], "component": "y" }),
+        ],
+    );
+    println!(
+        "mpm_fem_beam: all-FEM beam (h = 0.1 m): tip {:.6} m (coupled {:+.3} %), (4, 0.5) {:.6} m (coupled {:+.3} %)",
+        f["tip"],
+        100.0 * (m["tip"] / f["tip"] - 1.0),
+        f["interface"],
+        100.0 * (i / f["interface"] - 1.0)
+    );
+    assert!(rel(m["tip"], f["tip"]) <= 0.005, "tip {} vs the all-FEM beam {}", m["tip"], f["tip"]);
+    assert!(rel(i, f["interface"]) <= 0.005, "interface {i} vs the all-FEM beam {}", f["interface"]);
 }
 
 /// Without the interface (the structure's interface sub model part renamed in the
