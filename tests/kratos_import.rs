@@ -342,3 +342,165 @@ fn run_on_a_kratos_folder_imports_on_the_fly() {
     assert_eq!(strip(&on_the_fly), strip(&explicit), "the on-the-fly import is the explicit one");
     assert!(out.join("monitors.csv").is_file(), "results written in the run's folder");
 }
+
+/// Kratos' partitioned MPM–FEM co-simulation `mpm_fem_beam` (CoSimulationApplication test
+/// `test_MPM_FEM_beam_penalty`; benchmark 12 of BENCHMARKS.md): the plane-strain Neo-Hookean
+/// cantilever L = 8 m, h = 1 m clamped at x = 0 under its own weight, FEM (h = 0.1 m) on
+/// x ∈ [0, 4] and MPM (grid h = 0.1 m, 4 points per cell) on x ∈ [4, 8], one static step.
+/// Kratos iterates between the two solvers (Gauss–Seidel, MVQN); Loam imports the folder as ONE
+/// case and solves both halves in one Newton system, tied by the non-conforming penalty tie on
+/// the structure's interface sub model part.
+///
+/// Compared at the tip and at the interface with:
+/// - Timoshenko's beam (linear): tip −0.67806 m, w(4) = −0.24346 m (1.5 %);
+/// - Kratos 10.4.4 run with the MPM interface's contact force computed (the case README's
+///   `--contact-force-fix`; as shipped 10.4.4 passes no load from MPM to FEM): grid node
+///   (8, 0.5) −0.6660 m, tip material points −0.6637 m, FEM node (4, 0.5) −0.2383 m (2 %);
+/// - the stored `cosim_mpm_fem_beam_{particle,structure}_results.json`, Kratos' partitioned
+///   answer of an older Kratos: tip material points MP_1598 (x0 = 7.979, y0 = 0.479) and
+///   MP_1757 (y0 = 0.521) −0.6534 / −0.6541 m, FEM node 26 (4, 0.5) −0.2374 m. Kratos 10.4.4
+///   itself lands 2.4 % below the stored tip (README), so the stored values are checked to 3 %.
+///
+/// - the same beam all FEM (quad4, h = 0.1 m): the tie must give the one-piece beam (0.5 %).
+///
+/// An import that loses the interface leaves the MPM half unsupported: the run fails or its
+/// tip is far off.
+#[test]
+fn mpm_fem_beam_cosimulation_as_one_system() {
+    let dir = data("mpm_fem_beam");
+    let (json, stderr) = import(&dir, &temp_dir("mpm_fem_beam"));
+    println!("{stderr}");
+    let case: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(case["interfaces"][0]["coupling"], "tie", "the interface is a tie: {}", case["interfaces"]);
+    assert!(stderr.contains("apply_mpm_coupling_interface_dirichlet_condition_process"), "{stderr}");
+    let (a, b) = (0.5 - 0.5 / 3f64.sqrt(), 0.5 + 0.5 / 3f64.sqrt());
+    let m = run(
+        &json,
+        vec![
+            json!({ "name": "tip", "type": "displacement", "point": [8.0, 0.5], "component": "y" }),
+            json!({ "name": "mp_lo", "type": "material_point_displacement", "point": [7.9 + 0.1 * b, 0.4 + 0.1 * b], "component": "y" }),
+            json!({ "name": "mp_hi", "type": "material_point_displacement", "point": [7.9 + 0.1 * b, 0.5 + 0.1 * a], "component": "y" }),
+            json!({ "name": "interface", "type": "displacement", "point": [4.0, 0.5], "component": "y" }),
+            json!({ "name": "clamp", "type": "reaction", "region": "DISPLACEMENT_fix_support", "component": "y" }),
+        ],
+    );
+    let mp = 0.5 * (m["mp_lo"] + m["mp_hi"]);
+    let stored_mp = 0.5
+        * (stored(&dir.join("cosim_mpm_fem_beam_particle_results.json"), "MP_1598", "MP_DISPLACEMENT_Y")
+            + stored(&dir.join("cosim_mpm_fem_beam_particle_results.json"), "MP_1757", "MP_DISPLACEMENT_Y"));
+    let stored_interface = stored(&dir.join("cosim_mpm_fem_beam_structure_results.json"), "NODE_26", "DISPLACEMENT_Y");
+    let (timoshenko_tip, timoshenko_interface) = (-0.67806, -0.24346);
+    let (kratos_tip, kratos_mp, kratos_interface) = (-0.6660, -0.6637, -0.2383);
+    let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
+    println!(
+        "mpm_fem_beam: tip grid node (8, 0.5) u_y: Loam {:.6} m, Timoshenko {timoshenko_tip} ({:+.2} %), Kratos 10.4.4 partitioned {kratos_tip} ({:+.2} %)",
+        m["tip"],
+        100.0 * (m["tip"] / timoshenko_tip - 1.0),
+        100.0 * (m["tip"] / kratos_tip - 1.0)
+    );
+    println!(
+        "mpm_fem_beam: tip material points (7.979, 0.479/0.521) u_y: Loam {mp:.6} m, Kratos stored {stored_mp:.6} ({:+.2} %), Kratos 10.4.4 partitioned {kratos_mp} ({:+.2} %)",
+        100.0 * (mp / stored_mp - 1.0),
+        100.0 * (mp / kratos_mp - 1.0)
+    );
+    println!(
+        "mpm_fem_beam: interface FEM node (4, 0.5) u_y: Loam {:.6} m, Timoshenko {timoshenko_interface} ({:+.2} %), Kratos stored {stored_interface:.6} ({:+.2} %), Kratos 10.4.4 partitioned {kratos_interface} ({:+.2} %); clamp reaction {:.1} N (weight 78480 N)",
+        m["interface"],
+        100.0 * (m["interface"] / timoshenko_interface - 1.0),
+        100.0 * (m["interface"] / stored_interface - 1.0),
+        100.0 * (m["interface"] / kratos_interface - 1.0),
+        m["clamp"]
+    );
+    assert!(rel(m["tip"], timoshenko_tip) <= 0.015, "tip {} vs Timoshenko {timoshenko_tip}", m["tip"]);
+    assert!(rel(m["tip"], kratos_tip) <= 0.015, "tip {} vs Kratos 10.4.4 {kratos_tip}", m["tip"]);
+    assert!(rel(mp, kratos_mp) <= 0.015, "tip points {mp} vs Kratos 10.4.4 {kratos_mp}");
+    assert!(rel(mp, stored_mp) <= 0.03, "tip points {mp} vs stored {stored_mp}");
+    let i = m["interface"];
+    assert!(rel(i, timoshenko_interface) <= 0.015, "interface {i} vs Timoshenko {timoshenko_interface}");
+    assert!(rel(i, kratos_interface) <= 0.02, "interface {i} vs Kratos 10.4.4 {kratos_interface}");
+    assert!(rel(i, stored_interface) <= 0.02, "interface {i} vs stored {stored_interface}");
+    assert!(rel(m["clamp"], 78480.0) <= 1e-6, "the clamp carries the whole beam: {}", m["clamp"]);
+
+    // the same beam all FEM (quad4, h = 0.1 m as both halves, the structure's material)
+    let fem = json.parent().unwrap().join("fem_only.json");
+    let fem_case = json!({
+        "description": "mpm_fem_beam all FEM",
+        "formulation": "plane_strain",
+        "materials": { "beam": case["materials"]["structure"] },
+        "domains": [{ "name": "beam", "type": "fem", "material": "beam",
+            "mesh": { "rectangle": { "origin": [0.0, 0.0], "size": [8.0, 1.0], "cells": [80, 10], "element": "quad4" } } }],
+        "regions": { "clamp": { "x": 0.0 } },
+        "boundary_conditions": [{ "region": "clamp", "displacement": [0.0, 0.0] }],
+        "gravity": case["gravity"],
+        "analysis": case["analysis"],
+        "solver": case["solver"]
+    });
+    std::fs::write(&fem, serde_json::to_string_pretty(&fem_case).unwrap()).unwrap();
+    let f = run(
+        &fem,
+        vec![
+            json!({ "name": "tip", "type": "displacement", "point": [8.0, 0.5], "component": "y" }),
+            json!({ "name": "interface", "type": "displacement", "point": [4.0, 0.5], "component": "y" }),
+        ],
+    );
+    println!(
+        "mpm_fem_beam: all-FEM beam (h = 0.1 m): tip {:.6} m (coupled {:+.3} %), (4, 0.5) {:.6} m (coupled {:+.3} %)",
+        f["tip"],
+        100.0 * (m["tip"] / f["tip"] - 1.0),
+        f["interface"],
+        100.0 * (i / f["interface"] - 1.0)
+    );
+    assert!(rel(m["tip"], f["tip"]) <= 0.005, "tip {} vs the all-FEM beam {}", m["tip"], f["tip"]);
+    assert!(rel(i, f["interface"]) <= 0.005, "interface {i} vs the all-FEM beam {}", f["interface"]);
+}
+
+/// Without the interface (the structure's interface sub model part renamed in the
+/// co-simulation file) the import is refused: one line naming the file and the sub model part.
+#[test]
+fn cosimulation_interface_must_exist() {
+    let dir = edited_copy("mpm_fem_beam", "no-interface", "cosim_mpm_fem_beam_parameters.json", |t| {
+        t.replace("Structure.INTERFACE_normal_vector_calculator", "Structure.INTERFACE_nowhere")
+    });
+    let stderr = refused_import(&dir);
+    assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
+    assert!(stderr.contains("structure.mdpa: no sub model part 'INTERFACE_nowhere'"), "{stderr}");
+}
+
+/// The imported case with its interface removed does not run: Loam refuses an FEM mesh on a
+/// grid that no interface joins (the MPM half would otherwise hang free).
+#[test]
+fn cosimulation_without_interface_does_not_run() {
+    let (json, _) = import(&data("mpm_fem_beam"), &temp_dir("mpm_fem_beam-noi"));
+    let mut c: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    c.as_object_mut().unwrap().remove("interfaces");
+    std::fs::write(&json, serde_json::to_string_pretty(&c).unwrap()).unwrap();
+    let o = loam()
+        .arg("run")
+        .arg(&json)
+        .args(["--quiet", "--out"])
+        .arg(json.parent().unwrap().join("out"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("{stderr}");
+    assert!(!o.status.success(), "a run without the tie must fail");
+    assert!(stderr.contains("no interface joins them"), "{stderr}");
+}
+
+/// A co-simulation solver the importer does not couple: exit code 2, one line naming the file
+/// and the key.
+#[test]
+fn cosimulation_unknown_solver_refused() {
+    let dir = edited_copy("mpm_fem_beam", "cosim-fluid", "cosim_mpm_fem_beam_parameters.json", |t| {
+        t.replace(
+            "solver_wrappers.kratos.structural_mechanics_wrapper",
+            "solver_wrappers.kratos.fluid_dynamics_wrapper",
+        )
+    });
+    let stderr = refused_import(&dir);
+    assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
+    assert!(
+        stderr.contains("cosim_mpm_fem_beam_parameters.json: solver_settings.solvers.structure.type: \"solver_wrappers.kratos.fluid_dynamics_wrapper\""),
+        "{stderr}"
+    );
+}

@@ -31,7 +31,10 @@ pub struct RunArgs {
 /// `loam run`: checks the thread count and runs the case inside a pool of that many threads.
 pub fn run_command(args: RunArgs) -> ExitCode {
     let RunArgs { case, mut out, threads, quiet, resume, trace_newton } = args;
-    let case = if case.is_dir() && case.join("ProjectParameters.json").is_file() {
+    let kratos = case.is_dir()
+        && (case.join("ProjectParameters.json").is_file()
+            || matches!(crate::import::kratos::cosim::find(&case), Ok(Some(_))));
+    let case = if kratos {
         match imported_case(&case, &mut out) {
             Ok(c) => c,
             Err(code) => return code,

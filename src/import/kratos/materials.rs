@@ -7,8 +7,8 @@
 //!
 //! | Kratos law name (stem) | Loam `law` |
 //! |---|---|
-//! | `LinearElasticIsotropic…Law` | `linear_elastic` |
-//! | `HyperElasticNeoHookean…Law` | `neo_hookean` |
+//! | `LinearElasticIsotropic…Law`, `LinearElastic…Law` (StructuralMechanics) | `linear_elastic` |
+//! | `HyperElasticNeoHookean…Law`, `HyperElastic…Law` (StructuralMechanics: its isotropic Neo-Hookean) | `neo_hookean` |
 //! | `HenckyMCPlastic…Law` | `mohr_coulomb` (angles from radians to degrees) |
 //! | `HenckyMCStrainSofteningPlastic…Law` | `mohr_coulomb_softening`: peak values from `COHESION`, `INTERNAL_FRICTION_ANGLE`, `INTERNAL_DILATANCY_ANGLE`, residual ones from their `…_RESIDUAL`, `SHAPE_FUNCTION_BETA` the shape factor (the same exponential decay with the accumulated plastic deviatoric strain) |
 //! | `HenckyBorjaCamClayPlastic…Law` | `modified_cam_clay`: `PRE_CONSOLIDATION_STRESS` (negative in Kratos, compression negative) to a positive `preconsolidation_pressure`; `OVER_CONSOLIDATION_RATIO`, `SWELLING_SLOPE`, `NORMAL_COMPRESSION_SLOPE`, `CRITICAL_STATE_LINE`, `INITIAL_SHEAR_MODULUS`, `ALPHA_SHEAR` to their Loam names (both codes use Borja's ln v – ln p slopes and `μ = μ₀ + α p₀ e^(ε_v^e/κ̂)`) |
@@ -50,7 +50,12 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Vec<BodyM
     for (k, p) in props.iter().enumerate() {
         let s = top.child_at(p, &format!("properties[{k}]"))?;
         let part = s.string("model_part_name")?;
-        let part = part.strip_prefix("Initial_MPM_Material.").unwrap_or(&part).to_string();
+        // MPM bodies: `Initial_MPM_Material.NAME`; structures: `Structure.NAME`
+        let part = part
+            .strip_prefix("Initial_MPM_Material.")
+            .or_else(|| part.strip_prefix("Structure."))
+            .unwrap_or(&part)
+            .to_string();
         s.take("properties_id");
         let mat = s.object("Material")?;
         let law = mat.object("constitutive_law")?;
@@ -69,8 +74,9 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Vec<BodyM
             Ok(m)
         };
         let material = match stem {
-            "LinearElasticIsotropic" => elastic("linear_elastic")?,
-            "HyperElasticNeoHookean" => elastic("neo_hookean")?,
+            "LinearElasticIsotropic" | "LinearElastic" => elastic("linear_elastic")?,
+            // `HyperElastic…`, `LinearElastic…`: StructuralMechanicsApplication's names of the same laws
+            "HyperElasticNeoHookean" | "HyperElastic" => elastic("neo_hookean")?,
             "HenckyMCPlastic" => {
                 let mut m = elastic("mohr_coulomb")?;
                 m.insert("cohesion".into(), json!(num("COHESION")?));

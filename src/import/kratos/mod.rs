@@ -7,13 +7,17 @@
 //! positions, `material_points.cells`) and one for the grid (`grid_mesh`, with the grid's sub
 //! model parts as physical groups, i.e. regions) ([`msh`]). What is not taken over, or only
 //! approximately, is returned as notes, one line per key or block; what cannot be expressed
-//! is refused with an [`ImportError`]. The mapping of names: `docs/kratos.md`.
+//! is refused with an [`ImportError`]. A CoSimulation folder of one MPM and one structural
+//! solver is imported as one case, the structure an FEM domain tied to the grid ([`cosim`]).
+//! The mapping of names: `docs/kratos.md`.
 
+pub mod cosim;
 pub mod json;
 pub mod materials;
 pub mod mdpa;
 pub mod msh;
 pub mod parameters;
+pub mod structural;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -33,21 +37,62 @@ pub struct Import {
 }
 
 /// Imports the Kratos case folder `dir` and writes the Loam case `out` (meshes beside it).
+///
+/// A folder holding a CoSimulation parameters file (`cosim_*_parameters.json`) is imported as
+/// one monolithic case ([`cosim`]); any other folder as an MPM case (`ProjectParameters.json`).
 pub fn import(dir: &Path, out: &Path) -> Result<Import, ImportError> {
+    if let Some(params) = cosim::find(dir)? {
+        return cosim::import(dir, &params, out);
+    }
     let mut notes = Vec::new();
-    let read = |name: &str| -> Result<(String, String), ImportError> {
-        let path = dir.join(name);
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(&path).map_err(|e| ImportError(format!("{file}: cannot read: {e}")))?;
-        Ok((text, file))
-    };
-    let (text, file) = read("ProjectParameters.json")?;
-    let project = parameters::read(&text, &file, &mut notes)?;
-    let (text, mat_file) = read(&project.materials_file)?;
-    let bodies = materials::read(&text, &mat_file, &mut notes)?;
-    let body_path = dir.join(&project.body_file);
+    let (case, files) = mpm_case(dir, "ProjectParameters.json", out, &mut notes)?;
+    write_case(out, case)?;
+    Ok(Import { files, notes })
+}
+
+/// Writes the case `case` to `out`.
+fn write_case(out: &Path, case: Map<String, Value>) -> Result<(), ImportError> {
+    let text = serde_json::to_string_pretty(&Value::Object(case)).expect("JSON values serialise") + "\n";
+    std::fs::write(out, text).map_err(|e| ImportError(format!("{}: cannot write: {e}", out.display())))
+}
+
+/// The file `name` of the case folder `dir`. Kratos resolves file names from its working
+/// directory, which co-simulations put one level up (`mpm_fem_beam/particle_Body`): a name not
+/// found in `dir` is looked up by its last component.
+fn locate(dir: &Path, name: &str) -> PathBuf {
+    let path = dir.join(name);
+    if path.exists() {
+        return path;
+    }
+    match Path::new(name).file_name() {
+        Some(f) if dir.join(f).exists() => dir.join(f),
+        _ => path,
+    }
+}
+
+/// Reads the text of `path`, returning it and the path as a string for messages.
+fn read_text(path: &Path) -> Result<(String, String), ImportError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| ImportError(format!("{file}: cannot read: {e}")))?;
+    Ok((text, file))
+}
+
+/// The MPM case of `dir` whose parameters are the file `params` (Kratos' `MpmAnalysis`), with
+/// its meshes written beside `out`: the case as a JSON object (not yet written) and the files,
+/// `out` first.
+pub(crate) fn mpm_case(
+    dir: &Path,
+    params: &str,
+    out: &Path,
+    notes: &mut Vec<String>,
+) -> Result<(Map<String, Value>, Vec<PathBuf>), ImportError> {
+    let (text, file) = read_text(&locate(dir, params))?;
+    let project = parameters::read(&text, &file, notes)?;
+    let (text, mat_file) = read_text(&locate(dir, &project.materials_file))?;
+    let bodies = materials::read(&text, &mat_file, notes)?;
+    let body_path = locate(dir, &project.body_file);
     let body = mdpa::read(&body_path)?;
-    let grid_path = dir.join(&project.grid_file);
+    let grid_path = locate(dir, &project.grid_file);
     let grid = mdpa::read(&grid_path)?;
     notes.extend(body.notes.iter().cloned());
     notes.extend(grid.notes.iter().cloned());
@@ -264,9 +309,7 @@ pub fn import(dir: &Path, out: &Path) -> Result<Import, ImportError> {
     case.insert("analysis".into(), project.analysis.clone());
     case.insert("solver".into(), project.solver.clone());
     case.insert("output".into(), json!({ "grid": true }));
-    let text = serde_json::to_string_pretty(&Value::Object(case)).expect("JSON values serialise") + "\n";
-    std::fs::write(out, text).map_err(|e| ImportError(format!("{}: cannot write: {e}", out.display())))?;
-    Ok(Import { files, notes })
+    Ok((case, files))
 }
 
 /// The node lists of the elements `ids` of `m`, all of one linear kind of dimension `dim`

@@ -97,7 +97,6 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Project, 
     pd.finish(notes);
 
     let s = top.object("solver_settings")?;
-    let solver_type = s.string("solver_type")?;
     s.take("model_part_name");
     let domain_size = s.optional_number("domain_size")?.unwrap_or(2.0) as usize;
     if domain_size != 2 && domain_size != 3 {
@@ -112,6 +111,59 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Project, 
     let body_file = mdpa_file(&s, "model_import_settings", notes)?;
     let grid_file = mdpa_file(&s, "grid_model_import_settings", notes)?;
     let materials_file = s.object("material_import_settings")?.string("materials_filename")?;
+    let (analysis, solver) = analysis_and_solver(&pd, &s, start, end, notes)?;
+    s.take("problem_domain_sub_model_part_list");
+    s.take("processes_sub_model_part_list");
+    let pressure_dofs = s.optional_bool("pressure_dofs")?.unwrap_or(false);
+    let axisymmetric = s.optional_bool("axis_symmetric_flag")?.unwrap_or(false);
+    s.ignore("auxiliary_variables_list", "Loam computes what it needs", notes);
+    s.ignore("linear_solver_settings", "Loam's direct solvers: solver.linear_solver auto", notes);
+    s.ignore("compute_reactions", "Loam always computes reactions", notes);
+    s.finish(notes);
+
+    let mut gravity = None;
+    let mut conditions = Vec::new();
+    if let Some(procs) = top.optional_object("processes")? {
+        let lists: Vec<String> = procs_keys(&root);
+        for list in lists {
+            let items = procs.array(&list)?;
+            for (k, item) in items.iter().enumerate() {
+                let p = procs.child_at(item, &format!("{list}[{k}]"))?;
+                process(&p, &list, &mut gravity, &mut conditions, notes)?;
+            }
+        }
+        procs.finish(notes);
+    }
+    for key in ["output_processes", "print_output_process", "analysis_stage", "modelers"] {
+        top.ignore(key, "Loam writes its own output (docs/cli.md)", notes);
+    }
+    top.finish(notes);
+    Ok(Project {
+        name,
+        body_file,
+        grid_file,
+        materials_file,
+        domain_size,
+        axisymmetric,
+        pressure_dofs,
+        analysis,
+        solver,
+        gravity,
+        conditions,
+    })
+}
+
+/// The Loam `analysis` and `solver` of a Kratos solver's `solver_settings` `s` (`solver_type`,
+/// `time_stepping`, scheme, convergence criterion, tolerances, `max_iteration`; the same keys
+/// in Kratos' MPM and StructuralMechanics solvers) over `problem_data` `pd` from `start` to `end`.
+pub(crate) fn analysis_and_solver(
+    pd: &Section,
+    s: &Section,
+    start: f64,
+    end: f64,
+    notes: &mut Vec<String>,
+) -> Result<(Value, Value), ImportError> {
+    let solver_type = s.string("solver_type")?;
     let dt = s.object("time_stepping")?.number("time_step")?;
     if dt <= 0.0 {
         return Err(s.error("time_stepping.time_step", format!("must be positive, got {dt}")));
@@ -140,7 +192,7 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Project, 
         other => {
             return Err(s.error(
                 "solver_type",
-                format!("\"{other}\" is not a Kratos MPM solver type (Static, Quasi-static, Dynamic)"),
+                format!("\"{other}\" is not a Kratos solver type Loam imports (Static, Quasi-static, Dynamic)"),
             ))
         }
     };
@@ -193,49 +245,11 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Project, 
     if let Some(n) = s.optional_number("max_iteration")? {
         solver.insert("max_iterations".into(), json!(n as usize));
     }
-    s.take("problem_domain_sub_model_part_list");
-    s.take("processes_sub_model_part_list");
-    let pressure_dofs = s.optional_bool("pressure_dofs")?.unwrap_or(false);
-    let axisymmetric = s.optional_bool("axis_symmetric_flag")?.unwrap_or(false);
-    s.ignore("auxiliary_variables_list", "Loam computes what it needs", notes);
-    s.ignore("linear_solver_settings", "Loam's direct solvers: solver.linear_solver auto", notes);
-    s.ignore("compute_reactions", "Loam always computes reactions", notes);
-    s.finish(notes);
-
-    let mut gravity = None;
-    let mut conditions = Vec::new();
-    if let Some(procs) = top.optional_object("processes")? {
-        let lists: Vec<String> = procs_keys(&root);
-        for list in lists {
-            let items = procs.array(&list)?;
-            for (k, item) in items.iter().enumerate() {
-                let p = procs.child_at(item, &format!("{list}[{k}]"))?;
-                process(&p, &list, &mut gravity, &mut conditions, notes)?;
-            }
-        }
-        procs.finish(notes);
-    }
-    for key in ["output_processes", "analysis_stage", "modelers"] {
-        top.ignore(key, "Loam writes its own output (docs/cli.md)", notes);
-    }
-    top.finish(notes);
-    Ok(Project {
-        name,
-        body_file,
-        grid_file,
-        materials_file,
-        domain_size,
-        axisymmetric,
-        pressure_dofs,
-        analysis: Value::Object(analysis),
-        solver: Value::Object(solver),
-        gravity,
-        conditions,
-    })
+    Ok((Value::Object(analysis), Value::Object(solver)))
 }
 
 /// The `.mdpa` file named by the import settings at `key`.
-fn mdpa_file(s: &Section, key: &str, notes: &mut Vec<String>) -> Result<String, ImportError> {
+pub(crate) fn mdpa_file(s: &Section, key: &str, notes: &mut Vec<String>) -> Result<String, ImportError> {
     let m = s.object(key)?;
     if let Some(t) = m.optional_string("input_type")? {
         if t != "mdpa" {
@@ -260,7 +274,7 @@ fn grid_part(p: &Section, q: &Section) -> Result<String, ImportError> {
 }
 
 /// A vector of three numbers at `key`.
-fn vector(q: &Section, key: &str) -> Result<[f64; 3], ImportError> {
+pub(crate) fn vector(q: &Section, key: &str) -> Result<[f64; 3], ImportError> {
     let v = q.take(key).ok_or_else(|| q.error(key, "missing"))?;
     let a = v.as_array().filter(|a| a.len() == 3).ok_or_else(|| q.error(key, "must be an array of three numbers"))?;
     let mut out = [0.0; 3];
@@ -271,7 +285,7 @@ fn vector(q: &Section, key: &str) -> Result<[f64; 3], ImportError> {
 }
 
 /// `modulus` times the unit vector along `direction`.
-fn by_direction(q: &Section) -> Result<[f64; 3], ImportError> {
+pub(crate) fn by_direction(q: &Section) -> Result<[f64; 3], ImportError> {
     let m = q.number("modulus")?;
     let d = vector(q, "direction")?;
     let n = d.iter().map(|x| x * x).sum::<f64>().sqrt();
@@ -282,7 +296,7 @@ fn by_direction(q: &Section) -> Result<[f64; 3], ImportError> {
 }
 
 /// Only the whole analysis (`[0.0, "End"]`) is imported as a time interval.
-fn whole_interval(q: &Section) -> Result<(), ImportError> {
+pub(crate) fn whole_interval(q: &Section) -> Result<(), ImportError> {
     match q.take("interval") {
         None => Ok(()),
         Some(v) if v.get(0).and_then(Value::as_f64) == Some(0.0) && v.get(1).and_then(Value::as_str) == Some("End") => {
@@ -320,7 +334,28 @@ fn process(
         "mpm_multiple_points_output_process",
         "mpm_grid_conforming_reaction_output_process",
         "compute_nodal_normals_process",
+        "particle_from_json_check_result_process",
+        "particle_json_output_process",
     ];
+    // the MPM side of a partitioned MPM–FEM co-simulation (Kratos' mpm_dirichlet_wrapper and
+    // mpm_neumann_wrapper): the structure's displacement imposed on, or its load taken from, an
+    // interface of the grid
+    let coupling = [
+        "apply_mpm_coupling_interface_dirichlet_condition_process",
+        "apply_mpm_coupling_interface_neumann_condition_process",
+    ];
+    if coupling.contains(&module.as_str()) {
+        p.take("Parameters");
+        notes.push(p.note(
+            "",
+            format!(
+                "{module}: the co-simulation's interface condition, replaced by the monolithic tie \
+                 (interfaces[].coupling \"tie\") when the CoSimulation folder is imported; alone: ignored"
+            ),
+        ));
+        p.finish(notes);
+        return Ok(());
+    }
     if check_or_output.contains(&module.as_str()) {
         p.take("Parameters");
         notes.push(
@@ -350,7 +385,8 @@ fn process(
             let value = [0, 1, 2].map(|d| fixed[d].then_some(value[d]));
             conditions.push(Condition::Displacement { part, value });
         }
-        "assign_gravity_to_material_point_process" => {
+        // `assign_gravity_to_particle_process`: the name before Kratos 10
+        "assign_gravity_to_material_point_process" | "assign_gravity_to_particle_process" => {
             if let Some(v) = q.optional_string("variable_name")? {
                 if v != "MP_VOLUME_ACCELERATION" {
                     return Err(q.error("variable_name", format!("\"{v}\": expected MP_VOLUME_ACCELERATION")));
