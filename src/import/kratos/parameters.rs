@@ -284,6 +284,27 @@ pub(crate) fn vector(q: &Section, key: &str) -> Result<[f64; 3], ImportError> {
     Ok(out)
 }
 
+/// The parameters of an `assign_vector_variable_process` on `DISPLACEMENT` (any other
+/// variable refused): the prescribed value per component, `None` where not `constrained`,
+/// over the whole analysis.
+pub(super) fn prescribed_displacement(q: &Section) -> Result<[Option<f64>; 3], ImportError> {
+    let var = q.string("variable_name")?;
+    if var != "DISPLACEMENT" {
+        return Err(q.error("variable_name", format!("\"{var}\": only DISPLACEMENT is imported")));
+    }
+    let value = vector(q, "value")?;
+    let fixed = match q.take("constrained") {
+        None => [true; 3],
+        Some(v) => {
+            let a = v.as_array().filter(|a| a.len() == 3 && a.iter().all(Value::is_boolean));
+            let a = a.ok_or_else(|| q.error("constrained", "must be three booleans"))?;
+            [a[0] == true, a[1] == true, a[2] == true]
+        }
+    };
+    whole_interval(q)?;
+    Ok([0, 1, 2].map(|d| fixed[d].then_some(value[d])))
+}
+
 /// `modulus` times the unit vector along `direction`.
 pub(crate) fn by_direction(q: &Section) -> Result<[f64; 3], ImportError> {
     let m = q.number("modulus")?;
@@ -367,22 +388,8 @@ fn process(
     let q = p.object("Parameters")?;
     match module.as_str() {
         "assign_vector_variable_process" => {
-            let var = q.string("variable_name")?;
-            if var != "DISPLACEMENT" {
-                return Err(q.error("variable_name", format!("\"{var}\": only DISPLACEMENT is imported")));
-            }
+            let value = prescribed_displacement(&q)?;
             let part = grid_part(p, &q)?;
-            let value = vector(&q, "value")?;
-            let fixed = match q.take("constrained") {
-                None => [true; 3],
-                Some(v) => {
-                    let a = v.as_array().filter(|a| a.len() == 3 && a.iter().all(Value::is_boolean));
-                    let a = a.ok_or_else(|| q.error("constrained", "must be three booleans"))?;
-                    [a[0] == true, a[1] == true, a[2] == true]
-                }
-            };
-            whole_interval(&q)?;
-            let value = [0, 1, 2].map(|d| fixed[d].then_some(value[d]));
             conditions.push(Condition::Displacement { part, value });
         }
         // `assign_gravity_to_particle_process`: the name before Kratos 10

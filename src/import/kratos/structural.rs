@@ -12,7 +12,7 @@
 use serde_json::Value;
 
 use super::json::{ImportError, Section};
-use super::parameters::{by_direction, mdpa_file, vector, whole_interval};
+use super::parameters::{by_direction, mdpa_file, prescribed_displacement, whole_interval};
 
 /// What the structure's parameters say, in Loam's terms.
 #[derive(Debug, Clone)]
@@ -107,22 +107,8 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Structure
                     }
                     "assign_vector_variable_process" => {
                         let q = p.object("Parameters")?;
-                        let var = q.string("variable_name")?;
-                        if var != "DISPLACEMENT" {
-                            return Err(q.error("variable_name", format!("\"{var}\": only DISPLACEMENT is imported")));
-                        }
-                        let name = part(&q)?;
-                        let value = vector(&q, "value")?;
-                        let fixed = match q.take("constrained") {
-                            None => [true; 3],
-                            Some(v) => {
-                                let a = v.as_array().filter(|a| a.len() == 3 && a.iter().all(Value::is_boolean));
-                                let a = a.ok_or_else(|| q.error("constrained", "must be three booleans"))?;
-                                [a[0] == true, a[1] == true, a[2] == true]
-                            }
-                        };
-                        whole_interval(&q)?;
-                        supports.push((name, [0, 1, 2].map(|d| fixed[d].then_some(value[d]))));
+                        let value = prescribed_displacement(&q)?;
+                        supports.push((part(&q)?, value));
                         q.finish(notes);
                     }
                     "assign_vector_by_direction_process" => {
