@@ -306,32 +306,45 @@ fn refined_solve(
     pattern: &AssemblyPattern,
     values: &[f64],
     rhs: &mut [f64],
+    work: &mut RefinementWork,
     mut solve: impl FnMut(&mut [f64]),
 ) -> bool {
-    let b = rhs.to_vec();
-    let mut x = b.clone();
-    solve(&mut x);
-    let mut r = vec![0.0; b.len()];
+    let RefinementWork { b, x, r } = work;
+    b.clear();
+    b.extend_from_slice(rhs);
+    x.clear();
+    x.extend_from_slice(rhs);
+    r.resize(rhs.len(), 0.0);
+    solve(x);
     let residual = |x: &[f64], r: &mut [f64]| {
         pattern.multiply(values, x, r);
-        r.iter_mut().zip(&b).for_each(|(ri, bi)| *ri = bi - *ri);
+        r.iter_mut().zip(b.iter()).for_each(|(ri, bi)| *ri = bi - *ri);
         norm2(r)
     };
-    let bn = norm2(&b);
-    let mut rn = residual(&x, &mut r);
+    let bn = norm2(b);
+    let mut rn = residual(x, r);
     for _ in 0..LDLT_REFINEMENTS {
         if rn <= 1e-12 * bn {
             break;
         }
-        solve(&mut r);
-        x.iter_mut().zip(&r).for_each(|(xi, di)| *xi += di);
-        rn = residual(&x, &mut r);
+        solve(r);
+        x.iter_mut().zip(r.iter()).for_each(|(xi, di)| *xi += di);
+        rn = residual(x, r);
     }
     let accurate = rn <= 1e-8 * bn;
     if accurate {
-        rhs.copy_from_slice(&x);
+        rhs.copy_from_slice(x);
     }
     accurate
+}
+
+/// The vectors of [`refined_solve`] (right-hand side, solution, residual), kept between
+/// solves so that a Newton iteration allocates nothing.
+#[derive(Debug, Default)]
+struct RefinementWork {
+    b: Vec<f64>,
+    x: Vec<f64>,
+    r: Vec<f64>,
 }
 
 fn factorisation_error(e: impl std::fmt::Debug) -> LinearSolverError {
@@ -384,6 +397,8 @@ pub struct LinearSolver {
     gmres: Gmres,
     /// The factors the last successful solve left.
     kept: KeptFactors,
+    /// Work vectors of the refined solves.
+    refinement: RefinementWork,
     /// Options of the `petsc` kind.
     petsc_options: PetscOptions,
     /// Near null space of the matrices (the `petsc` kind's GAMG), one vector per mode.
@@ -415,6 +430,7 @@ impl LinearSolver {
             symmetric_values: Vec::new(),
             gmres: Gmres::default(),
             kept: KeptFactors::None,
+            refinement: RefinementWork::default(),
             petsc_options: PetscOptions::default(),
             near_null_space: Vec::new(),
             #[cfg(feature = "petsc")]
@@ -707,7 +723,7 @@ impl LinearSolver {
         }
         self.timings.factorisations += 1;
         let t = Instant::now();
-        let accurate = refined_solve(pattern, values, rhs, |x| lu.solve_in_place(x));
+        let accurate = refined_solve(pattern, values, rhs, &mut self.refinement, |x| lu.solve_in_place(x));
         self.timings.solve += t.elapsed().as_secs_f64();
         accurate
     }
@@ -823,7 +839,7 @@ impl LinearSolver {
         self.timings.factorisation += t.elapsed().as_secs_f64();
         self.timings.factorisations += 1;
         let t = Instant::now();
-        let accurate = refined_solve(pattern, values, rhs, |x| {
+        let accurate = refined_solve(pattern, values, rhs, &mut self.refinement, |x| {
             st.solve_in_place(x, pivoting, par);
             crate::simd_state::clear_upper_state();
         });
