@@ -75,43 +75,68 @@ impl AssemblyPattern {
     pub fn new(dofs: &DofMap, layout: &BlockLayout) -> Self {
         let n = dofs.num_equations();
         assert!(layout.matrix_len() < u32::MAX as usize, "element buffer exceeds u32 indexing");
-        // (column, row, source) triples of the free couplings
-        let mut triples: Vec<(u32, u32, u32)> = Vec::new();
+        // the free couplings as (row, source) pairs bucketed by column (a counting sort: two
+        // passes over the blocks), each column's few pairs then sorted by row and source
+        let free_equations = |bd: &[usize]| bd.iter().filter(|&&g| dofs.equation(g) != CONSTRAINED).count();
+        let mut bucket_ptr = vec![0usize; n + 1];
+        for b in 0..layout.num_blocks() {
+            let bd = &layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]];
+            let rows = free_equations(bd);
+            for &gc in bd {
+                let ec = dofs.equation(gc);
+                if ec != CONSTRAINED {
+                    bucket_ptr[ec + 1] += rows;
+                }
+            }
+        }
+        for c in 0..n {
+            bucket_ptr[c + 1] += bucket_ptr[c];
+        }
+        let mut pairs = vec![(0u32, 0u32); bucket_ptr[n]];
+        let mut fill = bucket_ptr.clone();
         for b in 0..layout.num_blocks() {
             let bd = &layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]];
             let nd = bd.len();
             let off = layout.matrix_offset[b];
-            for (r, &gr) in bd.iter().enumerate() {
-                let er = dofs.equation(gr);
-                if er == CONSTRAINED {
+            for (c, &gc) in bd.iter().enumerate() {
+                let ec = dofs.equation(gc);
+                if ec == CONSTRAINED {
                     continue;
                 }
-                for (c, &gc) in bd.iter().enumerate() {
-                    let ec = dofs.equation(gc);
-                    if ec != CONSTRAINED {
-                        triples.push((ec as u32, er as u32, (off + r * nd + c) as u32));
+                for (r, &gr) in bd.iter().enumerate() {
+                    let er = dofs.equation(gr);
+                    if er != CONSTRAINED {
+                        pairs[fill[ec]] = (er as u32, (off + r * nd + c) as u32);
+                        fill[ec] += 1;
                     }
                 }
             }
         }
-        triples.par_sort_unstable();
+        let mut rest = pairs.as_mut_slice();
+        for c in 0..n {
+            let (column, tail) = rest.split_at_mut(bucket_ptr[c + 1] - bucket_ptr[c]);
+            column.sort_unstable();
+            rest = tail;
+        }
         let mut col_ptr = vec![0usize; n + 1];
         let mut row_idx = Vec::new();
         let mut matrix_gather_ptr = vec![0usize];
-        let mut matrix_gather_src = Vec::with_capacity(triples.len());
-        let mut last: Option<(u32, u32)> = None;
-        for &(c, r, s) in &triples {
-            if last != Some((c, r)) {
-                if last.is_some() {
-                    matrix_gather_ptr.push(matrix_gather_src.len());
+        let mut matrix_gather_src = Vec::with_capacity(pairs.len());
+        for c in 0..n {
+            let mut last = None;
+            for &(r, s) in &pairs[bucket_ptr[c]..bucket_ptr[c + 1]] {
+                if last != Some(r) {
+                    if !matrix_gather_src.is_empty() {
+                        matrix_gather_ptr.push(matrix_gather_src.len());
+                    }
+                    row_idx.push(r as usize);
+                    col_ptr[c + 1] += 1;
+                    last = Some(r);
                 }
-                row_idx.push(r as usize);
-                col_ptr[c as usize + 1] += 1;
-                last = Some((c, r));
+                matrix_gather_src.push(s);
             }
-            matrix_gather_src.push(s);
         }
-        if last.is_some() {
+        if !matrix_gather_src.is_empty() {
             matrix_gather_ptr.push(matrix_gather_src.len());
         }
         for c in 0..n {

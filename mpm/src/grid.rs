@@ -18,10 +18,8 @@
 //! (tri3, tet4), whose isoparametric map is affine, from that map's inverse
 //! `ξ = J⁻¹(x − x₀)`, kept per cell with `det J` (recomputed for cells that move): one 3×3
 //! product per located point, and the shape-function gradients of every point in the cell
-//! from the same `J⁻¹`. (Rectangular quad cells are affine too, but there the Newton path is
-//! kept: the affine local coordinates differ from it by round-off only, and the MPM Cam Clay
-//! localisation run, `biaxial_mcc_mpm`, is sensitive enough to that to stop at 0.08 m of
-//! platen travel instead of 0.13 m.)
+//! from the same `J⁻¹`. Parallelogram quads and parallelepiped hexes (every cell of a
+//! structured grid, rotated or not, until it moves) are affine too and take the same path.
 
 use loam_fem::element::{ElementType, MAX_NODES};
 use loam_fem::formulation::Formulation;
@@ -831,19 +829,42 @@ impl Grid {
     }
 }
 
-/// The map `x = x₀ + J ξ` of a simplex `cell` (see the module doc for quads).
+/// The map `x = x₀ + J ξ` of `cell` where it is affine: a simplex, or a quad4 / hex8 cell that
+/// is a parallelogram / parallelepiped (opposite edges equal to round-off: the bilinear /
+/// trilinear map then has no `ξη` terms). `x₀` is the image of `ξ = 0`: node 0 of a simplex,
+/// the centroid of a quad or hex.
 fn affine_cell(mesh: &Mesh, cell: usize) -> Option<AffineCell> {
     let element = mesh.element;
-    if !matches!(element, ElementType::Tri3 | ElementType::Tet4) {
-        return None;
-    }
     let coords: Vec<[f64; 3]> = mesh.cell(cell).iter().map(|&a| mesh.coords[a]).collect();
+    let origin = match element {
+        ElementType::Tri3 | ElementType::Tet4 => coords[0],
+        ElementType::Quad4 | ElementType::Hex8 => {
+            if !is_parallelotope(element, &coords) {
+                return None;
+            }
+            let n = coords.len() as f64;
+            std::array::from_fn(|i| coords.iter().map(|x| x[i]).sum::<f64>() / n)
+        }
+    };
     let mut dn = [[0.0; 3]; MAX_NODES];
     element.shape_gradients(&element.centroid_local(), &mut dn);
     let map = CellMap::at(element, &coords, &dn).ok()?;
-    // ξ = 0 is node 0 of a simplex
-    let origin = coords[0];
     Some(AffineCell { origin, map })
+}
+
+/// Whether a quad4 (nodes counter-clockwise) is a parallelogram, `x₀ + x₂ = x₁ + x₃`, or a
+/// hex8 (two such faces, `z` layers 0–3 and 4–7) a parallelepiped, to a relative round-off.
+fn is_parallelotope(element: ElementType, coords: &[[f64; 3]]) -> bool {
+    let size = coords.iter().flat_map(|x| x.iter()).fold(0.0f64, |m, v| m.max(v.abs())).max(1.0);
+    let closes = |a: usize, b: usize, c: usize, d: usize| {
+        (0..3).all(|i| (coords[a][i] + coords[c][i] - coords[b][i] - coords[d][i]).abs() <= 1e-12 * size)
+    };
+    match element {
+        ElementType::Quad4 => closes(0, 1, 2, 3),
+        // bottom and top faces parallelograms, the vertical edges equal
+        ElementType::Hex8 => closes(0, 1, 2, 3) && closes(4, 5, 6, 7) && closes(0, 1, 5, 4) && closes(0, 3, 7, 4),
+        _ => false,
+    }
 }
 
 #[cfg(test)]
@@ -935,10 +956,15 @@ mod tests {
         }
     }
 
-    /// The per-cell affine maps of simplices give the local coordinates of the Newton inverse
-    /// map; quad and hex cells keep the Newton path.
+    /// The per-cell affine maps (simplices, parallelogram quads, parallelepiped hexes) give the
+    /// local coordinates of the Newton inverse map; a distorted quad keeps the Newton path.
     #[test]
     fn affine_cells_match_the_inverse_map() {
+        // a distorted quad: not affine, the Newton path
+        let mut distorted = Mesh::rectangle([0.0, 0.0], [2.0, 1.0], [2, 1], ElementType::Quad4);
+        distorted.coords[1][1] += 0.2;
+        let g = Grid::unstructured(distorted);
+        assert!(g.cell_map(0).is_none() && g.cell_map(1).is_none());
         let grids = [
             Grid::rotated([1.0, 0.0, 0.0], [2.0, 1.0, 0.0], [4, 2, 1], ElementType::Quad4, 0.5),
             Grid::rotated([1.0, 0.0, 0.0], [2.0, 1.0, 0.0], [4, 2, 1], ElementType::Tri3, 0.5),
@@ -955,8 +981,7 @@ mod tests {
                 for d in 0..element.dim() {
                     assert!((local[d] - newton[d]).abs() < 1e-12, "{element:?} cell {cell}: {local:?} vs {newton:?}");
                 }
-                let simplex = matches!(element, ElementType::Tri3 | ElementType::Tet4);
-                assert_eq!(g.cell_map(cell).is_some(), simplex, "{element:?} cell {cell}");
+                assert!(g.cell_map(cell).is_some(), "{element:?} cell {cell}: every cell is affine");
             }
         }
     }
