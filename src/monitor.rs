@@ -214,9 +214,24 @@ impl Monitor {
     }
 }
 
-/// Positions and sizes of the material points of every domain.
+/// Positions and sizes of the material points of every domain, as the free-surface monitors
+/// see them ([`SurfaceProfile`]: `x` along the runout, the second component up). In 3D, where
+/// `z` is up (gravity along −z), the points are seen from the side: `(x, z)` becomes the
+/// profile's `(x, y)`, so the surface is the top envelope over all `y` and a quarter or half
+/// column against symmetry planes gives its runout along `x`.
 pub fn point_extents(model: &Model) -> Vec<PointExtent> {
-    model.domains.iter().flat_map(|d| d.point_extents()).collect()
+    let side_view = model.dim == 3;
+    model
+        .domains
+        .iter()
+        .flat_map(|d| d.point_extents())
+        .map(|mut p| {
+            if side_view {
+                p.position.swap(1, 2);
+            }
+            p
+        })
+        .collect()
 }
 
 /// A component or invariant of a 3×3 tensor `t` (row-major).

@@ -307,3 +307,34 @@ fn bui2008_collapse_on_smooth_bases() {
         );
     }
 }
+
+/// The free-surface monitors in 3D see the points from the side, `z` up: a column of
+/// 0.1 m × 0.05 m × 0.08 m (x, y, z) at rest against the wall `x = 0`, cells of h = 10 mm with
+/// 2 × 2 × 2 points at the Gauss positions (`±h/(2√3)` from the cell's centre, cubes of side
+/// `h/2`): the envelope of the points' cubes reaches `L + h (1/(2√3) − 1/4)` along `x` and up
+/// `z` — a runout of 0.100387 m and a height at the wall of 0.080387 m, not the width along `y`
+/// (0.050387 m, what a view with `y` up would report).
+#[test]
+fn surface_monitors_see_a_3d_column_from_the_side() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/scale/collapse_3d_column.json");
+    let mut json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let column = &mut json["domains"][0]["material_points"]["cells"]["mesh"]["box"];
+    column["size"] = serde_json::json!([0.1, 0.05, 0.08]);
+    column["cells"] = serde_json::json!([10, 5, 8]);
+    json["domains"][0]["initial_stress"]["geostatic"]["surface"] = serde_json::json!(0.08);
+    json["monitors"] = serde_json::json!([
+        { "name": "runout", "type": "runout", "wall": 0.0, "base": 0.0, "threshold": 0.002 },
+        { "name": "height_at_wall", "type": "surface_height", "x": 0.0 }
+    ]);
+    let sim = Simulation::new(parse(json)).expect("case builds");
+    let values = sim.monitor_values();
+    let (runout, height) = (values[common::monitor(&sim, "runout")], values[common::monitor(&sim, "height_at_wall")]);
+    let envelope = 0.01 * (1.0 / (2.0 * 3f64.sqrt()) - 0.25);
+    println!(
+        "3D column seen from the side: runout {runout:.6} m (reference {:.6}), height at the wall {height:.6} m ({:.6})",
+        0.1 + envelope,
+        0.08 + envelope
+    );
+    assert!((runout - (0.1 + envelope)).abs() < 1e-9, "runout {runout}");
+    assert!((height - (0.08 + envelope)).abs() < 1e-9, "height {height}");
+}

@@ -77,12 +77,12 @@ pub(super) fn build(
                 }
             }
             MonitorSpec::Runout { wall, base, threshold, .. } => {
-                check_surface_monitor(&loc, model, dim)?;
+                check_surface_monitor(&loc, model)?;
                 check_positive(&format!("{loc}.threshold"), *threshold)?;
                 MonitorKind::Runout { wall: *wall, base: *base, threshold: *threshold }
             }
             MonitorSpec::SurfaceHeight { x, base, .. } => {
-                check_surface_monitor(&loc, model, dim)?;
+                check_surface_monitor(&loc, model)?;
                 MonitorKind::SurfaceHeight { x: *x, base: *base }
             }
             MonitorSpec::MaterialPointStress { point, within, component, .. } => MonitorKind::MaterialPointTensor {
@@ -162,11 +162,9 @@ fn energy_domain(model: &Model, loc: &str, name: Option<&str>) -> Result<Option<
         .ok_or_else(|| CaseError::new(format!("{loc}.domain"), format!("no domain named '{name}' in domains")))
 }
 
-/// Surface monitors need material points in a plane problem.
-fn check_surface_monitor(loc: &str, model: &Model, dim: usize) -> Result<(), CaseError> {
-    if dim != 2 {
-        return Err(CaseError::new(format!("{loc}.type"), "surface monitors need a plane (2D) problem"));
-    }
+/// Surface monitors need material points (plane problems, or 3D seen from the side:
+/// [`crate::monitor::point_extents`]).
+fn check_surface_monitor(loc: &str, model: &Model) -> Result<(), CaseError> {
     if model.domains.iter().all(|d| d.point_extents().is_empty()) {
         return Err(CaseError::new(format!("{loc}.type"), "the model has no material points"));
     }
