@@ -29,6 +29,7 @@
 //! (penalty; [`tie`] gives the block of one point).
 
 pub mod interface;
+pub mod interface_law;
 pub mod mesh_motion;
 pub mod tie;
 pub mod tie_interface;
