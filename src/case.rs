@@ -382,6 +382,10 @@ pub enum MeshSpec {
         cells: [usize; 2],
         /// `quad4` or `tri3`.
         element: ElementType,
+        /// Rotation (degrees, counter-clockwise) of the rectangle about `origin` (default 0),
+        /// e.g. an inclined slab in an axis-aligned grid.
+        #[serde(default)]
+        rotation: f64,
     },
     /// Structured box.
     Box {
@@ -466,7 +470,8 @@ pub struct InterfaceSpec {
     /// `DEFAULT_TIE_PENALTY_FACTOR · E_soil / h`).
     #[serde(default)]
     pub penalty: Option<f64>,
-    /// Tangential (stick) penalty β_T (Pa/m) of a contact with friction (default β_N).
+    /// Tangential (stick) penalty β_T (Pa/m) of a contact with friction (default
+    /// `DEFAULT_TANGENTIAL_PENALTY_FACTOR · E_soil / h`).
     #[serde(default)]
     pub tangential_penalty: Option<f64>,
     /// Coulomb coefficient μ ≥ 0 of a contact (default 0: frictionless).

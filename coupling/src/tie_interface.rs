@@ -57,7 +57,16 @@
 //! **Penalty.** `β` (Pa/m, β_N of contact) is the case's `interfaces[].penalty`, by default
 //! `DEFAULT_TIE_PENALTY_FACTOR · E_soil / h` (the stiffest body's Young's modulus over the
 //! grid's cell size; see the model builder); contact's tangential `β_T` is
-//! `interfaces[].tangential_penalty`, by default `β_N`.
+//! `interfaces[].tangential_penalty`, by default `DEFAULT_TANGENTIAL_PENALTY_FACTOR · E_soil / h`.
+//!
+//! **Newton.** The stick/slip and open/closed states are those of the iterate (a semi-smooth
+//! Newton method on the exact residual, with the exact tangent of the branch taken). A point
+//! that slides has no tangential stiffness, so a body whose points all slide is held along
+//! the interface only by its inertia, and a Newton correction of a sticking body lands in the
+//! stick band `|t_T^tr| ≤ μ t_N` (of width `μ t_N / β_T` in slip) only if β_T is not orders of
+//! magnitude stiffer than the body: hence the tangential default of `E_soil / h`, a hundredth
+//! of the normal one, with which the sticking block of `cases/block_on_incline_stick.json`
+//! converges (at `β_T = 100 E/h` its iterates cycle between sliding up and down the slope).
 //!
 //! Output: the points as a point cloud named after the interface (`gap`, `traction`,
 //! `normal_gap`, `normal_traction`, `tangential_traction`, `state`: [`Domain::outputs`]).
@@ -79,6 +88,11 @@ use crate::interface_law::{InterfaceLaw, LawResponse, PointState};
 /// the tip of benchmark 12 changes by less than 0.1 % between factors 10 and 1000, see
 /// docs/coupling.md).
 pub const DEFAULT_TIE_PENALTY_FACTOR: f64 = 100.0;
+
+/// Tangential (stick) penalty `β_T = factor · E_soil / h` of a contact when the case gives
+/// none (module doc, "Newton"): the elastic slip while sticking, `t_T / β_T`, is then that of a
+/// soil layer one cell thick under the same shear stress.
+pub const DEFAULT_TANGENTIAL_PENALTY_FACTOR: f64 = 1.0;
 
 /// Functions smaller than this at a point do not tie it to their node.
 const NEGLIGIBLE_FUNCTION: f64 = 1e-12;

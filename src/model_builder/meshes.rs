@@ -14,7 +14,9 @@ use std::sync::Arc;
 
 use loam_coupling::interface::{self as coupling, InterfaceNode, InterfaceRequest, InterfaceSummary, Structure};
 use loam_coupling::interface_law::InterfaceLaw;
-use loam_coupling::tie_interface::{self, TieFacet, TieInterface, DEFAULT_TIE_PENALTY_FACTOR};
+use loam_coupling::tie_interface::{
+    self, TieFacet, TieInterface, DEFAULT_TANGENTIAL_PENALTY_FACTOR, DEFAULT_TIE_PENALTY_FACTOR,
+};
 use loam_fem::dofs::NodeRole;
 use loam_fem::element::ElementType;
 use loam_fem::formulation::Formulation;
@@ -121,7 +123,7 @@ struct GridGroup<'a> {
 pub(super) fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh, CaseError> {
     let dim = case.formulation.dim();
     let mesh = match spec {
-        MeshSpec::Rectangle { origin, size, cells, element } => {
+        MeshSpec::Rectangle { origin, size, cells, element, rotation } => {
             for (i, s) in size.iter().enumerate() {
                 check_positive(&format!("{loc}.rectangle.size[{i}]"), *s)?;
             }
@@ -135,7 +137,19 @@ pub(super) fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh
                 return Err(CaseError::new(format!("{loc}.rectangle.element"), "a rectangle takes quad4 or tri3"));
             }
             check_block_size(case, &format!("{loc}.rectangle.cells"), cells, *element)?;
-            Mesh::rectangle(*origin, *size, *cells, *element)
+            if !rotation.is_finite() {
+                return Err(CaseError::new(format!("{loc}.rectangle.rotation"), "must be a finite angle in degrees"));
+            }
+            let mut mesh = Mesh::rectangle(*origin, *size, *cells, *element);
+            if *rotation != 0.0 {
+                let (sin, cos) = rotation.to_radians().sin_cos();
+                for x in &mut mesh.coords {
+                    let (dx, dy) = (x[0] - origin[0], x[1] - origin[1]);
+                    x[0] = origin[0] + cos * dx - sin * dy;
+                    x[1] = origin[1] + sin * dx + cos * dy;
+                }
+            }
+            mesh
         }
         MeshSpec::Box { origin, size, cells, element } => {
             for (i, s) in size.iter().enumerate() {
@@ -960,14 +974,17 @@ fn number(
         let (domain, bodies) = grid_domain(case, laws, grid, node_ids, group.bodies)?;
         if let Some((grid, node_ids)) = tie_grid {
             let modulus = domain.bodies().iter().map(|b| young_modulus(b.law().elastic_lame())).fold(0.0, f64::max);
-            let default_penalty = DEFAULT_TIE_PENALTY_FACTOR * modulus / mean_cell_size(&grid.mesh);
+            let stiffness = modulus / mean_cell_size(&grid.mesh);
+            let default_penalty = DEFAULT_TIE_PENALTY_FACTOR * stiffness;
             for t in group.ties {
                 let spec = &case.interfaces[t.interface];
                 let penalty = spec.penalty.unwrap_or(default_penalty);
                 let law = match spec.coupling {
                     InterfaceCoupling::Contact => InterfaceLaw::Contact {
                         normal_penalty: penalty,
-                        tangential_penalty: spec.tangential_penalty.unwrap_or(penalty),
+                        tangential_penalty: spec
+                            .tangential_penalty
+                            .unwrap_or(DEFAULT_TANGENTIAL_PENALTY_FACTOR * stiffness),
                         friction: spec.friction.unwrap_or(0.0),
                     },
                     _ => InterfaceLaw::Tie { penalty },
