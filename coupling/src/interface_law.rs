@@ -161,7 +161,7 @@ impl std::fmt::Display for InterfaceLaw {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match *self {
             InterfaceLaw::Tie { penalty } => write!(f, "non-conforming tie, penalty {penalty:.6e} Pa/m"),
-            InterfaceLaw::Contact { normal_penalty, friction, .. } if friction == 0.0 => {
+            InterfaceLaw::Contact { normal_penalty, friction: 0.0, .. } => {
                 write!(f, "frictionless contact, penalty {normal_penalty:.6e} Pa/m")
             }
             InterfaceLaw::Contact { normal_penalty, tangential_penalty, friction } => write!(
