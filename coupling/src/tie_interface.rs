@@ -51,13 +51,15 @@
 //! linear fields and keep the partition of unity. Otherwise (no such cell; a support
 //! without soil) the point is skipped for the step and its carried gap reset to zero: there
 //! is no soil there to tie to. A contact point whose soil does not press (`g_N ≥ 0`) is open
-//! and carries no gap either: separation is measured within the step, not remembered. The set of active points and their nodes is the domain's sparsity pattern:
-//! `begin_step` reports a change.
+//! and carries no gap either: separation is measured within the step, not remembered. The
+//! set of active points and their nodes is the domain's sparsity pattern: `begin_step`
+//! reports a change.
 //!
 //! **Penalty.** `β` (Pa/m, β_N of contact) is the case's `interfaces[].penalty`, by default
 //! `DEFAULT_TIE_PENALTY_FACTOR · E_soil / h` (the stiffest body's Young's modulus over the
 //! grid's cell size; see the model builder); contact's tangential `β_T` is
-//! `interfaces[].tangential_penalty`, by default `DEFAULT_TANGENTIAL_PENALTY_FACTOR · E_soil / h`.
+//! `interfaces[].tangential_penalty`, by default
+//! `DEFAULT_TANGENTIAL_PENALTY_FACTOR · E_soil / h`.
 //!
 //! **Newton.** The stick/slip and open/closed states are those of the iterate (a semi-smooth
 //! Newton method on the exact residual, with the exact tangent of the branch taken). A point
