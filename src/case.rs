@@ -382,6 +382,10 @@ pub enum MeshSpec {
         cells: [usize; 2],
         /// `quad4` or `tri3`.
         element: ElementType,
+        /// Rotation (degrees, counter-clockwise) of the rectangle about `origin` (default 0),
+        /// e.g. an inclined slab in an axis-aligned grid.
+        #[serde(default)]
+        rotation: f64,
     },
     /// Structured box.
     Box {
@@ -462,9 +466,17 @@ pub struct InterfaceSpec {
     /// How soil and structure are joined (default shared nodes).
     #[serde(default)]
     pub coupling: InterfaceCoupling,
-    /// Penalty β (Pa/m) of a tie (default `DEFAULT_TIE_PENALTY_FACTOR · E_soil / h`).
+    /// Penalty β (Pa/m) of a tie, the normal penalty β_N of a contact (default
+    /// `DEFAULT_TIE_PENALTY_FACTOR · E_soil / h`).
     #[serde(default)]
     pub penalty: Option<f64>,
+    /// Tangential (stick) penalty β_T (Pa/m) of a contact with friction (default
+    /// `DEFAULT_TANGENTIAL_PENALTY_FACTOR · E_soil / h`).
+    #[serde(default)]
+    pub tangential_penalty: Option<f64>,
+    /// Coulomb coefficient μ ≥ 0 of a contact (default 0: frictionless).
+    #[serde(default)]
+    pub friction: Option<f64>,
 }
 
 /// How an interface joins soil and structure.
@@ -479,6 +491,17 @@ pub enum InterfaceCoupling {
     /// the soil interpolated on the fixed grid, which keeps all its cells
     /// (`loam_coupling::tie_interface`).
     Tie,
+    /// Non-conforming penalty contact, unilateral, frictionless or with Coulomb friction
+    /// (`friction`): quadrature points like the tie's (`loam_coupling::interface_law`).
+    Contact,
+}
+
+impl InterfaceCoupling {
+    /// Whether the structure lies in a fixed grid and is joined to it by interface points
+    /// (tie or contact), rather than by shared nodes.
+    pub fn is_non_conforming(self) -> bool {
+        matches!(self, InterfaceCoupling::Tie | InterfaceCoupling::Contact)
+    }
 }
 
 /// Prescribed displacement on a region.

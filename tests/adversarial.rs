@@ -645,6 +645,36 @@ fn named_inputs(dir: &Path, inputs: &mut Vec<Input>) {
             mention: Some("outside the soil's grid".into()),
         },
     );
+    // non-conforming contact (issue 25)
+    let contact = read("block_on_incline_slide.json");
+    case(
+        "contact friction negative",
+        "check",
+        &contact,
+        &|v| v["interfaces"][0]["friction"] = json!(-0.2),
+        bad("interfaces[0].friction"),
+    );
+    case(
+        "friction on a tie",
+        "check",
+        &tied,
+        &|v| v["interfaces"][0]["friction"] = json!(0.3),
+        bad("interfaces[0].friction"),
+    );
+    case(
+        "contact tangential penalty negative",
+        "check",
+        &contact,
+        &|v| v["interfaces"][0]["tangential_penalty"] = json!(-1e9),
+        bad("interfaces[0].tangential_penalty"),
+    );
+    case(
+        "rectangle rotation not a number",
+        "check",
+        &contact,
+        &|v| v["domains"][1]["mesh"]["rectangle"]["rotation"] = json!("thirty"),
+        bad("domains[1].mesh.rectangle.rotation"),
+    );
     // whole files
     let mut file = |name: &str, contents: &[u8], expect: Expect| {
         let f = dir.join(format!("file_{}.json", inputs.len()));

@@ -209,6 +209,7 @@ fn two_domains_sharing_nodes_equal_one_domain() {
         size: [3.5, 1.0],
         cells: [28, 8],
         element: ElementType::Quad4,
+        rotation: 0.0,
     });
     let mut right = left.clone();
     right.name = "right".into();
@@ -217,6 +218,7 @@ fn two_domains_sharing_nodes_equal_one_domain() {
         size: [3.5, 1.0],
         cells: [28, 8],
         element: ElementType::Quad4,
+        rotation: 0.0,
     });
     split.domains = vec![left, right];
     let (s1, h1) = run_to_end(single);

@@ -5,18 +5,8 @@
 
 mod common;
 
-use common::{last, monitor, report, residual_differences, run};
+use common::{last, monitor, ramped_slide, report, residual_differences, run};
 use loam::simulation::Simulation;
-
-const G: f64 = 9.81;
-
-/// Distance of a rigid block sliding down an incline of angle α with friction μ under
-/// gravity ramped linearly from 0 to g over `ramp` s: `x(t) = a (t²/2 − t t_r/2 + t_r²/6)`,
-/// `a = g (sin α − μ cos α)` (t ≥ t_r; the friction follows the normal force, so the block's
-/// acceleration follows the ramp).
-fn ramped_slide(alpha: f64, mu: f64, ramp: f64, t: f64) -> f64 {
-    G * (alpha.sin() - mu * alpha.cos()) * (t * t / 2.0 - t * ramp / 2.0 + ramp * ramp / 6.0)
-}
 
 /// `cases/block_friction_grid_mpm.json`: an elastic block on the grid's base, a slip
 /// boundary with μ_b = 0.3, under gravity tilted by 30°. It slides `x(t)` of the rigid block

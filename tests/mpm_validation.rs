@@ -295,8 +295,13 @@ fn unstructured_grid_with_bin_search_equals_structured_grid() {
         }
         let mut binned = structured.clone();
         binned.domains[0].grid = None;
-        binned.domains[0].grid_mesh =
-            Some(loam::case::MeshSpec::Rectangle { origin: [0.0, -1.5], size: [8.0, 3.0], cells: [64, 24], element });
+        binned.domains[0].grid_mesh = Some(loam::case::MeshSpec::Rectangle {
+            origin: [0.0, -1.5],
+            size: [8.0, 3.0],
+            cells: [64, 24],
+            element,
+            rotation: 0.0,
+        });
         let (s1, h1) = run(structured);
         let (s2, h2) = run(binned);
         let (a, b) = (last(&s1, &h1, "tip_uy"), last(&s2, &h2, "tip_uy"));

@@ -119,6 +119,14 @@ fn tied_beam_resumes_bit_for_bit() {
     resume_equals_uninterrupted("coupled_beam_split_tied", 1, 2, |_| {});
 }
 
+/// The block sliding on the inclined slab by Coulomb contact (dynamic, 100 steps), resumed
+/// after step 50: the contact's carried gaps (the elastic tangential gap of the return
+/// mapping) and its points' tractions and states come back with the checkpoint.
+#[test]
+fn sliding_contact_resumes_bit_for_bit() {
+    resume_equals_uninterrupted("block_on_incline_slide", 25, 50, |_| {});
+}
+
 /// The Bui column collapsing onto the rubber plate (coupled, adaptive, to rest), resumed
 /// after step 300. Long (two runs of about 40 s).
 #[test]

@@ -53,9 +53,9 @@ pub struct InterfaceSummary {
     pub measure: f64,
     /// Whether it is a slip interface.
     pub slip: bool,
-    /// The penalty β (Pa/m) of a non-conforming tie ([`crate::tie_interface`]); `None` for
+    /// The law of a non-conforming tie or contact ([`crate::tie_interface`]); `None` for
     /// shared nodes.
-    pub tie_penalty: Option<f64>,
+    pub law: Option<crate::interface_law::InterfaceLaw>,
 }
 
 /// A grid node on an interface.
@@ -218,7 +218,7 @@ pub fn couple(
             nodes: nodes.len(),
             measure,
             slip: req.slip,
-            tie_penalty: None,
+            law: None,
         });
     }
     for map in &mut on_interface {

@@ -1,5 +1,6 @@
-//! A non-conforming tie between the facets of a structure and the soil of a fixed
-//! background grid (issue 25, the tie law): a [`Domain`] of interface quadrature points.
+//! A non-conforming interface between the facets of a structure and the soil of a fixed
+//! background grid (issue 25: tie, frictionless and Coulomb contact): a [`Domain`] of
+//! interface quadrature points.
 //!
 //! The structure's interface facets (2-node, 2D) carry two Gauss points each, of weight
 //! `w = ½ L₀ t` (Gauss weight on `[0, 1]` × reference facet length × the formulation's
@@ -19,12 +20,19 @@
 //!
 //! the soil material that was at the point at `t_n` moved by the grid's field there, the
 //! structure's point by its own increment; `g_n` is the gap committed at the end of the
-//! last step (the penalty's elastic offset that carries the interface force). The penalty
-//! energy `Π = Σ_p ½ β w_p |g|²` gives the residual `β w N_I g` on the grid nodes and
-//! `−β w φ_a g` on the facet nodes, and the exact tangent `β w (∂g/∂u)ᵀ(∂g/∂u)`
-//! ([`crate::tie::tie_point_block`] with the functions frozen: zero gradients). Because
+//! last step (the penalty's elastic offset that carries the interface force). The point's
+//! law ([`InterfaceLaw`]: tie, or contact with Coulomb friction in the frame of the facet's
+//! outward normal `n` at the start of the step) gives the traction on the structure `T(g)`
+//! and `C = ∂T/∂g`; with `∂g/∂u_I = N_I I`, `∂g/∂u_a = −φ_a I` the point's residual is
+//! `w N_I T` on the grid nodes and `−w φ_a T` on the facet nodes, and its exact tangent
+//! `w (∂g/∂u)ᵀ C (∂g/∂u)` (for the tie `T = β g`: the gradient and Hessian of the penalty
+//! energy `½ β w |g|²`, [`crate::tie::tie_point_block`] with the functions frozen; for
+//! contact unsymmetric while sliding). Because
 //! `N_I` is taken at `x_p^n`, the point does not move in the grid within the step and the
 //! tangent needs no `∂N/∂x`: this is the MPM's own convention, not a simplification of it.
+//! The normal is frozen the same way: a facet that turns by `Δθ` in a step mixes normal and
+//! tangential gap by `Δθ |g|` (the carried gap is kept in global components), a penalty gap
+//! of micrometres against rotations of milliradians per step.
 //! (Evaluating `N_I` at the current position `x_p^n + Δu_S` instead would tie the soil
 //! that started where the structure ends, a different material point, off by
 //! `∇Δu · Δu_S` per step; the moving-point tangent of [`crate::tie`], which needs the
@@ -42,15 +50,28 @@
 //! other nodes as those of a hole's removed nodes ([`loam_mpm::basis`]). Both reproduce
 //! linear fields and keep the partition of unity. Otherwise (no such cell; a support
 //! without soil) the point is skipped for the step and its carried gap reset to zero: there
-//! is no soil there to tie to. The set of active points and their nodes is the domain's sparsity pattern:
-//! `begin_step` reports a change.
+//! is no soil there to tie to. A contact point whose soil does not press (`g_N ≥ 0`) is open
+//! and carries no gap either: separation is measured within the step, not remembered. The
+//! set of active points and their nodes is the domain's sparsity pattern: `begin_step`
+//! reports a change.
 //!
-//! **Penalty.** `β` (Pa/m) is the case's `interfaces[].penalty`, by default
+//! **Penalty.** `β` (Pa/m, β_N of contact) is the case's `interfaces[].penalty`, by default
 //! `DEFAULT_TIE_PENALTY_FACTOR · E_soil / h` (the stiffest body's Young's modulus over the
-//! grid's cell size; see the model builder).
+//! grid's cell size; see the model builder); contact's tangential `β_T` is
+//! `interfaces[].tangential_penalty`, by default
+//! `DEFAULT_TANGENTIAL_PENALTY_FACTOR · E_soil / h`.
+//!
+//! **Newton.** The stick/slip and open/closed states are those of the iterate (a semi-smooth
+//! Newton method on the exact residual, with the exact tangent of the branch taken). A point
+//! that slides has no tangential stiffness, so a body whose points all slide is held along
+//! the interface only by its inertia, and a Newton correction of a sticking body lands in the
+//! stick band `|t_T^tr| ≤ μ t_N` (of width `μ t_N / β_T` in slip) only if β_T is not orders of
+//! magnitude stiffer than the body: hence the tangential default of `E_soil / h`, a hundredth
+//! of the normal one, with which the sticking block of `cases/block_on_incline_stick.json`
+//! converges (at `β_T = 100 E/h` its iterates cycle between sliding up and down the slope).
 //!
 //! Output: the points as a point cloud named after the interface (`gap`, `traction`,
-//! `tied`: [`Domain::outputs`]).
+//! `normal_gap`, `normal_traction`, `tangential_traction`, `state`: [`Domain::outputs`]).
 //!
 //! The domain's residual at the structure's facet nodes is the force the soil exerts on the
 //! structure (`−r`), so it reports itself as soil ([`Domain::is_soil`]): the model's
@@ -59,16 +80,21 @@
 use loam_fem::assembly::BlockLayout;
 use loam_fem::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NamedOutput, NodalState};
 use loam_fem::formulation::Formulation;
-use loam_mpm::grid::{Grid, GridFunction};
+use loam_mpm::grid::Grid;
 use loam_mpm::mpm_domain::SoilNodes;
 
 use crate::interface::{InterfaceError, Structure};
-use crate::tie::tie_point_block;
+use crate::interface_law::{InterfaceLaw, LawResponse, PointState};
 
 /// Penalty `β = factor · E_soil / h` of a tie when the case gives none (see the module doc;
 /// the tip of benchmark 12 changes by less than 0.1 % between factors 10 and 1000, see
 /// docs/coupling.md).
 pub const DEFAULT_TIE_PENALTY_FACTOR: f64 = 100.0;
+
+/// Tangential (stick) penalty `β_T = factor · E_soil / h` of a contact when the case gives
+/// none (module doc, "Newton"): the elastic slip while sticking, `t_T / β_T`, is then that of a
+/// soil layer one cell thick under the same shear stress.
+pub const DEFAULT_TANGENTIAL_PENALTY_FACTOR: f64 = 1.0;
 
 /// Functions smaller than this at a point do not tie it to their node.
 const NEGLIGIBLE_FUNCTION: f64 = 1e-12;
@@ -96,23 +122,28 @@ struct TiePoint {
 }
 
 /// A point active at this step: the grid nodes (grid numbering) whose functions are non-zero
-/// at its position at the start of the step, and those functions' values.
+/// at its position at the start of the step, those functions' values, and its facet's
+/// outward unit normal at the start of the step.
 #[derive(Debug, Clone, PartialEq)]
 struct ActivePoint {
     point: usize,
     nodes: Vec<usize>,
     values: Vec<f64>,
+    normal: [f64; 2],
 }
 
 /// The committed state beyond the nodal unknowns.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct TieState {
     gaps: Vec<[f64; 2]>,
+    tractions: Vec<[f64; 2]>,
+    states: Vec<PointState>,
     force: [f64; 2],
     energy: f64,
 }
 
-/// A penalty tie between a structure's facets and a fixed grid (see the module doc).
+/// A penalty tie or contact between a structure's facets and a fixed grid (see the module
+/// doc).
 pub struct TieInterface {
     name: String,
     formulation: Formulation,
@@ -122,22 +153,26 @@ pub struct TieInterface {
     soil_nodes: SoilNodes,
     facets: Vec<TieFacet>,
     points: Vec<TiePoint>,
-    penalty: f64,
+    law: InterfaceLaw,
     /// Per point, the gap `g_n` committed at the end of the last step.
     gaps: Vec<[f64; 2]>,
+    /// Per point, the traction on the structure (Pa) and the state at the end of the last
+    /// step (output).
+    tractions: Vec<[f64; 2]>,
+    states: Vec<PointState>,
     /// The points active at this step, in block order.
     active: Vec<ActivePoint>,
-    /// Force (N) the soil exerted on the structure through the tie in the last converged
-    /// step, `Σ_p β w_p g_p`.
+    /// Force (N) the soil exerted on the structure through the interface in the last
+    /// converged step, `Σ_p w_p T_p`.
     force: [f64; 2],
-    /// Penalty energy `Σ_p ½ β w_p |g_p|²` at the last converged step.
+    /// Penalty energy `Σ_p w_p ψ_p` at the last converged step ([`LawResponse::energy`]).
     energy: f64,
 }
 
 impl TieInterface {
-    /// A tie named `name` of the structure's `facets` to the soil on `grid` (fixed, not
-    /// attached to any structure), whose node `a` is global node `grid_ids[a]` and whose
-    /// reached nodes `soil_nodes` reports, with penalty `β` (Pa/m). 2D only.
+    /// An interface named `name` of the structure's `facets` to the soil on `grid` (fixed,
+    /// not attached to any structure), whose node `a` is global node `grid_ids[a]` and whose
+    /// reached nodes `soil_nodes` reports, with the point law `law`. 2D only.
     pub fn new(
         name: &str,
         formulation: Formulation,
@@ -146,7 +181,7 @@ impl TieInterface {
         grid_ids: Vec<usize>,
         soil_nodes: SoilNodes,
         facets: Vec<TieFacet>,
-        penalty: f64,
+        law: InterfaceLaw,
     ) -> Self {
         debug_assert_eq!(grid.mesh.element.dim(), 2, "a tie is 2D");
         let a = 0.5 / 3f64.sqrt();
@@ -170,17 +205,24 @@ impl TieInterface {
             soil_nodes,
             facets,
             points,
-            penalty,
+            law,
             gaps: vec![[0.0; 2]; n],
+            tractions: vec![[0.0; 2]; n],
+            states: vec![PointState::Open; n],
             active: Vec::new(),
             force: [0.0; 2],
             energy: 0.0,
         }
     }
 
-    /// The penalty `β` (Pa/m).
+    /// The penalty `β` (Pa/m; β_N of contact).
     pub fn penalty(&self) -> f64 {
-        self.penalty
+        self.law.penalty()
+    }
+
+    /// The points' law.
+    pub fn law(&self) -> InterfaceLaw {
+        self.law
     }
 
     /// Number of interface quadrature points, and of those active at this step.
@@ -188,8 +230,8 @@ impl TieInterface {
         (self.points.len(), self.active.len())
     }
 
-    /// Force (N) the soil exerted on the structure through the tie in the last converged
-    /// step.
+    /// Force (N) the soil exerted on the structure through the interface in the last
+    /// converged step.
     pub fn force(&self) -> [f64; 2] {
         self.force
     }
@@ -206,14 +248,53 @@ impl TieInterface {
         dofs.chunks(2).map(|d| std::array::from_fn(|k| input.state.u[d[k]] - input.committed.u[d[k]])).collect()
     }
 
-    /// Residual, tangent and gap of an active point at the iterate of `input`.
-    fn point_block(&self, p: &ActivePoint, input: &AssemblyInput<'_>) -> (Vec<f64>, Vec<f64>, [f64; 2]) {
+    /// Residual, tangent and law response of an active point at the iterate of `input`:
+    /// `r = w (∂g/∂u)ᵀ T`, `K = w (∂g/∂u)ᵀ C (∂g/∂u)` with `∂g/∂u_I = N_I I` (grid nodes) and
+    /// `∂g/∂u_a = −φ_a I` (facet nodes), block DOFs `[x, y]` per node as in
+    /// [`TieInterface::block_dofs`].
+    fn point_block(&self, p: &ActivePoint, input: &AssemblyInput<'_>) -> (Vec<f64>, Vec<f64>, LawResponse) {
         let point = &self.points[p.point];
         let du = self.increments(p, input);
         let (grid_du, facet_du) = du.split_at(p.nodes.len());
-        let functions: Vec<GridFunction> =
-            p.values.iter().map(|&value| GridFunction { value, ..GridFunction::default() }).collect();
-        tie_point_block(&functions, self.gaps[p.point], grid_du, &point.phi, facet_du, self.penalty, point.weight)
+        // ∂g/∂u per node (the same factor for both components)
+        let dg: Vec<f64> = p.values.iter().copied().chain(point.phi.iter().map(|phi| -phi)).collect();
+        let mut gap = self.gaps[p.point];
+        for (d, u) in dg.iter().zip(grid_du.iter().chain(facet_du)) {
+            for k in 0..2 {
+                gap[k] += d * u[k];
+            }
+        }
+        let response = self.law.response(gap, p.normal);
+        let nd = 2 * dg.len();
+        let w = point.weight;
+        let residual: Vec<f64> = dg.iter().flat_map(|d| response.traction.map(|t| w * d * t)).collect();
+        let mut tangent = vec![0.0; nd * nd];
+        for (a, da) in dg.iter().enumerate() {
+            for (b, db) in dg.iter().enumerate() {
+                for i in 0..2 {
+                    for j in 0..2 {
+                        tangent[(2 * a + i) * nd + 2 * b + j] = w * da * db * response.tangent[i][j];
+                    }
+                }
+            }
+        }
+        (residual, tangent, response)
+    }
+
+    /// Outward unit normal of point `p`'s facet at the committed state (the facet's nodes run
+    /// counter-clockwise around their element, as [`loam_fem::mesh::Mesh::boundary_facets`]
+    /// gives them).
+    fn committed_normal(&self, p: usize, committed: &NodalState) -> [f64; 2] {
+        let facet = &self.facets[self.points[p].facet];
+        let x: Vec<[f64; 2]> = facet
+            .nodes
+            .iter()
+            .zip(&facet.reference)
+            .map(|(&g, r)| [r[0] + committed.u[2 * g], r[1] + committed.u[2 * g + 1]])
+            .collect();
+        let (dx, dy) = (x[1][0] - x[0][0], x[1][1] - x[0][1]);
+        let length = dx.hypot(dy);
+        [dy / length, -dx / length]
     }
 
     /// The functions at `x` extrapolated from the nodes the soil reaches (module doc): on
@@ -326,7 +407,8 @@ impl Domain for TieInterface {
                 continue;
             };
             let (nodes, values) = functions.into_iter().unzip();
-            active.push(ActivePoint { point: p, nodes, values });
+            let normal = self.committed_normal(p, committed);
+            active.push(ActivePoint { point: p, nodes, values, normal });
         }
         let changed = active.len() != self.active.len()
             || active.iter().zip(&self.active).any(|(a, b)| a.point != b.point || a.nodes != b.nodes);
@@ -371,17 +453,24 @@ impl Domain for TieInterface {
 
     fn commit(&mut self, input: &AssemblyInput<'_>) {
         let (mut force, mut energy) = ([0.0; 2], 0.0);
-        let mut gaps = vec![[0.0; 2]; self.points.len()];
+        let n = self.points.len();
+        let mut gaps = vec![[0.0; 2]; n];
+        let mut tractions = vec![[0.0; 2]; n];
+        let mut states = vec![PointState::Open; n];
         for p in &self.active {
-            let (_, _, gap) = self.point_block(p, input);
-            let bw = self.penalty * self.points[p.point].weight;
+            let (_, _, response) = self.point_block(p, input);
+            let w = self.points[p.point].weight;
             for k in 0..2 {
-                force[k] += bw * gap[k];
+                force[k] += w * response.traction[k];
             }
-            energy += 0.5 * bw * (gap[0] * gap[0] + gap[1] * gap[1]);
-            gaps[p.point] = gap;
+            energy += w * response.energy;
+            gaps[p.point] = response.carried;
+            tractions[p.point] = response.traction;
+            states[p.point] = response.state;
         }
         self.gaps = gaps;
+        self.tractions = tractions;
+        self.states = states;
         self.force = force;
         self.energy = energy;
     }
@@ -400,13 +489,20 @@ impl Domain for TieInterface {
     }
 
     fn save_state(&self) -> Vec<u8> {
-        let state = TieState { gaps: self.gaps.clone(), force: self.force, energy: self.energy };
+        let state = TieState {
+            gaps: self.gaps.clone(),
+            tractions: self.tractions.clone(),
+            states: self.states.clone(),
+            force: self.force,
+            energy: self.energy,
+        };
         bincode::serialize(&state).expect("a tie's state encodes")
     }
 
     fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
         let state: TieState = bincode::deserialize(bytes).map_err(|e| format!("interface '{}': {e}", self.name))?;
-        if state.gaps.len() != self.points.len() {
+        let n = self.points.len();
+        if state.gaps.len() != n || state.tractions.len() != n || state.states.len() != n {
             return Err(format!(
                 "interface '{}': the checkpoint has {} tie points, the case {}",
                 self.name,
@@ -415,33 +511,51 @@ impl Domain for TieInterface {
             ));
         }
         self.gaps = state.gaps;
+        self.tractions = state.tractions;
+        self.states = state.states;
         self.force = state.force;
         self.energy = state.energy;
         Ok(())
     }
 
     /// The interface points as a point cloud named after the interface, at their committed
-    /// positions: `gap` (m), `traction` on the structure `β g` (Pa) and `tied` (1 where the
-    /// point was active in the last step).
+    /// positions, with the state of the last converged step: `gap` (m, the carried gap
+    /// `g_n`), `traction` on the structure `T` (Pa), `normal_gap` `g_N = g · n` (m, negative
+    /// where the soil presses), `normal_traction` (the contact pressure `−T · n`, Pa),
+    /// `tangential_traction` `T · τ` (Pa, `τ = (−n_y, n_x)`), `state` (0 open or without
+    /// soil, 1 tied or sticking, 2 sliding) and, for a tie, `tied` (1 where the point was
+    /// active).
     fn outputs(&self, committed: &NodalState, _with_grid: bool) -> Vec<NamedOutput> {
         let n = self.points.len();
         let points = (0..n).map(|p| self.committed_position(p, committed)).collect();
-        let vector = |scale: f64| self.gaps.iter().flat_map(|g| [scale * g[0], scale * g[1], 0.0]).collect();
-        let mut tied = vec![0.0; n];
-        for p in &self.active {
-            tied[p.point] = 1.0;
-        }
-        let field = |name: &str, components: usize, values: Vec<f64>| Field { name: name.into(), components, values };
-        let output = DomainOutput {
-            points,
-            cells: None,
-            point_fields: vec![
-                field("gap", 3, vector(1.0)),
-                field("traction", 3, vector(self.penalty)),
-                field("tied", 1, tied),
-            ],
-            cell_fields: Vec::new(),
+        let normals: Vec<[f64; 2]> = (0..n).map(|p| self.committed_normal(p, committed)).collect();
+        let vector = |v: &[[f64; 2]]| v.iter().flat_map(|g| [g[0], g[1], 0.0]).collect();
+        let along = |v: &[[f64; 2]], scale: f64, tangential: bool| {
+            v.iter()
+                .zip(&normals)
+                .map(|(v, n)| {
+                    let d = if tangential { [-n[1], n[0]] } else { *n };
+                    scale * (v[0] * d[0] + v[1] * d[1])
+                })
+                .collect()
         };
+        let field = |name: &str, components: usize, values: Vec<f64>| Field { name: name.into(), components, values };
+        let mut point_fields = vec![
+            field("gap", 3, vector(&self.gaps)),
+            field("traction", 3, vector(&self.tractions)),
+            field("normal_gap", 1, along(&self.gaps, 1.0, false)),
+            field("normal_traction", 1, along(&self.tractions, -1.0, false)),
+            field("tangential_traction", 1, along(&self.tractions, 1.0, true)),
+            field("state", 1, self.states.iter().map(|s| s.code()).collect()),
+        ];
+        if !self.law.is_contact() {
+            let mut tied = vec![0.0; n];
+            for p in &self.active {
+                tied[p.point] = 1.0;
+            }
+            point_fields.push(field("tied", 1, tied));
+        }
+        let output = DomainOutput { points, cells: None, point_fields, cell_fields: Vec::new() };
         vec![NamedOutput { name: self.name.clone(), output }]
     }
 }
@@ -476,43 +590,48 @@ mod tests {
         AssemblyInput::static_tangent(state, committed)
     }
 
-    /// A bilinear grid of 4 × 2 cells (h = 0.1) and an inclined two-facet structure
-    /// boundary across it, displaced at the start of the step, with a carried gap from a
-    /// first step: the assembled tangent of the whole domain against central differences
-    /// of its residual; and the force on the structure equal and opposite to the grid's.
-    #[test]
-    fn assembled_tangent_matches_central_differences() {
+    /// A bilinear grid of 4 × 2 cells (h = 0.1) and an inclined three-facet structure
+    /// boundary across it with the point law `law`, displaced at the start of the step, with
+    /// a carried gap from a first step: the assembled tangent of the whole domain against
+    /// central differences of its residual (the largest relative error returned); the force
+    /// on the structure equal and opposite to the grid's; the points' states at the iterate.
+    fn check_domain_tangent(law: InterfaceLaw, amplitude: f64) -> (f64, Vec<PointState>) {
         let grid = Grid::new([0.0; 3], [0.4, 0.2, 0.0], [4, 2, 1], ElementType::Quad4);
         let grid_nodes = grid.mesh.coords.len();
         let ids: Vec<usize> = (0..grid_nodes).collect();
         let soil: SoilNodes = Arc::new(RwLock::new(vec![true; grid_nodes]));
         let s = grid_nodes;
-        let reference = [[0.13, 0.02], [0.19, 0.09], [0.27, 0.17]];
-        let facets = vec![
-            TieFacet { nodes: [s, s + 1], reference: [reference[0], reference[1]] },
-            TieFacet { nodes: [s + 1, s + 2], reference: [reference[1], reference[2]] },
-        ];
-        let mut tie = TieInterface::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil, facets, 3.0e9);
-        let n = 2 * (grid_nodes + 3);
+        let reference = [[0.13, 0.02], [0.19, 0.09], [0.27, 0.17], [0.36, 0.11]];
+        let facets = (0..3)
+            .map(|f| TieFacet { nodes: [s + f, s + f + 1], reference: [reference[f], reference[f + 1]] })
+            .collect();
+        let mut tie = TieInterface::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil, facets, law);
+        let n = 2 * (grid_nodes + 4);
         let wave = |k: usize, a: f64| a * ((k * 7 + 3) as f64).sin();
         // step 1 from rest, committed: a gap to carry
         let mut committed = NodalState::zeros(n);
         assert!(tie.begin_step(&mut committed).unwrap(), "the first pattern");
         let mut state = committed.clone();
-        state.u.iter_mut().enumerate().for_each(|(k, u)| *u = wave(k, 0.004));
+        state.u.iter_mut().enumerate().for_each(|(k, u)| *u = wave(k, 4.0 * amplitude));
         tie.commit(&input(&state, &committed));
-        assert!(tie.gaps.iter().any(|g| g[0].abs() > 1e-4), "a gap is carried");
+        assert!(tie.gaps.iter().any(|g| g[0].abs() > 1e-2 * amplitude), "a gap is carried");
         // step 2: the structure at its committed place, the grid reset
         committed.u.clone_from(&state.u);
         committed.u[..2 * grid_nodes].fill(0.0);
         tie.begin_step(&mut committed).unwrap();
-        assert_eq!(tie.num_points(), (4, 4));
+        assert_eq!(tie.num_points(), (6, 6));
         let mut u = committed.clone();
-        u.u.iter_mut().enumerate().for_each(|(k, v)| *v += wave(k + 5, 0.003));
+        u.u.iter_mut().enumerate().for_each(|(k, v)| *v += wave(k + 5, 3.0 * amplitude));
+        // the soil moved down by 0.3 amplitudes: it leaves some of the facets (their normals
+        // point down)
+        for a in 0..grid_nodes {
+            u.u[2 * a + 1] -= 0.3 * amplitude;
+        }
         let (r, k) = assembled(&mut tie, &input(&u, &committed), n);
+        let states = tie.active.iter().map(|p| tie.point_block(p, &input(&u, &committed)).2.state).collect();
         let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let mut worst = 0.0f64;
-        let h = 1e-7;
+        let h = 1e-7 * amplitude / 1e-3;
         for q in 0..n {
             let (mut p, mut m) = (u.clone(), u.clone());
             p.u[q] += h;
@@ -523,13 +642,37 @@ mod tests {
                 worst = worst.max(((rp[i] - rm[i]) / (2.0 * h) - k[i * n + q]).abs() / kmax);
             }
         }
-        println!("tie domain: assembled tangent vs central differences, relative error {worst:.2e}");
-        assert!(worst < 1e-7, "{worst:.2e}");
         // the soil's and the structure's forces balance
         for c in 0..2 {
             let grid_sum: f64 = (0..grid_nodes).map(|a| r[2 * a + c]).sum();
-            let structure_sum: f64 = (grid_nodes..grid_nodes + 3).map(|a| r[2 * a + c]).sum();
+            let structure_sum: f64 = (grid_nodes..grid_nodes + 4).map(|a| r[2 * a + c]).sum();
             assert!((grid_sum + structure_sum).abs() < 1e-9 * grid_sum.abs().max(1.0), "{grid_sum} vs {structure_sum}");
+        }
+        (worst, states)
+    }
+
+    #[test]
+    fn assembled_tangent_matches_central_differences() {
+        let (worst, _) = check_domain_tangent(InterfaceLaw::Tie { penalty: 3.0e9 }, 1e-3);
+        println!("tie domain: assembled tangent vs central differences, relative error {worst:.2e}");
+        assert!(worst < 1e-7, "{worst:.2e}");
+    }
+
+    /// Frictionless and Coulomb contact on the same blocks: the assembled (for friction,
+    /// unsymmetric) tangent against central differences, relative error < 1e-6, with points
+    /// open, sticking and sliding at the iterate.
+    #[test]
+    fn contact_tangent_matches_central_differences() {
+        for friction in [0.0, 0.3] {
+            let law = InterfaceLaw::Contact { normal_penalty: 3.0e9, tangential_penalty: 1.0e9, friction };
+            let (worst, states) = check_domain_tangent(law, 1e-3);
+            println!(
+                "contact μ = {friction}: tangent vs central differences, relative error {worst:.2e}, states {states:?}"
+            );
+            assert!(worst < 1e-6, "{worst:.2e}");
+            let has = |s: PointState| states.contains(&s);
+            assert!(has(PointState::Open) && has(PointState::Slip), "{states:?}");
+            assert!(friction == 0.0 || has(PointState::Stick), "{states:?}");
         }
     }
 
@@ -551,7 +694,8 @@ mod tests {
             let facets =
                 vec![TieFacet { nodes: [grid_nodes, grid_nodes + 1], reference: [[0.05, 0.05], [0.39, 0.19]] }];
             let ids = (0..grid_nodes).collect();
-            let mut tie = TieInterface::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil.clone(), facets, 1.0);
+            let law = InterfaceLaw::Tie { penalty: 1.0 };
+            let mut tie = TieInterface::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil.clone(), facets, law);
             let mut committed = NodalState::zeros(2 * (grid_nodes + 2));
             tie.begin_step(&mut committed).unwrap();
             assert_eq!(tie.num_points(), (2, 2));

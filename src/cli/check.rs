@@ -25,8 +25,8 @@ pub fn check_command(case: &Path) -> ExitCode {
                 println!(
                     "  interface '{}': {}, {} nodes, {} {:.6} {}",
                     i.name,
-                    match (i.tie_penalty, i.slip) {
-                        (Some(beta), _) => format!("non-conforming tie, penalty {beta:.6e} Pa/m"),
+                    match (i.law, i.slip) {
+                        (Some(law), _) => law.to_string(),
                         (None, true) => "frictionless slip".into(),
                         (None, false) => "tied".into(),
                     },

@@ -13,7 +13,10 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use loam_coupling::interface::{self as coupling, InterfaceNode, InterfaceRequest, InterfaceSummary, Structure};
-use loam_coupling::tie_interface::{self, TieFacet, TieInterface, DEFAULT_TIE_PENALTY_FACTOR};
+use loam_coupling::interface_law::InterfaceLaw;
+use loam_coupling::tie_interface::{
+    self, TieFacet, TieInterface, DEFAULT_TANGENTIAL_PENALTY_FACTOR, DEFAULT_TIE_PENALTY_FACTOR,
+};
 use loam_fem::dofs::NodeRole;
 use loam_fem::element::ElementType;
 use loam_fem::formulation::Formulation;
@@ -120,7 +123,7 @@ struct GridGroup<'a> {
 pub(super) fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh, CaseError> {
     let dim = case.formulation.dim();
     let mesh = match spec {
-        MeshSpec::Rectangle { origin, size, cells, element } => {
+        MeshSpec::Rectangle { origin, size, cells, element, rotation } => {
             for (i, s) in size.iter().enumerate() {
                 check_positive(&format!("{loc}.rectangle.size[{i}]"), *s)?;
             }
@@ -134,7 +137,19 @@ pub(super) fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh
                 return Err(CaseError::new(format!("{loc}.rectangle.element"), "a rectangle takes quad4 or tri3"));
             }
             check_block_size(case, &format!("{loc}.rectangle.cells"), cells, *element)?;
-            Mesh::rectangle(*origin, *size, *cells, *element)
+            if !rotation.is_finite() {
+                return Err(CaseError::new(format!("{loc}.rectangle.rotation"), "must be a finite angle in degrees"));
+            }
+            let mut mesh = Mesh::rectangle(*origin, *size, *cells, *element);
+            if *rotation != 0.0 {
+                let (sin, cos) = rotation.to_radians().sin_cos();
+                for x in &mut mesh.coords {
+                    let (dx, dy) = (x[0] - origin[0], x[1] - origin[1]);
+                    x[0] = origin[0] + cos * dx - sin * dy;
+                    x[1] = origin[1] + sin * dx + cos * dy;
+                }
+            }
+            mesh
         }
         MeshSpec::Box { origin, size, cells, element } => {
             for (i, s) in size.iter().enumerate() {
@@ -773,22 +788,47 @@ fn couple_grids(
                 };
                 CaseError::new(format!("{loc}.region"), message)
             })?;
-        if spec.coupling == InterfaceCoupling::Tie {
+        if spec.coupling != InterfaceCoupling::Contact {
+            let only_contact = |key: &str| {
+                Err(CaseError::new(
+                    format!("{loc}.{key}"),
+                    format!("only a contact (coupling \"contact\") takes {key}"),
+                ))
+            };
+            if spec.friction.is_some() {
+                return only_contact("friction");
+            }
+            if spec.tangential_penalty.is_some() {
+                return only_contact("tangential_penalty");
+            }
+        }
+        if spec.coupling.is_non_conforming() {
             let refuse = |key: &str, why: &str| Err(CaseError::new(format!("{loc}.{key}"), why.to_string()));
             if spec.slip {
                 return refuse(
                     "slip",
-                    "a tie (coupling \"tie\") is bilateral and without slip; slip is for shared nodes",
+                    "a tie is bilateral and without slip, a contact slides by its friction: slip is for shared nodes",
                 );
             }
             if spec.band.is_some() {
                 return refuse(
                     "band",
-                    "a tie leaves the grid fixed: band is for shared nodes (coupling \"shared_nodes\")",
+                    "a tie or contact leaves the grid fixed: band is for shared nodes (coupling \"shared_nodes\")",
                 );
             }
             if let Some(beta) = spec.penalty {
                 check_positive(&format!("{loc}.penalty"), beta)?;
+            }
+            if let Some(beta) = spec.tangential_penalty {
+                check_positive(&format!("{loc}.tangential_penalty"), beta)?;
+            }
+            if let Some(mu) = spec.friction {
+                if !(mu.is_finite() && mu >= 0.0) {
+                    return Err(CaseError::new(
+                        format!("{loc}.friction"),
+                        format!("must be a Coulomb coefficient ≥ 0 (0: frictionless), got {mu}"),
+                    ));
+                }
             }
             let view = Structure { name: &spec.structure, mesh };
             let (facets, length) = tie_interface::tie_facets(&view, &nodes, &groups[g].grid)
@@ -799,7 +839,7 @@ fn couple_grids(
         if spec.penalty.is_some() {
             return Err(CaseError::new(
                 format!("{loc}.penalty"),
-                "only a tie (coupling \"tie\") takes a penalty; shared nodes need none",
+                "only a tie or contact (coupling \"tie\" or \"contact\") takes a penalty; shared nodes need none",
             ));
         }
         if let Some(band) = spec.band {
@@ -813,7 +853,7 @@ fn couple_grids(
             return Err(CaseError::new(
                 format!("interfaces[{}].coupling", tie.interface),
                 format!(
-                    "a tie needs a fixed grid, and '{soil}' is attached to a structure by shared nodes (interfaces[{}]): one kind of interface per grid",
+                    "a tie or contact needs a fixed grid, and '{soil}' is attached to a structure by shared nodes (interfaces[{}]): one kind of interface per grid",
                     shared.0
                 ),
             ));
@@ -934,10 +974,21 @@ fn number(
         let (domain, bodies) = grid_domain(case, laws, grid, node_ids, group.bodies)?;
         if let Some((grid, node_ids)) = tie_grid {
             let modulus = domain.bodies().iter().map(|b| young_modulus(b.law().elastic_lame())).fold(0.0, f64::max);
-            let default_penalty = DEFAULT_TIE_PENALTY_FACTOR * modulus / mean_cell_size(&grid.mesh);
+            let stiffness = modulus / mean_cell_size(&grid.mesh);
+            let default_penalty = DEFAULT_TIE_PENALTY_FACTOR * stiffness;
             for t in group.ties {
                 let spec = &case.interfaces[t.interface];
                 let penalty = spec.penalty.unwrap_or(default_penalty);
+                let law = match spec.coupling {
+                    InterfaceCoupling::Contact => InterfaceLaw::Contact {
+                        normal_penalty: penalty,
+                        tangential_penalty: spec
+                            .tangential_penalty
+                            .unwrap_or(DEFAULT_TANGENTIAL_PENALTY_FACTOR * stiffness),
+                        friction: spec.friction.unwrap_or(0.0),
+                    },
+                    _ => InterfaceLaw::Tie { penalty },
+                };
                 let ids = ids_of_structure[&t.structure];
                 let mesh = &meshes[fem_list.iter().position(|(k, _)| *k == t.structure).expect("an fem domain")];
                 let facets: Vec<TieFacet> = t
@@ -956,7 +1007,7 @@ fn number(
                     nodes: nodes.len(),
                     measure: t.length,
                     slip: false,
-                    tie_penalty: Some(penalty),
+                    law: Some(law),
                 };
                 interfaces[t.interface] = Some(ResolvedInterface { summary, part: part_key, soil_nodes: nodes });
                 ties.push(TieInterface::new(
@@ -967,7 +1018,7 @@ fn number(
                     node_ids.clone(),
                     domain.soil_nodes(),
                     facets,
-                    penalty,
+                    law,
                 ));
             }
         }

@@ -185,7 +185,7 @@ fn check_output_names(case: &Case) -> Result<(), CaseError> {
         add(format!("domains[{k}].name"), &d.name)?;
     }
     for (k, interface) in case.interfaces.iter().enumerate() {
-        if interface.coupling == crate::case::InterfaceCoupling::Tie {
+        if interface.coupling.is_non_conforming() {
             add(format!("interfaces[{k}].name"), &interface.name)?;
         }
     }

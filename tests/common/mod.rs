@@ -90,6 +90,14 @@ pub fn report(what: &str, measured: f64, reference: f64, tolerance: f64) {
     assert!(err <= tolerance, "{what}: error {err} above {tolerance}");
 }
 
+/// Distance of a rigid block sliding down an incline of angle α with friction μ under
+/// gravity ramped linearly from 0 to g = 9.81 m/s² over `ramp` s:
+/// `x(t) = a (t²/2 − t t_r/2 + t_r²/6)`, `a = g (sin α − μ cos α)` (t ≥ t_r; the friction
+/// follows the normal force, so the block's acceleration follows the ramp).
+pub fn ramped_slide(alpha: f64, mu: f64, ramp: f64, t: f64) -> f64 {
+    9.81 * (alpha.sin() - mu * alpha.cos()) * (t * t / 2.0 - t * ramp / 2.0 + ramp * ramp / 6.0)
+}
+
 /// Frequency of an oscillation from the downward crossings of its mean.
 pub fn frequency(h: &[(f64, f64)]) -> f64 {
     let mean = h.iter().map(|r| r.1).sum::<f64>() / h.len() as f64;

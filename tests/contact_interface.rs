@@ -1,0 +1,240 @@
+//! Issue 25, non-conforming contact (items 2 and 5): an elastic MPM block on an FEM slab
+//! inclined 30° against the axis-aligned, unmoved grid (`cases/block_on_incline_slide.json`,
+//! μ = 0.2, and `cases/block_on_incline_stick.json`, μ = 0.7), joined by the penalty contact
+//! of `loam_coupling::interface_law` with Coulomb friction; gravity vertical, ramped over
+//! t_r = 0.05 s. The closed form is the rigid block's: it slides by
+//! `x(t) = a (t²/2 − t t_r/2 + t_r²/6)`, `a = g (sin α − μ cos α)` (`½ a t²` delayed by the
+//! ramp), and does not move for μ ≥ tan α. The block's displacement is that of its centre of
+//! mass (the mean of its material points, which have equal masses), so its elastic
+//! deformation (micrometres: the sticking block's centre moves 2e-5 m in all) and the
+//! penalty gaps enter as they are; nothing is subtracted. The tangents of the contact law and
+//! of the assembled interface domain against central differences are unit tests of
+//! `loam_coupling` (`interface_law`, `tie_interface`).
+
+mod common;
+
+use common::{case, case_json, monitor, parse, ramped_slide, report, run, History};
+use loam::simulation::Simulation;
+use loam_fem::domain::PointQuantity;
+
+/// Slope angle α (rad), the gravity ramp (s), the block's weight (N/m: ρ g × 0.3 m × 0.15 m).
+const ALPHA_DEG: f64 = 30.0;
+const RAMP: f64 = 0.05;
+const WEIGHT: f64 = 1000.0 * 9.81 * 0.3 * 0.15;
+
+/// Displacement of the block's centre of mass along the slope, downhill positive: the mean
+/// displacement of the material points of domain 0 (the block) projected on
+/// `d = (cos α, −sin α)`.
+fn centre_along_slope(sim: &Simulation) -> f64 {
+    let block = &sim.model.domains[0];
+    let ids = block.points_in_box(&[f64::MIN; 2], &[f64::MAX; 2]);
+    assert!(!ids.is_empty(), "the block has material points");
+    let (sin, cos) = ALPHA_DEG.to_radians().sin_cos();
+    let sum: f64 = ids
+        .iter()
+        .map(|&id| {
+            let u = block.point_quantity(id, PointQuantity::Displacement).expect("displacement");
+            u[0] * cos - u[1] * sin
+        })
+        .sum();
+    sum / ids.len() as f64
+}
+
+/// The force of the block on the slab (`interface_force_x/y`) in the slab's frame over the
+/// rows of `h`: mean of its component into the slab (the normal force) and of its component
+/// down the slope (the friction that drags the slab).
+fn mean_normal_and_friction(sim: &Simulation, h: &[(f64, Vec<f64>)]) -> (f64, f64) {
+    let (fx, fy) = (monitor(sim, "interface_force_x"), monitor(sim, "interface_force_y"));
+    let (sin, cos) = ALPHA_DEG.to_radians().sin_cos();
+    let n = h.len() as f64;
+    let normal = h.iter().map(|r| -(r.1[fx] * sin + r.1[fy] * cos)).sum::<f64>() / n;
+    let friction = h.iter().map(|r| r.1[fx] * cos - r.1[fy] * sin).sum::<f64>() / n;
+    (normal, friction)
+}
+
+/// The block run with friction `mu` (the slide case otherwise).
+fn run_with_friction(mu: f64) -> (Simulation, History) {
+    let mut json = case_json("block_on_incline_slide.json");
+    json["interfaces"][0]["friction"] = serde_json::json!(mu);
+    run(parse(json))
+}
+
+/// μ = 0.2: the centre of mass slides `x(t)` within 2 % at 0.5 s (0.362 m), and over the
+/// second half the slab carries the block's normal weight `W cos α` and the friction
+/// `μ W cos α` within 1 %; with gravity applied at once, `½ a t²` (0.401 m) within 2 %;
+/// frictionless (μ = 0) the block slides `x(t)` with
+/// `a = g sin α` within 2 %, and the interface carries no force along the slope.
+#[test]
+fn block_slides_down_the_incline_by_coulomb_friction() {
+    let alpha = ALPHA_DEG.to_radians();
+    let (sim, h) = run(case("block_on_incline_slide.json"));
+    let t = h.last().unwrap().0;
+    let slide = centre_along_slope(&sim);
+    report(
+        &format!("μ = 0.2: centre of mass down the 30° slab at t = {t} s [m]"),
+        slide,
+        ramped_slide(alpha, 0.2, RAMP, t),
+        0.02,
+    );
+    let (normal, friction) = mean_normal_and_friction(&sim, &h[h.len() / 2..]);
+    report("μ = 0.2: normal force on the slab, second half [N/m]", normal, WEIGHT * alpha.cos(), 0.01);
+    report("μ = 0.2: friction over normal force, second half", friction / normal, 0.2, 0.01);
+
+    // gravity applied at once (no ramp): ½ a t² itself; the block's normal vibration (its
+    // pressure swings about W cos α) leaves the mean friction, and so the slide, unchanged
+    let mut json = case_json("block_on_incline_slide.json");
+    json["gravity"].as_object_mut().unwrap().remove("amplitude");
+    let (sim, h) = run(parse(json));
+    let t = h.last().unwrap().0;
+    let a = 9.81 * (alpha.sin() - 0.2 * alpha.cos());
+    report(
+        &format!("μ = 0.2, gravity at once: centre of mass at t = {t} s vs ½ a t² [m]"),
+        centre_along_slope(&sim),
+        0.5 * a * t * t,
+        0.02,
+    );
+
+    let (sim, h) = run_with_friction(0.0);
+    let t = h.last().unwrap().0;
+    report(
+        &format!("μ = 0: centre of mass down the 30° slab at t = {t} s [m]"),
+        centre_along_slope(&sim),
+        ramped_slide(alpha, 0.0, RAMP, t),
+        0.02,
+    );
+    let (normal, friction) = mean_normal_and_friction(&sim, &h[h.len() / 2..]);
+    println!(
+        "μ = 0: mean force along the slope {friction:.3e} N/m against the normal {normal:.1} N/m (asserted < 1e-6)"
+    );
+    assert!(friction.abs() < 1e-6 * normal, "a frictionless contact carries no tangential force");
+}
+
+/// μ = 0.7 > tan 30° = 0.577: the block sticks. Its centre of mass moves less than 1 % of the
+/// μ = 0.2 slide at the same time (what moves is the block's elastic deformation and the
+/// penalty's elastic slip), and the slab carries the whole weight, `W` downwards, within 1 %
+/// (mean over the second half).
+#[test]
+fn block_sticks_on_the_incline_for_friction_above_tan_alpha() {
+    let alpha = ALPHA_DEG.to_radians();
+    let (sim, h) = run(case("block_on_incline_stick.json"));
+    let t = h.last().unwrap().0;
+    let moved = centre_along_slope(&sim);
+    let slide = ramped_slide(alpha, 0.2, RAMP, t);
+    println!(
+        "μ = 0.7 ≥ tan α: centre of mass moved {:.3} mm along the slope by t = {t} s (μ = 0.2 slides {:.0} mm; asserted < 1 %)",
+        moved * 1e3,
+        slide * 1e3
+    );
+    assert!(moved.abs() < 0.01 * slide, "the block must stick");
+    let rows = &h[h.len() / 2..];
+    let fy = monitor(&sim, "interface_force_y");
+    let carried = -rows.iter().map(|r| r.1[fy]).sum::<f64>() / rows.len() as f64;
+    report("μ = 0.7: vertical force on the slab = the block's weight, second half [N/m]", carried, WEIGHT, 0.01);
+}
+
+/// The return mapping starts from the committed state of the step, so the converged answer
+/// does not depend on the Newton path: the sliding block with a line search (other
+/// iterates) ends where it ends without, to 1e-6 of the slide.
+#[test]
+fn converged_slide_does_not_depend_on_the_newton_path() {
+    let plain = centre_along_slope(&run(case("block_on_incline_slide.json")).0);
+    let mut json = case_json("block_on_incline_slide.json");
+    json["solver"]["line_search"] = serde_json::json!(true);
+    let searched = centre_along_slope(&run(parse(json)).0);
+    println!("slide with Newton {plain:.9} m, with a line search {searched:.9} m (asserted within 1e-6 relative)");
+    assert!((plain - searched).abs() < 1e-6 * plain.abs());
+}
+
+/// `loam check` reports the contact with its law and penalties, and refuses with one line
+/// naming the key (exit 2): `friction < 0`, friction on a tie, a non-positive
+/// `tangential_penalty`, an unknown `coupling`.
+#[test]
+fn check_reports_the_contact_and_refuses_bad_keys() {
+    let dir = std::env::temp_dir().join(format!("loam_contact_check_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let check = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut json = case_json("block_on_incline_slide.json");
+        edit(&mut json);
+        let file = dir.join(format!("{name}.json"));
+        std::fs::write(&file, json.to_string()).unwrap();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_loam")).arg("check").arg(&file).output().unwrap();
+        let text = |b: &[u8]| String::from_utf8_lossy(b).trim().to_string();
+        (out.status.code().unwrap_or(-1), text(&out.stdout), text(&out.stderr))
+    };
+    let (code, stdout, _) = check("ok", &|_| {});
+    println!("{stdout}");
+    assert_eq!(code, 0);
+    assert!(stdout.contains(
+        "interface 'bed': Coulomb contact, friction 0.2, penalty 2.000000e10 Pa/m, tangential penalty 2.000000e8 Pa/m"
+    ));
+    for (name, key, edit) in [
+        (
+            "negative friction",
+            "interfaces[0].friction",
+            &(|v: &mut serde_json::Value| v["interfaces"][0]["friction"] = serde_json::json!(-0.1))
+                as &dyn Fn(&mut serde_json::Value),
+        ),
+        ("friction on a tie", "interfaces[0].friction", &|v: &mut serde_json::Value| {
+            v["interfaces"][0]["coupling"] = serde_json::json!("tie")
+        }),
+        ("tangential penalty 0", "interfaces[0].tangential_penalty", &|v: &mut serde_json::Value| {
+            v["interfaces"][0]["tangential_penalty"] = serde_json::json!(0.0)
+        }),
+        ("unknown coupling", "interfaces[0].coupling", &|v: &mut serde_json::Value| {
+            v["interfaces"][0]["coupling"] = serde_json::json!("velcro")
+        }),
+    ] {
+        let (code, _, stderr) = check(name, edit);
+        println!("{name}: exit {code}: {stderr}");
+        assert_eq!(code, 2, "{name}");
+        assert_eq!(stderr.lines().count(), 1, "{name}: one line");
+        assert!(stderr.contains(key), "{name}: names {key}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Unilateral: with gravity reversed (upwards, ramped) the contact releases the block — no
+/// force at any step, and the block rises as in free flight, `x(t)` of the ramped gravity
+/// along the vertical within 1 % at 0.1 s — while a tie (`coupling: "tie"`) on the same
+/// points holds it: it moves less than 1 % of that, and the tie carries its weight.
+#[test]
+fn contact_releases_a_block_pulled_away_that_a_tie_holds() {
+    let rise = |sim: &Simulation| {
+        let block = &sim.model.domains[0];
+        let ids = block.points_in_box(&[f64::MIN; 2], &[f64::MAX; 2]);
+        ids.iter()
+            .map(|&id| block.point_quantity(id, PointQuantity::Displacement).expect("displacement")[1])
+            .sum::<f64>()
+            / ids.len() as f64
+    };
+    let pulled = |coupling: &str| {
+        let mut json = case_json("block_on_incline_slide.json");
+        json["gravity"]["acceleration"] = serde_json::json!([0.0, 9.81]);
+        json["analysis"]["end_time"] = serde_json::json!(0.1);
+        json["interfaces"][0]["coupling"] = serde_json::json!(coupling);
+        if coupling == "tie" {
+            json["interfaces"][0].as_object_mut().unwrap().remove("friction");
+        }
+        run(parse(json))
+    };
+    let (sim, h) = pulled("contact");
+    let t = h.last().unwrap().0;
+    let free = ramped_slide(std::f64::consts::FRAC_PI_2, 0.0, RAMP, t);
+    let (fx, fy) = (monitor(&sim, "interface_force_x"), monitor(&sim, "interface_force_y"));
+    let largest = h.iter().map(|r| r.1[fx].abs().max(r.1[fy].abs())).fold(0.0, f64::max);
+    println!("contact, gravity upwards: largest interface force over the run {largest:.3e} N/m (asserted 0)");
+    assert_eq!(largest, 0.0, "a released contact carries no force");
+    report(&format!("contact, gravity upwards: the block's rise at t = {t} s [m]"), rise(&sim), free, 0.01);
+    let (sim, h) = pulled("tie");
+    let held = rise(&sim);
+    println!(
+        "tie, gravity upwards: the block rose {:.4} mm (free flight {:.1} mm; asserted < 1 %)",
+        held * 1e3,
+        free * 1e3
+    );
+    assert!(held.abs() < 0.01 * free, "a tie holds the block");
+    let rows = &h[h.len() / 2..];
+    let fy = monitor(&sim, "interface_force_y");
+    let carried = rows.iter().map(|r| r.1[fy]).sum::<f64>() / rows.len() as f64;
+    report("tie, gravity upwards: the tie's pull on the slab, second half [N/m]", carried, WEIGHT, 0.01);
+}
