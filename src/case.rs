@@ -489,7 +489,7 @@ pub enum InterfaceCoupling {
     SharedNodes,
     /// Non-conforming penalty tie: the structure's facets carry quadrature points tied to
     /// the soil interpolated on the fixed grid, which keeps all its cells
-    /// (`loam_coupling::tie_interface`).
+    /// (`loam_coupling::interface_points`).
     Tie,
     /// Non-conforming penalty contact, unilateral, frictionless or with Coulomb friction
     /// (`friction`): quadrature points like the tie's (`loam_coupling::interface_law`).

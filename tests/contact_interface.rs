@@ -9,7 +9,7 @@
 //! deformation (micrometres: the sticking block's centre moves 2e-5 m in all) and the
 //! penalty gaps enter as they are; nothing is subtracted. The tangents of the contact law and
 //! of the assembled interface domain against central differences are unit tests of
-//! `loam_coupling` (`interface_law`, `tie_interface`).
+//! `loam_coupling` (`interface_law`, `interface_points`).
 
 mod common;
 

@@ -53,7 +53,7 @@ pub struct InterfaceSummary {
     pub measure: f64,
     /// Whether it is a slip interface.
     pub slip: bool,
-    /// The law of a non-conforming tie or contact ([`crate::tie_interface`]); `None` for
+    /// The law of a non-conforming tie or contact ([`crate::interface_points`]); `None` for
     /// shared nodes.
     pub law: Option<crate::interface_law::InterfaceLaw>,
 }

@@ -2,7 +2,7 @@
 //! soil exerts on the structure as a function of the gap, and its derivative.
 //!
 //! The gap `g` (m, a 2D vector) is the soil's displacement at the point less the structure's,
-//! plus the part carried from the last step ([`crate::tie_interface`]: `g = g_n + Δg`,
+//! plus the part carried from the last step ([`crate::interface_points`]: `g = g_n + Δg`,
 //! `Δg = Σ_I N_I Δu_I − Σ_a φ_a Δu_a`). `n` is the structure facet's outward unit normal and
 //! `τ = (−n_y, n_x)` its tangent, both taken at the start of the step; `g_N = g · n`,
 //! `g_T = g · τ`. Each law gives the traction `T(g)` on the structure (the soil's force per

@@ -24,13 +24,13 @@
 
 //!
 //! The second form, for structures that do not fit the grid, is a **non-conforming tie or
-//! contact** ([`tie_interface`]): quadrature points on the structure's interface facets,
+//! contact** ([`interface_points`]): quadrature points on the structure's interface facets,
 //! located in the fixed grid, each an element block over its grid nodes and its facet's
 //! nodes, under a penalty law ([`interface_law`]: bilateral tie, or unilateral contact with
 //! Coulomb friction; [`tie`] gives the moving-point block of a tie).
 
 pub mod interface;
 pub mod interface_law;
+pub mod interface_points;
 pub mod mesh_motion;
 pub mod tie;
-pub mod tie_interface;

@@ -91,7 +91,7 @@ struct CellBlocks {
 /// current step, so that the soil's own terms give it an equation (the others keep their
 /// place by an identity row, or are outside the system): written by
 /// [`MpmDomain::update_pattern`], read by the coupling terms that act on the grid from
-/// outside (a non-conforming tie, `loam_coupling::tie_interface`), whose `begin_step` runs
+/// outside (a non-conforming tie, `loam_coupling::interface_points`), whose `begin_step` runs
 /// after this domain's.
 pub type SoilNodes = Arc<RwLock<Vec<bool>>>;
 

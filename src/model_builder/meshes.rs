@@ -7,15 +7,15 @@
 //! an interface says so (tied), or the partner of one (slip). Any other contact between an
 //! FEM mesh and a grid is refused (`loam_coupling::interface`), but for a non-conforming tie
 //! (`"coupling": "tie"`), whose structure lies in the grid, keeps its own nodes and is
-//! joined to the soil by a [`TieInterface`] placed after every part.
+//! joined to the soil by a [`InterfacePoints`] placed after every part.
 
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use loam_coupling::interface::{self as coupling, InterfaceNode, InterfaceRequest, InterfaceSummary, Structure};
 use loam_coupling::interface_law::InterfaceLaw;
-use loam_coupling::tie_interface::{
-    self, TieFacet, TieInterface, DEFAULT_TANGENTIAL_PENALTY_FACTOR, DEFAULT_TIE_PENALTY_FACTOR,
+use loam_coupling::interface_points::{
+    self, InterfaceFacet, InterfacePoints, DEFAULT_TANGENTIAL_PENALTY_FACTOR, DEFAULT_TIE_PENALTY_FACTOR,
 };
 use loam_fem::dofs::NodeRole;
 use loam_fem::element::ElementType;
@@ -85,7 +85,7 @@ pub(super) struct Discretisation {
     pub interfaces: Vec<ResolvedInterface>,
     /// The non-conforming ties, placed after every part (their initialisation phase reads
     /// what their grid's soil reaches).
-    pub ties: Vec<TieInterface>,
+    pub ties: Vec<InterfacePoints>,
 }
 
 /// A non-conforming tie of a grid, before numbering.
@@ -831,7 +831,7 @@ fn couple_grids(
                 }
             }
             let view = Structure { name: &spec.structure, mesh };
-            let (facets, length) = tie_interface::tie_facets(&view, &nodes, &groups[g].grid)
+            let (facets, length) = interface_points::tie_facets(&view, &nodes, &groups[g].grid)
                 .map_err(|e| CaseError::new(format!("{loc}.region"), e.message))?;
             groups[g].ties.push(TieRequest { interface: k, structure, facets, length });
             continue;
@@ -991,10 +991,10 @@ fn number(
                 };
                 let ids = ids_of_structure[&t.structure];
                 let mesh = &meshes[fem_list.iter().position(|(k, _)| *k == t.structure).expect("an fem domain")];
-                let facets: Vec<TieFacet> = t
+                let facets: Vec<InterfaceFacet> = t
                     .facets
                     .iter()
-                    .map(|f| TieFacet {
+                    .map(|f| InterfaceFacet {
                         nodes: f.map(|a| ids[a]),
                         reference: f.map(|a| [mesh.coords[a][0], mesh.coords[a][1]]),
                     })
@@ -1010,7 +1010,7 @@ fn number(
                     law: Some(law),
                 };
                 interfaces[t.interface] = Some(ResolvedInterface { summary, part: part_key, soil_nodes: nodes });
-                ties.push(TieInterface::new(
+                ties.push(InterfacePoints::new(
                     &spec.name,
                     case.formulation,
                     case.thickness,

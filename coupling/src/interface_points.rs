@@ -106,7 +106,7 @@ fn significant(functions: Vec<(usize, f64)>) -> Vec<(usize, f64)> {
 
 /// A 2-node interface facet of the structure.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TieFacet {
+pub struct InterfaceFacet {
     /// Global node ids.
     pub nodes: [usize; 2],
     /// Reference coordinates of the nodes.
@@ -144,14 +144,14 @@ struct TieState {
 
 /// A penalty tie or contact between a structure's facets and a fixed grid (see the module
 /// doc).
-pub struct TieInterface {
+pub struct InterfacePoints {
     name: String,
     formulation: Formulation,
     thickness: f64,
     grid: Grid,
     grid_ids: Vec<usize>,
     soil_nodes: SoilNodes,
-    facets: Vec<TieFacet>,
+    facets: Vec<InterfaceFacet>,
     points: Vec<TiePoint>,
     law: InterfaceLaw,
     /// Per point, the gap `g_n` committed at the end of the last step.
@@ -169,7 +169,7 @@ pub struct TieInterface {
     energy: f64,
 }
 
-impl TieInterface {
+impl InterfacePoints {
     /// An interface named `name` of the structure's `facets` to the soil on `grid` (fixed,
     /// not attached to any structure), whose node `a` is global node `grid_ids[a]` and whose
     /// reached nodes `soil_nodes` reports, with the point law `law`. 2D only.
@@ -180,7 +180,7 @@ impl TieInterface {
         grid: Grid,
         grid_ids: Vec<usize>,
         soil_nodes: SoilNodes,
-        facets: Vec<TieFacet>,
+        facets: Vec<InterfaceFacet>,
         law: InterfaceLaw,
     ) -> Self {
         debug_assert_eq!(grid.mesh.element.dim(), 2, "a tie is 2D");
@@ -251,7 +251,7 @@ impl TieInterface {
     /// Residual, tangent and law response of an active point at the iterate of `input`:
     /// `r = w (∂g/∂u)ᵀ T`, `K = w (∂g/∂u)ᵀ C (∂g/∂u)` with `∂g/∂u_I = N_I I` (grid nodes) and
     /// `∂g/∂u_a = −φ_a I` (facet nodes), block DOFs `[x, y]` per node as in
-    /// [`TieInterface::block_dofs`].
+    /// [`InterfacePoints::block_dofs`].
     fn point_block(&self, p: &ActivePoint, input: &AssemblyInput<'_>) -> (Vec<f64>, Vec<f64>, LawResponse) {
         let point = &self.points[p.point];
         let du = self.increments(p, input);
@@ -372,7 +372,7 @@ pub fn tie_facets(
     Ok((facets, length))
 }
 
-impl Domain for TieInterface {
+impl Domain for InterfacePoints {
     fn name(&self) -> &str {
         &self.name
     }
@@ -567,7 +567,7 @@ mod tests {
     use std::sync::{Arc, RwLock};
 
     /// Dense global residual and tangent of a tie domain at `input` (DOFs `0..n`).
-    fn assembled(tie: &mut TieInterface, input: &AssemblyInput<'_>, n: usize) -> (Vec<f64>, Vec<f64>) {
+    fn assembled(tie: &mut InterfacePoints, input: &AssemblyInput<'_>, n: usize) -> (Vec<f64>, Vec<f64>) {
         let mut layout = BlockLayout::default();
         tie.blocks(&mut layout);
         let (mut m, mut v) = (vec![0.0; layout.matrix_len()], vec![0.0; layout.vector_len()]);
@@ -603,9 +603,9 @@ mod tests {
         let s = grid_nodes;
         let reference = [[0.13, 0.02], [0.19, 0.09], [0.27, 0.17], [0.36, 0.11]];
         let facets = (0..3)
-            .map(|f| TieFacet { nodes: [s + f, s + f + 1], reference: [reference[f], reference[f + 1]] })
+            .map(|f| InterfaceFacet { nodes: [s + f, s + f + 1], reference: [reference[f], reference[f + 1]] })
             .collect();
-        let mut tie = TieInterface::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil, facets, law);
+        let mut tie = InterfacePoints::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil, facets, law);
         let n = 2 * (grid_nodes + 4);
         let wave = |k: usize, a: f64| a * ((k * 7 + 3) as f64).sin();
         // step 1 from rest, committed: a gap to carry
@@ -692,10 +692,11 @@ mod tests {
             reached[grid_nodes - 1] = false; // the top right corner (0.4, 0.2)
             let soil: SoilNodes = Arc::new(RwLock::new(reached));
             let facets =
-                vec![TieFacet { nodes: [grid_nodes, grid_nodes + 1], reference: [[0.05, 0.05], [0.39, 0.19]] }];
+                vec![InterfaceFacet { nodes: [grid_nodes, grid_nodes + 1], reference: [[0.05, 0.05], [0.39, 0.19]] }];
             let ids = (0..grid_nodes).collect();
             let law = InterfaceLaw::Tie { penalty: 1.0 };
-            let mut tie = TieInterface::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil.clone(), facets, law);
+            let mut tie =
+                InterfacePoints::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil.clone(), facets, law);
             let mut committed = NodalState::zeros(2 * (grid_nodes + 2));
             tie.begin_step(&mut committed).unwrap();
             assert_eq!(tie.num_points(), (2, 2));
