@@ -117,7 +117,7 @@ struct GridGroup<'a> {
 }
 
 /// Builds the mesh described by `spec` (at JSON path `loc`).
-pub(super) fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh, CaseError> {
+pub(crate) fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh, CaseError> {
     let dim = case.formulation.dim();
     let mesh = match spec {
         MeshSpec::Rectangle { origin, size, cells, element } => {
@@ -525,7 +525,7 @@ fn check_overlaps(
 }
 
 /// The structured grid of `g` (at JSON path `loc`), checked.
-fn structured_grid(case: &Case, loc: &str, g: &GridSpec) -> Result<Grid, CaseError> {
+pub(crate) fn structured_grid(case: &Case, loc: &str, g: &GridSpec) -> Result<Grid, CaseError> {
     let dim = case.formulation.dim();
     check_len(&format!("{loc}.grid.origin"), &g.origin, dim)?;
     check_len(&format!("{loc}.grid.size"), &g.size, dim)?;

@@ -109,9 +109,17 @@ const POISSON: Variable = var("poisson_ratio", "POISSON_RATIO", Same);
 /// The laws of the table in the module doc, the one mapping of import and export.
 pub const LAWS: &[LawMap] = &[
     // `LinearElastic…`: StructuralMechanicsApplication's name of the same law
-    LawMap { loam: "linear_elastic", kratos: &["LinearElasticIsotropic", "LinearElastic"], variables: &[DENSITY, YOUNG, POISSON] },
+    LawMap {
+        loam: "linear_elastic",
+        kratos: &["LinearElasticIsotropic", "LinearElastic"],
+        variables: &[DENSITY, YOUNG, POISSON],
+    },
     // `HyperElastic…`: StructuralMechanicsApplication's isotropic Neo-Hookean
-    LawMap { loam: "neo_hookean", kratos: &["HyperElasticNeoHookean", "HyperElastic"], variables: &[DENSITY, YOUNG, POISSON] },
+    LawMap {
+        loam: "neo_hookean",
+        kratos: &["HyperElasticNeoHookean", "HyperElastic"],
+        variables: &[DENSITY, YOUNG, POISSON],
+    },
     LawMap {
         loam: "mohr_coulomb",
         kratos: &["HenckyMCPlastic"],
@@ -157,11 +165,7 @@ pub const LAWS: &[LawMap] = &[
     LawMap {
         loam: "newtonian_fluid",
         kratos: &["DispNewtonianFluid"],
-        variables: &[
-            DENSITY,
-            var("viscosity", "DYNAMIC_VISCOSITY", Same),
-            var("bulk_modulus", "BULK_MODULUS", Same),
-        ],
+        variables: &[DENSITY, var("viscosity", "DYNAMIC_VISCOSITY", Same), var("bulk_modulus", "BULK_MODULUS", Same)],
     },
 ];
 
@@ -209,16 +213,16 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Vec<BodyM
         let (stem, formulation, mixed_up) = split_law_name(&name)
             .ok_or_else(|| law.error("name", format!("Kratos law '{name}' has no Loam counterpart")))?;
         let vars = mat.object("Variables")?;
-        let map = law_of_stem(stem).ok_or_else(|| law.error("name", format!("Kratos law '{name}' has no Loam counterpart")))?;
+        let map = law_of_stem(stem)
+            .ok_or_else(|| law.error("name", format!("Kratos law '{name}' has no Loam counterpart")))?;
         let mut material = Map::new();
         material.insert("law".into(), json!(map.loam));
         for v in map.variables {
             let x = vars.number(v.kratos)?;
             if v.conversion == Conversion::CompressionNegative && x >= 0.0 {
-                return Err(vars.error(
-                    v.kratos,
-                    format!("{x} is not a compression (Kratos takes compression negative)"),
-                ));
+                return Err(
+                    vars.error(v.kratos, format!("{x} is not a compression (Kratos takes compression negative)"))
+                );
             }
             material.insert(v.loam.into(), json!(v.conversion.to_loam(x)));
         }
