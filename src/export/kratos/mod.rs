@@ -20,7 +20,7 @@ pub mod materials;
 pub mod mdpa;
 pub mod parameters;
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use loam_fem::formulation::Formulation;
@@ -88,18 +88,19 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
         Ok(select_region(name, spec, &grid.coords, dim, &grid.node_groups, tol)?)
     };
     let facets = grid.boundary_facets();
+    let part_name = part_names(&case);
     let mut conditions = Vec::new();
     let mut grid_parts = GridParts { mdpa: &mut grid_mdpa, next_condition: 1 };
     for (k, bc) in case.boundary_conditions.iter().enumerate() {
         let loc = format!("boundary_conditions[{k}]");
         let nodes = region(&bc.region, format!("{loc}.region"))?;
         if bc.slip.is_some() {
-            let part = format!("SLIP_{}", bc.region);
+            let part = part_name("SLIP", &bc.region);
             let kind = if dim == 2 { "LineCondition2D2N" } else { "SurfaceCondition3D" };
             grid_parts.add(&part, &nodes, &facets, Some(kind), &loc)?;
             conditions.push(Condition::Slip { part });
         } else {
-            let part = format!("DISPLACEMENT_{}", bc.region);
+            let part = part_name("DISPLACEMENT", &bc.region);
             grid_parts.add(&part, &nodes, &facets, None, &loc)?;
             let mut value = [None, None, Some(0.0)];
             for (d, v) in bc.displacement.iter().enumerate().take(dim) {
@@ -117,7 +118,7 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
         match load {
             LoadSpec::Traction { region: r, traction, .. } => {
                 let nodes = region(r, format!("{loc}.region"))?;
-                let part = format!("LINE_LOAD_{r}");
+                let part = part_name("LINE_LOAD", r);
                 let kind =
                     if axisymmetric { "MPMGridAxisymLineLoadCondition2D2N" } else { "MPMGridLineLoadCondition2D2N" };
                 grid_parts.add(&part, &nodes, &facets, Some(kind), &loc)?;
@@ -126,7 +127,7 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
             }
             LoadSpec::NodalForce { region: r, force, .. } => {
                 let nodes = region(r, format!("{loc}.region"))?;
-                let part = format!("POINT_LOAD_{r}");
+                let part = part_name("POINT_LOAD", r);
                 let kind = format!("MPMGridPointLoadCondition{}1N", if dim == 2 { "2D" } else { "3D" });
                 grid_parts.points(&part, &nodes, &kind);
                 let mut f = [0.0; 3];
@@ -143,6 +144,9 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
                 let node = nearest_node(&grid.coords, point)
                     .ok_or_else(|| ExportError(format!("monitors[{k}].point: no grid node")))?;
                 let part = format!("OUTPUT_{name}");
+                if grid_parts.mdpa.sub_model_part(&part).is_some() {
+                    return Err(ExportError(format!("monitors[{k}].name: \"{name}\": its sub model part {part} is a region's name")));
+                }
                 grid_parts.add(&part, &[node], &[], None, &format!("monitors[{k}]"))?;
                 outputs.push((part, format!("{name}.json")));
             }
@@ -227,6 +231,31 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
     write("Grid.mdpa", mdpa::write(&grid_mdpa))?;
     write("Body.mdpa", mdpa::write(&body_mdpa))?;
     Ok(Export { files: written, notes })
+}
+
+/// The grid sub model part of the conditions of kind `KIND` (`DISPLACEMENT`, `SLIP`,
+/// `LINE_LOAD`, `POINT_LOAD`) on a region: the region's name where only one kind uses it (a
+/// re-import gives the region back by its name), else `KIND_<region>` (Kratos puts the
+/// conditions of a sub model part under one process).
+fn part_names(case: &Case) -> impl Fn(&str, &str) -> String {
+    let mut kinds: BTreeMap<String, BTreeSet<&'static str>> = BTreeMap::new();
+    for bc in &case.boundary_conditions {
+        kinds.entry(bc.region.clone()).or_default().insert(if bc.slip.is_some() { "SLIP" } else { "DISPLACEMENT" });
+    }
+    for l in &case.loads {
+        match l {
+            LoadSpec::Traction { region, .. } => kinds.entry(region.clone()).or_default().insert("LINE_LOAD"),
+            LoadSpec::NodalForce { region, .. } => kinds.entry(region.clone()).or_default().insert("POINT_LOAD"),
+            _ => false,
+        };
+    }
+    move |kind, region| {
+        if kinds.get(region).is_some_and(|k| k.len() == 1) && region != GRID_PART {
+            region.to_string()
+        } else {
+            format!("{kind}_{region}")
+        }
+    }
 }
 
 /// Kratos' suffix of a linear entity of `nodes` nodes in `dim` dimensions (`2D4N`).
