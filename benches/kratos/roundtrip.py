@@ -41,10 +41,13 @@ def imported(source, node_id, component, dim):
     return make
 
 
-def copied(case, monitor):
-    """A bundled case with a displacement monitor added."""
+def copied(case, monitor, edit=None):
+    """A bundled case with a displacement monitor added (and `edit` applied to its JSON)."""
     def make(out, loam):
-        shutil.copy(case, os.path.join(out, "case.json"))
+        c = json.load(open(case))
+        if edit:
+            edit(c)
+        json.dump(c, open(os.path.join(out, "case.json"), "w"), indent=2)
         add_monitor(os.path.join(out, "case.json"), monitor)
     return make
 

@@ -22,21 +22,9 @@ pub fn cli(format: Format, case: &Path, output: Option<&Path>) -> ExitCode {
         PathBuf::from(format!("{stem}_kratos"))
     });
     match format {
-        Format::Kratos => match kratos::export(case, &out) {
-            Ok(export) => {
-                for note in &export.notes {
-                    eprintln!("note: {note}");
-                }
-                for f in &export.files {
-                    println!("loam: wrote {}", f.display());
-                }
-                println!("loam: {} notes (keys approximated or left out, listed above)", export.notes.len());
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::from(2)
-            }
-        },
+        Format::Kratos => crate::cli::conversion(
+            kratos::export(case, &out).map(|e| (e.files, e.notes)),
+            "keys approximated or left out",
+        ),
     }
 }

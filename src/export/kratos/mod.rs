@@ -69,8 +69,8 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
     refuse_unexpressed(&case, &raw, &mut notes)?;
 
     let grid = grid_mesh(&case, &raw)?;
-    let mut grid_mdpa = Mdpa::default();
-    grid_mdpa.nodes = grid.coords.iter().enumerate().map(|(n, x)| (n + 1, *x)).collect();
+    let mut grid_mdpa =
+        Mdpa { nodes: grid.coords.iter().enumerate().map(|(n, x)| (n + 1, *x)).collect(), ..Mdpa::default() };
     let kind = format!("Element{}", entity_suffix(dim, grid.element.num_nodes()));
     grid_mdpa.elements.push(block(&kind, (0..grid.num_cells()).map(|e| grid.cell(e).to_vec()), 0));
     grid_mdpa.sub_model_parts.push(SubModelPart {
@@ -410,7 +410,7 @@ fn refuse_unexpressed(case: &Case, raw: &Value, notes: &mut Vec<String>) -> Resu
         if d.mass_matrix != case.domains[0].mass_matrix || d.element_formulation != case.domains[0].element_formulation
         {
             return refuse(
-                format!("{loc}"),
+                loc.clone(),
                 "the bodies' mass_matrix and element_formulation must be one (Kratos' solver settings)",
             );
         }

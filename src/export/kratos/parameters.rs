@@ -188,23 +188,26 @@ fn newton(case: &Case, solver: &mut Value, notes: &mut Vec<String>) -> Result<()
     Ok(())
 }
 
-/// The dynamic scheme: Kratos' MPM Newmark has γ = 1/2; its Bossak scheme is given β.
+/// The dynamic scheme. Kratos' MPM schemes are its Bossak scheme (`ResidualBasedBossakDisplacementScheme`)
+/// with β = (1 − α)² β_N, γ = ½ − α from `damp_factor_m` α and `newmark_beta` β_N, which it
+/// admits as 0.25 only among implicit values (0.167 is not 1/6): Newmark is α = 0, so Loam's
+/// Newmark must be the average acceleration (β = ¼, γ = ½), and Loam's Bossak (β = (1 − α)²/4,
+/// γ = ½ − α) is written with β_N = 0.25.
 fn scheme(scheme: TimeScheme, solver: &mut Value) -> Result<(), ExportError> {
     match scheme {
         TimeScheme::Newmark { beta, gamma } => {
-            if (gamma - 0.5).abs() > 1e-12 {
+            if (beta - 0.25).abs() > 1e-12 || (gamma - 0.5).abs() > 1e-12 {
                 return Err(ExportError(format!(
-                    "analysis.scheme.newmark.gamma: {gamma}: Kratos' MPM Newmark scheme has γ = 0.5 (no newmark_gamma setting)"
+                    "analysis.scheme.newmark: beta {beta}, gamma {gamma}: Kratos' implicit MPM Newmark is the average acceleration scheme (beta 0.25, gamma 0.5)"
                 )));
             }
             solver["scheme_type"] = json!("newmark");
-            solver["newmark_beta"] = json!(beta);
+            solver["newmark_beta"] = json!(0.25);
         }
         TimeScheme::Bossak { alpha } => {
-            let (_, beta, _) = scheme.coefficients().expect("dynamic");
             solver["scheme_type"] = json!("bossak");
             solver["damp_factor_m"] = json!(alpha);
-            solver["newmark_beta"] = json!(beta);
+            solver["newmark_beta"] = json!(0.25);
         }
         TimeScheme::Static => {}
     }

@@ -73,6 +73,8 @@ pub struct Project {
     pub axisymmetric: bool,
     /// `pressure_dofs` (mixed u–p elements).
     pub pressure_dofs: bool,
+    /// `consistent_mass_matrix`, if given (`false`: Loam's `mass_matrix: "lumped"`).
+    pub consistent_mass_matrix: Option<bool>,
     /// Loam `analysis`.
     pub analysis: Value,
     /// Loam `solver`.
@@ -115,6 +117,7 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Project, 
     s.take("problem_domain_sub_model_part_list");
     s.take("processes_sub_model_part_list");
     let pressure_dofs = s.optional_bool("pressure_dofs")?.unwrap_or(false);
+    let consistent_mass_matrix = s.optional_bool("consistent_mass_matrix")?;
     let axisymmetric = s.optional_bool("axis_symmetric_flag")?.unwrap_or(false);
     s.ignore("auxiliary_variables_list", "Loam computes what it needs", notes);
     s.ignore("linear_solver_settings", "Loam's direct solvers: solver.linear_solver auto", notes);
@@ -146,6 +149,7 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Project, 
         domain_size,
         axisymmetric,
         pressure_dofs,
+        consistent_mass_matrix,
         analysis,
         solver,
         gravity,
