@@ -366,6 +366,11 @@ fn check_element_formulation(case: &Case, k: usize, law: &dyn ConstitutiveLaw) -
     }
 }
 
+/// The material points of the MPM domain `k` (unit density), checked to lie in `grid`.
+pub(crate) fn body_points(case: &Case, k: usize, grid: &Grid) -> Result<MaterialPoints, CaseError> {
+    material_points(case, k, 1.0, grid).map(|(points, _)| points)
+}
+
 /// The material points of the MPM domain `k` (`density` of its material), checked to lie
 /// in `grid`, and the region they fill.
 fn material_points(

@@ -36,6 +36,17 @@ pub fn properties(name: &str, material: &Value, id: usize, body: &BodyKinematics
         let known: Vec<&str> = LAWS.iter().map(|l| l.loam).collect();
         ExportError(format!("{loc}.law: \"{law}\" has no Kratos MPM counterpart (exported: {})", known.join(", ")))
     })?;
+    // combinations Kratos 10.4.4's MPM application does not register
+    if body.formulation == "plane_stress" && law != "linear_elastic" {
+        return Err(ExportError(format!(
+            "{loc}.law: \"{law}\" in plane stress: Kratos' MPM has plane stress for LinearElasticIsotropic only"
+        )));
+    }
+    if body.mixed_up && law == "linear_elastic" {
+        return Err(ExportError(format!(
+            "{loc}.law: \"linear_elastic\" with mixed_up: Kratos' MPM has no UP form of LinearElasticIsotropic"
+        )));
+    }
     if let Some(key) = m.keys().find(|k| *k != "law" && !map.variables.iter().any(|v| v.loam == k.as_str())) {
         return Err(ExportError(format!("{loc}.{key}: Kratos' {} law has no such parameter: refused", map.kratos[0])));
     }

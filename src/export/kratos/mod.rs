@@ -8,7 +8,8 @@
 //! sub model part `Parts_<domain>` each; [`mdpa`]) and `ParticleMaterials.json`
 //! ([`materials`]). Kratos places `MATERIAL_POINTS_PER_ELEMENT` points in each body cell at
 //! the positions and with the volumes Loam gives `material_points.cells` (both codes use the
-//! cell's Gauss rule), so only bodies given as cells are exported.
+//! cell's Gauss rule); a lattice body (`disk`, `polygon`) is written as one square cell per
+//! point with one point each.
 //!
 //! What Kratos cannot express is refused with one line naming the JSON path; what it expresses
 //! only approximately, or what is left out (output settings, monitors other than a point's
@@ -23,9 +24,11 @@ pub mod parameters;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
+use loam_fem::element::ElementType;
 use loam_fem::formulation::Formulation;
 use loam_fem::mesh::Mesh;
 use loam_mpm::basis::Basis;
+use loam_mpm::grid::Grid;
 use serde_json::{json, Value};
 
 use crate::case::{
@@ -33,7 +36,7 @@ use crate::case::{
 };
 use crate::import::kratos::mdpa::{EntityBlock, Mdpa, SubModelPart};
 use crate::import::kratos::parameters::Condition;
-use crate::model_builder::{build_mesh, line_tolerance, nearest_node, select_region, structured_grid};
+use crate::model_builder::{body_points, build_mesh, line_tolerance, nearest_node, select_region, structured_grid};
 
 /// Why a case could not be exported: one line naming the JSON path and the problem.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -165,12 +168,7 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
     let first = &case.domains[0];
     for k in 0..case.domains.len() {
         let d = &case.domains[k];
-        let Some(BodySpec::Cells { mesh, points_per_cell }) = &d.material_points else {
-            return Err(ExportError(format!(
-                "domains[{k}].material_points: Kratos generates material points from a body mesh: only \"cells\" bodies are exported"
-            )));
-        };
-        let m = build_mesh(&case, &format!("domains[{k}].material_points.cells.mesh"), mesh)?;
+        let (m, points_per_cell) = body_mesh(&case, k, &grid, &mut notes)?;
         let part = format!("Parts_{}", d.name);
         let (node0, element0) =
             (body_mdpa.nodes.len(), body_mdpa.elements.iter().map(|b| b.entities.len()).sum::<usize>());
@@ -191,7 +189,7 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
             formulation: case.formulation.name(),
             mixed_up: !up.is_empty(),
             thickness: (dim == 2 && !axisymmetric).then_some(case.thickness),
-            points_per_cell: *points_per_cell,
+            points_per_cell,
         };
         properties.push(materials::properties(
             &d.material,
@@ -329,6 +327,40 @@ impl GridParts<'_> {
         });
         self.mdpa.conditions.push(b);
     }
+}
+
+/// The body mesh of MPM domain `k` and its points per cell. A `cells` body as given; a lattice
+/// body (`disk`, `polygon`) as one square cell of side `spacing` centred on each of its
+/// lattice points with one point per cell, which Kratos (as Loam) places at the cell's centre
+/// with the square's area as its volume: Loam's lattice point, position and volume.
+fn body_mesh(case: &Case, k: usize, grid: &Mesh, notes: &mut Vec<String>) -> Result<(Mesh, usize), ExportError> {
+    let loc = format!("domains[{k}].material_points");
+    let spacing = match case.domains[k].material_points.as_ref().expect("an mpm domain has points") {
+        BodySpec::Cells { mesh, points_per_cell } => {
+            return Ok((build_mesh(case, &format!("{loc}.cells.mesh"), mesh)?, *points_per_cell));
+        }
+        BodySpec::Disk { spacing, .. } | BodySpec::Polygon { spacing, .. } => *spacing,
+    };
+    let points = body_points(case, k, &Grid::unstructured(grid.clone()))?;
+    let mut ids: BTreeMap<(i64, i64), usize> = BTreeMap::new();
+    let mut coords = Vec::new();
+    let mut connectivity = Vec::new();
+    for x in &points.position {
+        for (di, dj) in [(-1, -1), (1, -1), (1, 1), (-1, 1)] {
+            // corners on the lattice of half spacings, so that neighbours share them
+            let key = ((2.0 * x[0] / spacing).round() as i64 + di, (2.0 * x[1] / spacing).round() as i64 + dj);
+            let id = *ids.entry(key).or_insert_with(|| {
+                coords.push([x[0] + 0.5 * spacing * di as f64, x[1] + 0.5 * spacing * dj as f64, 0.0]);
+                coords.len() - 1
+            });
+            connectivity.push(id);
+        }
+    }
+    notes.push(format!(
+        "{loc}: the lattice of {} points written as one {spacing} m square cell per point, 1 point per cell (the same points and volumes)",
+        points.len()
+    ));
+    Ok((Mesh { element: ElementType::Quad4, coords, connectivity, node_groups: BTreeMap::new() }, 1))
 }
 
 /// The background grid shared by every body, as a mesh (a structured `grid` rotated as given).
