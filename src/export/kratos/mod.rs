@@ -402,6 +402,16 @@ fn monitor_type(raw: &Value, k: usize) -> String {
     raw["monitors"][k]["type"].as_str().unwrap_or("?").to_string()
 }
 
+/// A name that becomes part of a Kratos sub model part name (`Begin SubModelPart NAME`, and
+/// `Background_Grid.NAME` in processes) must be one word of letters, digits and `_`.
+fn check_kratos_name(loc: &str, name: &str) -> Result<(), ExportError> {
+    if !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        Ok(())
+    } else {
+        Err(ExportError(format!("{loc}: \"{name}\" names a Kratos sub model part: use letters, digits and _ only")))
+    }
+}
+
 /// Refuses what Kratos' MPM cannot express and notes what it only approximates or leaves
 /// out, one line per key with its JSON path.
 fn refuse_unexpressed(case: &Case, raw: &Value, notes: &mut Vec<String>) -> Result<(), ExportError> {
@@ -412,8 +422,17 @@ fn refuse_unexpressed(case: &Case, raw: &Value, notes: &mut Vec<String>) -> Resu
             "soil–structure interfaces are not exported (Kratos' MPM case has no structure)",
         );
     }
+    for name in case.regions.keys() {
+        check_kratos_name(&format!("regions.{name}"), name)?;
+    }
+    for (k, m) in case.monitors.iter().enumerate() {
+        if matches!(m, MonitorSpec::Displacement { .. }) {
+            check_kratos_name(&format!("monitors[{k}].name"), m.name())?;
+        }
+    }
     for (k, d) in case.domains.iter().enumerate() {
         let loc = format!("domains[{k}]");
+        check_kratos_name(&format!("{loc}.name"), &d.name)?;
         if d.kind != DomainKind::Mpm {
             return refuse(
                 format!("{loc}.type"),
