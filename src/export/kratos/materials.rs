@@ -72,3 +72,75 @@ pub fn properties(name: &str, material: &Value, id: usize, body: &BodyKinematics
         "Material": { "constitutive_law": { "name": law_name }, "Variables": vars, "Tables": {} }
     }))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{properties, BodyKinematics};
+    use crate::import::kratos::materials::{read, LAWS};
+    use serde_json::{json, Value};
+
+    /// Every law of the shared table goes to Kratos and back unchanged, in every formulation:
+    /// `import ∘ export` is the identity on Loam's materials (angles through radians, the
+    /// preconsolidation pressure through a negative stress), and the Kratos name is the one
+    /// the importer reads.
+    #[test]
+    fn every_law_round_trips() {
+        for law in LAWS {
+            let mut m = serde_json::Map::new();
+            m.insert("law".into(), json!(law.loam));
+            for (k, v) in law.variables.iter().enumerate() {
+                m.insert(v.loam.into(), json!(0.1 + 0.37 * k as f64));
+            }
+            let material = Value::Object(m);
+            for (formulation, thickness) in [("plane_strain", Some(2.0)), ("axisymmetric", None), ("3d", None)] {
+                let body =
+                    BodyKinematics { part: "Parts_soil", formulation, mixed_up: false, thickness, points_per_cell: 4 };
+                let p = properties("soil", &material, 1, &body).expect("exports");
+                let file = json!({ "properties": [p] }).to_string();
+                let mut notes = Vec::new();
+                let back = read(&file, "ParticleMaterials.json", &mut notes).expect("imports");
+                assert!(notes.is_empty(), "{}: {notes:?}", law.loam);
+                assert_eq!(back[0].part, "Parts_soil");
+                assert_eq!(back[0].formulation, formulation);
+                assert_eq!(back[0].thickness, thickness);
+                assert_eq!(back[0].points_per_cell, Some(4));
+                for (key, v) in material.as_object().unwrap() {
+                    let (a, b) = (v.as_f64(), back[0].material[key].as_f64());
+                    match (a, b) {
+                        (Some(a), Some(b)) => {
+                            assert!((a - b).abs() <= 1e-14 * a.abs(), "{}.{key}: {a} → {b}", law.loam)
+                        }
+                        _ => assert_eq!(v, &back[0].material[key], "{}.{key}", law.loam),
+                    }
+                }
+            }
+        }
+    }
+
+    /// A law Kratos' MPM lacks, an unknown parameter and one left at Loam's default are refused
+    /// naming `materials.<name>.<key>`.
+    #[test]
+    fn unexpressed_materials_refused() {
+        let body = BodyKinematics {
+            part: "Parts_soil",
+            formulation: "plane_strain",
+            mixed_up: false,
+            thickness: None,
+            points_per_cell: 1,
+        };
+        let refuse = |m: Value| properties("soil", &m, 1, &body).unwrap_err().to_string();
+        let e = refuse(json!({ "law": "hencky", "density": 1.0, "young_modulus": 1.0, "poisson_ratio": 0.0 }));
+        assert!(e.starts_with("materials.soil.law: \"hencky\" has no Kratos MPM counterpart"), "{e}");
+        let e = refuse(
+            json!({ "law": "linear_elastic", "density": 1.0, "young_modulus": 1.0, "poisson_ratio": 0.0, "damping": 0.1 }),
+        );
+        assert!(
+            e.starts_with("materials.soil.damping: Kratos' LinearElasticIsotropic law has no such parameter"),
+            "{e}"
+        );
+        let e = refuse(
+            json!({ "law": "mohr_coulomb", "density": 1.0, "young_modulus": 1.0, "poisson_ratio": 0.0, "cohesion": 1.0, "friction_angle": 30.0 }),
+        );
+        assert!(e.starts_with("materials.soil.dilatancy_angle: not given"), "{e}");
+    }
+}

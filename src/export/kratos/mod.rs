@@ -188,7 +188,8 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
             part: &part,
             formulation: case.formulation.name(),
             mixed_up: !up.is_empty(),
-            thickness: (dim == 2 && !axisymmetric).then_some(case.thickness),
+            // Kratos' 2D elements need THICKNESS, also in axisymmetry (where it is not used)
+            thickness: (dim == 2).then_some(if axisymmetric { 1.0 } else { case.thickness }),
             points_per_cell,
         };
         properties.push(materials::properties(
