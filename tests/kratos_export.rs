@@ -21,11 +21,12 @@ use loam_fem::domain::PointQuantity;
 use serde_json::{json, Value};
 
 /// The round-trip folders and the displacement monitor each stores Kratos' result of.
-const ROUNDTRIPS: [(&str, &str); 5] = [
+const ROUNDTRIPS: [(&str, &str); 6] = [
     ("cantilever_selfweight_2D_quad", "u"),
     ("cantilever_lineload_2D_quad", "u"),
     ("cantilever_selfweight_3D_hexa", "u"),
     ("cantilever_mpm", "tip_node_uy"),
+    ("cantilever_point_load", "tip_node_uy"),
     ("mohr_coulomb", "settlement"),
 ];
 
@@ -138,7 +139,7 @@ fn consistency(name: &str, case: &Path, monitor: &str) -> (f64, f64) {
 }
 
 /// Export, re-import and run give the case's own answer (consistency of the exporter with the
-/// importer, not a check of the physics): for the five round-trip cases, to 1e-9 relative,
+/// importer, not a check of the physics): for the six round-trip cases, to 1e-9 relative,
 /// and the same material points to 1e-12.
 #[test]
 fn export_then_import_is_consistent() {
@@ -242,7 +243,8 @@ fn kratos_value(file: &Path, component: &str) -> f64 {
 /// Loam's run of each round-trip case against Kratos 10.4.4's run of its export: the grid
 /// node's displacement to 1e-6 relative. Measured (Kratos 10.4.4, one thread): self-weight
 /// cantilever −0.67382919661 m (Neo-Hookean, quads), line load −2.9474000e-6 m (linear elastic),
-/// 3D hexahedra −0.35470604837 m, Loam's own `cases/cantilever_mpm.json` −0.39623128469 m,
+/// 3D hexahedra −0.35470604837 m, Loam's own `cases/cantilever_mpm.json` −0.39623128469 m and
+/// the same beam under a 50 kN nodal force (`POINT_LOAD`) −0.77914947503 m,
 /// the confined Mohr–Coulomb block −0.0129600317937 m (it yields: elastic −0.0107 m); Loam
 /// agrees to 9e-8 relative on the line load (3e-6 m, near the solvers' round-off) and to 1e-10 or
 /// better on the others. The stored export must be what the exporter

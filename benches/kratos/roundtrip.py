@@ -52,6 +52,16 @@ def copied(case, monitor, edit=None):
     return make
 
 
+def point_load(c, at, force):
+    """Gravity replaced by a nodal force on the grid node nearest to `at` (Kratos' POINT_LOAD)."""
+    c["description"] = ("Round trip to Kratos (issue 27): cases/cantilever_mpm.json without gravity, loaded by a "
+                        "nodal force %s N on the grid node at %s (Kratos: POINT_LOAD on an "
+                        "MPMGridPointLoadCondition2D1N). " % (force, at)) + c["description"]
+    c.pop("gravity")
+    c["regions"]["tip"] = {"nearest": at}
+    c["loads"] = [{"type": "nodal_force", "region": "tip", "force": force}]
+
+
 def by_hand(out, loam):
     """The case.json already in the folder (written by hand)."""
 
@@ -69,6 +79,9 @@ CASES = {
     "cantilever_selfweight_3D_hexa": imported(os.path.join(DATA, "cantilever_selfweight_3D_hexa"), 338, "y", 3),
     "cantilever_mpm": copied(os.path.join("cases", "cantilever_mpm.json"),
                              {"name": "tip_node_uy", "type": "displacement", "point": [7.0, 1.0], "component": "y"}),
+    "cantilever_point_load": copied(os.path.join("cases", "cantilever_mpm.json"),
+                                    {"name": "tip_node_uy", "type": "displacement", "point": [7.0, 1.0], "component": "y"},
+                                    lambda c: point_load(c, [7.0, 1.0], [0.0, -5.0e4])),
     "mohr_coulomb": by_hand,
 }
 
