@@ -61,29 +61,85 @@ pub struct Export {
 /// The grid's own sub model part.
 const GRID_PART: &str = "Parts_Grid";
 
-/// Exports the case file `case_path` into the folder `dir`.
+/// Exports the case file `case_path` into the folder `dir`: the case checked (it must build,
+/// and Kratos must express it), the grid with its conditions and outputs, the bodies with
+/// their materials, the parameters, and the four files written.
 pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
     let case = Case::load(case_path)?;
     let raw = crate::input::parse_value(&crate::input::read_json_text(case_path, "case file")?)?;
     // the case must be one Loam runs
     crate::model_builder::build_model(&case)?;
     let mut notes = Vec::new();
-    let dim = case.formulation.dim();
     refuse_unexpressed(&case, &raw, &mut notes)?;
 
     let grid = grid_mesh(&case, &raw)?;
-    let mut grid_mdpa =
-        Mdpa { nodes: grid.coords.iter().enumerate().map(|(n, x)| (n + 1, *x)).collect(), ..Mdpa::default() };
+    let mut grid_mdpa = grid_model_part(&grid, case.formulation.dim());
+    let mut grid_parts = GridParts { mdpa: &mut grid_mdpa, next_condition: 1 };
+    let conditions = grid_conditions(&case, &grid, &mut grid_parts)?;
+    let outputs = outputs(&case, &raw, &grid, &mut grid_parts, &mut notes)?;
+    let (body_mdpa, properties, mut parts) = bodies(&case, &raw, &grid, &mut notes)?;
+    parts.push(GRID_PART.into());
+
+    let process_parts: Vec<String> = grid_mdpa.sub_model_parts.iter().skip(1).map(|p| p.name.clone()).collect();
+    let dim = case.formulation.dim();
+    let gravity = case.gravity.as_ref().map(|g| {
+        let mut a = [0.0; 3];
+        a[..dim].copy_from_slice(&g.acceleration[..dim]);
+        a
+    });
+    let files = parameters::Files {
+        parts: &parts,
+        process_parts: &process_parts,
+        pressure_dofs: case.domains[0].element_formulation == ElementFormulation::MixedUp,
+        mass_matrix: case.domains[0].mass_matrix,
+    };
+    let project = parameters::project(&case, &files, &conditions, gravity, &outputs, &mut notes)?;
+
+    let pretty = |v: &Value| serde_json::to_string_pretty(v).expect("JSON values serialise") + "\n";
+    let files = write_folder(
+        dir,
+        [
+            ("ProjectParameters.json", pretty(&project)),
+            ("ParticleMaterials.json", pretty(&json!({ "properties": properties }))),
+            ("Grid.mdpa", mdpa::write(&grid_mdpa)),
+            ("Body.mdpa", mdpa::write(&body_mdpa)),
+        ],
+    )?;
+    Ok(Export { files, notes })
+}
+
+/// Writes the `files` (name, text) into the folder `dir`; returns their paths.
+fn write_folder(dir: &Path, files: [(&str, String); 4]) -> Result<Vec<PathBuf>, ExportError> {
+    std::fs::create_dir_all(dir).map_err(|e| ExportError(format!("{}: cannot create: {e}", dir.display())))?;
+    let mut written = Vec::new();
+    for (name, text) in files {
+        let path = dir.join(name);
+        std::fs::write(&path, text).map_err(|e| ExportError(format!("{}: cannot write: {e}", path.display())))?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+/// The grid's model part: its nodes (Kratos ids from 1) and cells (`Element2D4N` …), sub
+/// model part [`GRID_PART`].
+fn grid_model_part(grid: &Mesh, dim: usize) -> Mdpa {
+    let mut m = Mdpa { nodes: grid.coords.iter().enumerate().map(|(n, x)| (n + 1, *x)).collect(), ..Mdpa::default() };
     let kind = format!("Element{}", entity_suffix(dim, grid.element.num_nodes()));
-    grid_mdpa.elements.push(block(&kind, (0..grid.num_cells()).map(|e| grid.cell(e).to_vec()), 0));
-    grid_mdpa.sub_model_parts.push(SubModelPart {
+    m.elements.push(block(&kind, (0..grid.num_cells()).map(|e| grid.cell(e).to_vec()), 0));
+    m.sub_model_parts.push(SubModelPart {
         name: GRID_PART.into(),
         nodes: (1..=grid.coords.len()).collect(),
         elements: (1..=grid.num_cells()).collect(),
         conditions: Vec::new(),
     });
+    m
+}
 
-    // regions on the grid, and the grid conditions
+/// The boundary conditions and loads of the case on the grid, their sub model parts added to
+/// `grid_parts` (with the grid's boundary facets in the region as conditions where Kratos
+/// applies them on facets).
+fn grid_conditions(case: &Case, grid: &Mesh, grid_parts: &mut GridParts) -> Result<Vec<Condition>, ExportError> {
+    let dim = case.formulation.dim();
     let tol = line_tolerance(&grid.coords);
     let region = |name: &str, loc: String| -> Result<Vec<usize>, ExportError> {
         let spec =
@@ -91,9 +147,8 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
         Ok(select_region(name, spec, &grid.coords, dim, &grid.node_groups, tol)?)
     };
     let facets = grid.boundary_facets();
-    let part_name = part_names(&case);
+    let part_name = part_names(case);
     let mut conditions = Vec::new();
-    let mut grid_parts = GridParts { mdpa: &mut grid_mdpa, next_condition: 1 };
     for (k, bc) in case.boundary_conditions.iter().enumerate() {
         let loc = format!("boundary_conditions[{k}]");
         let nodes = region(&bc.region, format!("{loc}.region"))?;
@@ -105,12 +160,10 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
         } else {
             let part = part_name("DISPLACEMENT", &bc.region);
             grid_parts.add(&part, &nodes, &facets, None, &loc)?;
+            // in 2D, DISPLACEMENT_Z held at 0 as in Kratos' own 2D cases
             let mut value = [None, None, Some(0.0)];
             for (d, v) in bc.displacement.iter().enumerate().take(dim) {
                 value[d] = *v;
-            }
-            if dim == 3 {
-                value[2] = bc.displacement.get(2).copied().flatten();
             }
             conditions.push(Condition::Displacement { part, value });
         }
@@ -131,7 +184,7 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
             LoadSpec::NodalForce { region: r, force, .. } => {
                 let nodes = region(r, format!("{loc}.region"))?;
                 let part = part_name("POINT_LOAD", r);
-                let kind = format!("MPMGridPointLoadCondition{}1N", if dim == 2 { "2D" } else { "3D" });
+                let kind = format!("MPMGridPointLoadCondition{dim}D1N");
                 grid_parts.points(&part, &nodes, &kind);
                 let mut f = [0.0; 3];
                 f[..dim].copy_from_slice(&force[..dim]);
@@ -140,6 +193,19 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
             LoadSpec::Pressure { .. } | LoadSpec::MaterialPointForce { .. } => unreachable!("refused above"),
         }
     }
+    Ok(conditions)
+}
+
+/// The `json_output_process` outputs `(sub model part, file)`: one per `displacement`
+/// monitor, of the grid node nearest to its point (`OUTPUT_<monitor>`, `<monitor>.json`);
+/// other monitors are noted as left out.
+fn outputs(
+    case: &Case,
+    raw: &Value,
+    grid: &Mesh,
+    grid_parts: &mut GridParts,
+    notes: &mut Vec<String>,
+) -> Result<Vec<(String, String)>, ExportError> {
     let mut outputs = Vec::new();
     for (k, m) in case.monitors.iter().enumerate() {
         match m {
@@ -148,27 +214,38 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
                     .ok_or_else(|| ExportError(format!("monitors[{k}].point: no grid node")))?;
                 let part = format!("OUTPUT_{name}");
                 if grid_parts.mdpa.sub_model_part(&part).is_some() {
-                    return Err(ExportError(format!("monitors[{k}].name: \"{name}\": its sub model part {part} is a region's name")));
+                    return Err(ExportError(format!(
+                        "monitors[{k}].name: \"{name}\": its sub model part {part} is a region's name"
+                    )));
                 }
                 grid_parts.add(&part, &[node], &[], None, &format!("monitors[{k}]"))?;
                 outputs.push((part, format!("{name}.json")));
             }
             other => notes.push(format!(
-                "monitors[{k}]: the {} monitor '{}' left out (Kratos writes a grid node's displacement: displacement monitors)",
-                monitor_type(&raw, k),
+                "monitors[{k}]: the {} monitor '{}' left out (exported: displacement monitors, as Kratos' json_output_process of a grid node)",
+                monitor_type(raw, k),
                 other.name()
             )),
         }
     }
+    Ok(outputs)
+}
 
-    // the bodies
+/// The bodies' model part (one sub model part `Parts_<domain>` each, `MPMUpdatedLagrangian…`
+/// elements), their materials' `properties` and the sub model part names.
+fn bodies(
+    case: &Case,
+    raw: &Value,
+    grid: &Mesh,
+    notes: &mut Vec<String>,
+) -> Result<(Mdpa, Vec<Value>, Vec<String>), ExportError> {
+    let dim = case.formulation.dim();
+    let axisymmetric = case.formulation == Formulation::Axisymmetric;
     let mut body_mdpa = Mdpa::default();
     let mut properties = Vec::new();
     let mut parts = Vec::new();
-    let first = &case.domains[0];
-    for k in 0..case.domains.len() {
-        let d = &case.domains[k];
-        let (m, points_per_cell) = body_mesh(&case, k, &grid, &mut notes)?;
+    for (k, d) in case.domains.iter().enumerate() {
+        let (m, points_per_cell) = body_mesh(case, k, grid, notes)?;
         let part = format!("Parts_{}", d.name);
         let (node0, element0) =
             (body_mdpa.nodes.len(), body_mdpa.elements.iter().map(|b| b.entities.len()).sum::<usize>());
@@ -192,44 +269,11 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
             thickness: (dim == 2).then_some(if axisymmetric { 1.0 } else { case.thickness }),
             points_per_cell,
         };
-        properties.push(materials::properties(
-            &d.material,
-            &raw["materials"][&d.material],
-            properties.len() + 1,
-            &kin,
-        )?);
+        let id = properties.len() + 1;
+        properties.push(materials::properties(&d.material, &raw["materials"][&d.material], id, &kin)?);
         parts.push(part);
     }
-    parts.push(GRID_PART.into());
-
-    let process_parts: Vec<String> = grid_mdpa.sub_model_parts.iter().skip(1).map(|p| p.name.clone()).collect();
-    let gravity = case.gravity.as_ref().map(|g| {
-        let mut a = [0.0; 3];
-        a[..dim].copy_from_slice(&g.acceleration[..dim]);
-        a
-    });
-    let files = parameters::Files {
-        parts: &parts,
-        process_parts: &process_parts,
-        pressure_dofs: first.element_formulation == ElementFormulation::MixedUp,
-        mass_matrix: first.mass_matrix,
-    };
-    let project = parameters::project(&case, &files, &conditions, gravity, &outputs, &mut notes)?;
-
-    std::fs::create_dir_all(dir).map_err(|e| ExportError(format!("{}: cannot create: {e}", dir.display())))?;
-    let mut written = Vec::new();
-    let mut write = |name: &str, text: String| -> Result<(), ExportError> {
-        let path = dir.join(name);
-        std::fs::write(&path, text).map_err(|e| ExportError(format!("{}: cannot write: {e}", path.display())))?;
-        written.push(path);
-        Ok(())
-    };
-    let pretty = |v: &Value| serde_json::to_string_pretty(v).expect("JSON values serialise") + "\n";
-    write("ProjectParameters.json", pretty(&project))?;
-    write("ParticleMaterials.json", pretty(&json!({ "properties": properties })))?;
-    write("Grid.mdpa", mdpa::write(&grid_mdpa))?;
-    write("Body.mdpa", mdpa::write(&body_mdpa))?;
-    Ok(Export { files: written, notes })
+    Ok((body_mdpa, properties, parts))
 }
 
 /// The grid sub model part of the conditions of kind `KIND` (`DISPLACEMENT`, `SLIP`,
