@@ -47,3 +47,14 @@ fn blocks(s: &mut String, keyword: &str, blocks: &[EntityBlock]) {
         let _ = writeln!(s, "End {keyword}\n");
     }
 }
+
+/// Kratos' suffix of a linear entity of `nodes` nodes in `dim` dimensions (`2D4N`).
+pub(super) fn entity_suffix(dim: usize, nodes: usize) -> String {
+    format!("{dim}D{nodes}N")
+}
+
+/// An entity block of `kind` numbering `cells` (0-based node indices) from `first + 1`.
+pub(super) fn block(kind: &str, cells: impl Iterator<Item = Vec<usize>>, first: usize) -> EntityBlock {
+    let entities = cells.enumerate().map(|(e, c)| (first + e + 1, 0, c.iter().map(|n| n + 1).collect())).collect();
+    EntityBlock { kind: kind.into(), line: 0, entities }
+}
