@@ -231,6 +231,14 @@ fn lattice_body_exported_as_cells() {
     let rel = (back - original).abs() / original.abs();
     println!("slip slope: centre_ux at 0.2 s: Loam {original:.12e}, exported and re-imported {back:.12e} (relative {rel:.1e})");
     assert!(rel <= CONSISTENCY_RTOL, "the lattice body's round trip changed centre_ux by {rel:.2e}");
+    // Kratos' slip process writes the nodal normals into NORMAL, which the solver allocates
+    // only when asked: without it Kratos 10.4.4 held the slip nodes fixed (Kratos' own
+    // slip_boundary_2D exported: v_x = −0.0012 m/s at 1.5 s instead of 7.3576 m/s)
+    let p: Value = serde_json::from_str(
+        &std::fs::read_to_string(temp_dir_path("consistency-lattice").join("kratos/ProjectParameters.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(p["solver_settings"]["auxiliary_variables_list"], json!(["NORMAL"]));
 }
 
 /// The last value of `DISPLACEMENT_<C>` in a Kratos json_output_process file.

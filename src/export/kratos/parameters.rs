@@ -76,6 +76,10 @@ pub fn project(
         "processes_sub_model_part_list": files.process_parts,
         "linear_solver_settings": { "solver_type": "LinearSolversApplication.sparse_lu" },
     });
+    if conditions.iter().any(|c| matches!(c, Condition::Slip { .. })) {
+        // the slip process computes the nodal normals into NORMAL, which must be allocated
+        solver["auxiliary_variables_list"] = json!(["NORMAL"]);
+    }
     newton(case, &mut solver, notes)?;
     if a.kind == AnalysisType::Dynamic {
         scheme(a.scheme.unwrap_or(TimeScheme::Newmark { beta: 0.25, gamma: 0.5 }), &mut solver)?;
