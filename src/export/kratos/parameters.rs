@@ -80,7 +80,7 @@ pub fn project(
         // the slip process computes the nodal normals into NORMAL, which must be allocated
         solver["auxiliary_variables_list"] = json!(["NORMAL"]);
     }
-    newton(case, &mut solver, notes)?;
+    newton(case, &mut solver, notes);
     if a.kind == AnalysisType::Dynamic {
         scheme(a.scheme.unwrap_or(TimeScheme::Newmark { beta: 0.25, gamma: 0.5 }), &mut solver)?;
     }
@@ -170,7 +170,7 @@ pub fn project(
 
 /// The Newton settings: Kratos' MPM solver has a residual and a displacement criterion; Loam's
 /// `and` and `or` are approximated by the residual one.
-fn newton(case: &Case, solver: &mut Value, notes: &mut Vec<String>) -> Result<(), ExportError> {
+fn newton(case: &Case, solver: &mut Value, notes: &mut Vec<String>) {
     let s = &case.solver;
     let criterion = match s.convergence_criterion {
         ConvergenceCriterion::Residual => "residual_criterion",
@@ -189,7 +189,6 @@ fn newton(case: &Case, solver: &mut Value, notes: &mut Vec<String>) -> Result<()
     solver["displacement_relative_tolerance"] = json!(s.displacement_relative_tolerance);
     solver["displacement_absolute_tolerance"] = json!(s.displacement_absolute_tolerance);
     solver["max_iteration"] = json!(s.max_iterations);
-    Ok(())
 }
 
 /// The dynamic scheme. Kratos' MPM schemes are its Bossak scheme (`ResidualBasedBossakDisplacementScheme`)
