@@ -13,7 +13,7 @@ use serde_json::{json, Value};
 
 use super::ExportError;
 use crate::case::{AnalysisType, Case, MassMatrix};
-use crate::import::kratos::parameters::Condition;
+use crate::import::kratos::parameters::{Condition, CRITERIA, SOLVER_TYPES};
 use loam_fem::convergence::ConvergenceCriterion;
 use loam_fem::scheme::TimeScheme;
 
@@ -55,11 +55,7 @@ pub fn project(
     }
     let dim = case.formulation.dim();
     let mut solver = json!({
-        "solver_type": match a.kind {
-            AnalysisType::Static => "Static",
-            AnalysisType::QuasiStatic => "Quasi-static",
-            AnalysisType::Dynamic => "Dynamic",
-        },
+        "solver_type": kratos_name(&SOLVER_TYPES.map(|(k, l)| (k[0], l)), a.kind.as_str()),
         "model_part_name": "MPM_Material",
         "domain_size": dim,
         "echo_level": 0,
@@ -173,14 +169,14 @@ pub fn project(
 fn newton(case: &Case, solver: &mut Value, notes: &mut Vec<String>) {
     let s = &case.solver;
     let criterion = match s.convergence_criterion {
-        ConvergenceCriterion::Residual => "residual_criterion",
-        ConvergenceCriterion::Displacement => "displacement_criterion",
+        ConvergenceCriterion::Residual => kratos_name(&CRITERIA, "residual"),
+        ConvergenceCriterion::Displacement => kratos_name(&CRITERIA, "displacement"),
         ConvergenceCriterion::And | ConvergenceCriterion::Or => {
             let which = if s.convergence_criterion == ConvergenceCriterion::And { "and" } else { "or" };
             notes.push(format!(
                 "solver.convergence_criterion: \"{which}\" approximated by Kratos' residual_criterion (its MPM solver has residual_criterion and displacement_criterion)"
             ));
-            "residual_criterion"
+            kratos_name(&CRITERIA, "residual")
         }
     };
     solver["convergence_criterion"] = json!(criterion);
@@ -189,6 +185,11 @@ fn newton(case: &Case, solver: &mut Value, notes: &mut Vec<String>) {
     solver["displacement_relative_tolerance"] = json!(s.displacement_relative_tolerance);
     solver["displacement_absolute_tolerance"] = json!(s.displacement_absolute_tolerance);
     solver["max_iteration"] = json!(s.max_iterations);
+}
+
+/// The Kratos name of Loam's `loam` in the importer's `table` of (Kratos, Loam) names.
+fn kratos_name(table: &[(&'static str, &str)], loam: &str) -> &'static str {
+    table.iter().find(|t| t.1 == loam).map(|t| t.0).expect("every Loam name has its Kratos name in the table")
 }
 
 /// The dynamic scheme. Kratos' MPM schemes are its Bossak scheme (`ResidualBasedBossakDisplacementScheme`)

@@ -85,6 +85,23 @@ pub struct Project {
     pub conditions: Vec<Condition>,
 }
 
+/// Kratos' MPM solver types (the names its solver wrapper accepts; the first is the one
+/// `loam export kratos` writes) and Loam's `analysis.type`.
+pub const SOLVER_TYPES: [(&[&str], &str); 3] = [
+    (&["Static", "static"], "static"),
+    (&["Quasi-static", "quasi_static", "QuasiStatic"], "quasi_static"),
+    (&["Dynamic", "dynamic"], "dynamic"),
+];
+
+/// Kratos' convergence criteria and Loam's `solver.convergence_criterion` (Kratos' MPM solver
+/// builds the first two; the combined ones are StructuralMechanics' names).
+pub const CRITERIA: [(&str, &str); 4] = [
+    ("residual_criterion", "residual"),
+    ("displacement_criterion", "displacement"),
+    ("and_criterion", "and"),
+    ("or_criterion", "or"),
+];
+
 /// Reads `ProjectParameters.json` (text `text`, named `file`); notes collect what is not taken over.
 pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Project, ImportError> {
     let root = super::json::parse_json(text, file)?;
@@ -189,17 +206,14 @@ pub(crate) fn analysis_and_solver(
         notes.push(pd.note("start_time", format!("{start}: Loam's time starts at 0 (times shifted)")));
     }
     let mut analysis = Map::new();
-    let kind = match solver_type.as_str() {
-        "Static" | "static" => "static",
-        "Quasi-static" | "quasi_static" | "QuasiStatic" => "quasi_static",
-        "Dynamic" | "dynamic" => "dynamic",
-        other => {
-            return Err(s.error(
+    let kind = SOLVER_TYPES.iter().find(|(kratos, _)| kratos.contains(&solver_type.as_str())).map(|t| t.1).ok_or_else(
+        || {
+            s.error(
                 "solver_type",
-                format!("\"{other}\" is not a Kratos solver type Loam imports (Static, Quasi-static, Dynamic)"),
-            ))
-        }
-    };
+                format!("\"{solver_type}\" is not a Kratos solver type Loam imports (Static, Quasi-static, Dynamic)"),
+            )
+        },
+    )?;
     analysis.insert("type".into(), json!(kind));
     analysis.insert("time_step".into(), json!(dt));
     analysis.insert("end_time".into(), json!(loam_end));
@@ -227,13 +241,11 @@ pub(crate) fn analysis_and_solver(
 
     let mut solver = Map::new();
     if let Some(c) = s.optional_string("convergence_criterion")? {
-        let loam = match c.as_str() {
-            "residual_criterion" => "residual",
-            "displacement_criterion" => "displacement",
-            "and_criterion" => "and",
-            "or_criterion" => "or",
-            other => return Err(s.error("convergence_criterion", format!("\"{other}\" has no Loam counterpart"))),
-        };
+        let loam = CRITERIA
+            .iter()
+            .find(|(kratos, _)| *kratos == c)
+            .map(|t| t.1)
+            .ok_or_else(|| s.error("convergence_criterion", format!("\"{c}\" has no Loam counterpart")))?;
         solver.insert("convergence_criterion".into(), json!(loam));
     }
     for key in [
