@@ -680,6 +680,17 @@ pub enum AnalysisType {
     Dynamic,
 }
 
+impl AnalysisType {
+    /// The name in the case file.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            AnalysisType::Static => "static",
+            AnalysisType::QuasiStatic => "quasi_static",
+            AnalysisType::Dynamic => "dynamic",
+        }
+    }
+}
+
 /// Time stepping.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]

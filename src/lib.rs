@@ -8,6 +8,7 @@
 pub mod case;
 pub mod checkpoint;
 pub mod cli;
+pub mod export;
 pub mod fit;
 pub mod fmu_package;
 pub mod hints;

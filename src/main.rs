@@ -72,6 +72,18 @@ enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Export a Loam case as another code's input: `loam export kratos CASE.json -o DIR`
+    /// (docs/kratos.md#export).
+    Export {
+        /// The format to write.
+        #[arg(value_enum)]
+        format: loam::export::Format,
+        /// The case file (JSON).
+        case: PathBuf,
+        /// The folder to write (default <case name>_kratos).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
     /// Drive one material point of a law along a laboratory path and write path.csv.
     Law {
         /// The path file (JSON), e.g. cases/laws/mc_triaxial_drained.json.
@@ -222,6 +234,7 @@ fn main() -> ExitCode {
             cli::plot::plot_command(&dir, &options)
         }
         Command::Import { format, dir, output } => loam::import::cli(format, &dir, output.as_deref()),
+        Command::Export { format, case, output } => loam::export::cli(format, &case, output.as_deref()),
         Command::Law { path, out } => cli::law::law_command(&path, out),
         Command::Fit { fit, out } => cli::fit::fit_command(&fit, out),
     }

@@ -20,6 +20,31 @@ use std::process::ExitCode;
 
 use crate::case::CaseError;
 
+/// The outcome of a conversion between formats (`loam import`, `loam export`): the notes
+/// (one line each, on stderr), the files written and a count of the notes, exit code 0; or
+/// the one-line error and exit code 2.
+pub fn conversion<E: std::fmt::Display>(
+    outcome: Result<(Vec<std::path::PathBuf>, Vec<String>), E>,
+    noted: &str,
+) -> ExitCode {
+    match outcome {
+        Ok((files, notes)) => {
+            for note in &notes {
+                eprintln!("note: {note}");
+            }
+            for f in &files {
+                println!("loam: wrote {}", f.display());
+            }
+            println!("loam: {} notes ({noted}, listed above)", notes.len());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
 /// Prints a bad-input error (one line) and returns exit code 2.
 pub fn bad_input(e: &CaseError) -> ExitCode {
     eprintln!("error: {e}");

@@ -21,21 +21,9 @@ pub fn cli(format: Format, dir: &Path, output: Option<&Path>) -> ExitCode {
         PathBuf::from(format!("{}.json", name.unwrap_or_else(|| "kratos".into())))
     });
     match format {
-        Format::Kratos => match kratos::import(dir, &out) {
-            Ok(import) => {
-                for note in &import.notes {
-                    eprintln!("note: {note}");
-                }
-                for f in &import.files {
-                    println!("loam: wrote {}", f.display());
-                }
-                println!("loam: {} notes (keys or blocks ignored or approximated, listed above)", import.notes.len());
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::from(2)
-            }
-        },
+        Format::Kratos => crate::cli::conversion(
+            kratos::import(dir, &out).map(|i| (i.files, i.notes)),
+            "keys or blocks ignored or approximated",
+        ),
     }
 }

@@ -120,7 +120,7 @@ struct GridGroup<'a> {
 }
 
 /// Builds the mesh described by `spec` (at JSON path `loc`).
-pub(super) fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh, CaseError> {
+pub(crate) fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh, CaseError> {
     let dim = case.formulation.dim();
     let mesh = match spec {
         MeshSpec::Rectangle { origin, size, cells, element, rotation } => {
@@ -381,6 +381,11 @@ fn check_element_formulation(case: &Case, k: usize, law: &dyn ConstitutiveLaw) -
     }
 }
 
+/// The material points of the MPM domain `k` (unit density), checked to lie in `grid`.
+pub(crate) fn body_points(case: &Case, k: usize, grid: &Grid) -> Result<MaterialPoints, CaseError> {
+    material_points(case, k, 1.0, grid).map(|(points, _)| points)
+}
+
 /// The material points of the MPM domain `k` (`density` of its material), checked to lie
 /// in `grid`, and the region they fill.
 fn material_points(
@@ -540,7 +545,7 @@ fn check_overlaps(
 }
 
 /// The structured grid of `g` (at JSON path `loc`), checked.
-fn structured_grid(case: &Case, loc: &str, g: &GridSpec) -> Result<Grid, CaseError> {
+pub(crate) fn structured_grid(case: &Case, loc: &str, g: &GridSpec) -> Result<Grid, CaseError> {
     let dim = case.formulation.dim();
     check_len(&format!("{loc}.grid.origin"), &g.origin, dim)?;
     check_len(&format!("{loc}.grid.size"), &g.size, dim)?;

@@ -30,8 +30,10 @@ use loam_laws::ConstitutiveLaw;
 use crate::case::{Case, CaseError, Component};
 use crate::monitor::Monitor;
 
+pub(crate) use meshes::{body_points, build_mesh, structured_grid};
 pub use monitors::monitor_unit;
 pub use regions::nearest_node;
+pub(crate) use regions::{line_tolerance, select_region};
 
 /// A model ready to run, with the monitors resolved to nodes and regions.
 pub struct BuiltModel {

@@ -23,7 +23,7 @@ pub(super) fn select_all(
 }
 
 /// Distance within which a node lies on a region's line: a millionth of the model's size.
-pub(super) fn line_tolerance(coords: &[[f64; 3]]) -> f64 {
+pub(crate) fn line_tolerance(coords: &[[f64; 3]]) -> f64 {
     let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
     for c in coords {
         for d in 0..3 {
@@ -55,7 +55,7 @@ fn distance_to_segment(c: &[f64; 3], a: &[f64], b: &[f64], dim: usize) -> f64 {
 
 /// The nodes (indices into `coords`) of region `name` (`regions.<name>`); `groups` are the
 /// Gmsh physical groups by name, `tol` the distance within which a node lies on a line.
-pub(super) fn select_region(
+pub(crate) fn select_region(
     name: &str,
     spec: &RegionSpec,
     coords: &[[f64; 3]],

@@ -14,7 +14,7 @@
 //! | `HenckyBorjaCamClayPlastic…Law` | `modified_cam_clay`: `PRE_CONSOLIDATION_STRESS` (negative in Kratos, compression negative) to a positive `preconsolidation_pressure`; `OVER_CONSOLIDATION_RATIO`, `SWELLING_SLOPE`, `NORMAL_COMPRESSION_SLOPE`, `CRITICAL_STATE_LINE`, `INITIAL_SHEAR_MODULUS`, `ALPHA_SHEAR` to their Loam names (both codes use Borja's ln v – ln p slopes and `μ = μ₀ + α p₀ e^(ε_v^e/κ̂)`) |
 //! | `DispNewtonianFluid…Law` | `newtonian_fluid` (`DYNAMIC_VISCOSITY`, `BULK_MODULUS`) |
 //!
-//! followed by `PlaneStrain2D`, `PlaneStress2D`, `Axisym2D` or `3D` (the formulation), with
+//! ([`LAWS`], which `loam export kratos` reads backwards) followed by `PlaneStrain2D`, `PlaneStress2D`, `Axisym2D` or `3D` (the formulation), with
 //! `UP` before it for the mixed displacement–pressure form. Variables: `DENSITY`,
 //! `YOUNG_MODULUS`, `POISSON_RATIO`, the laws' own variables above, `THICKNESS`,
 //! `MATERIAL_POINTS_PER_ELEMENT`. Every other law (e.g. the sand hypoplasticity) is refused,
@@ -41,6 +41,155 @@ pub struct BodyMaterial {
     pub points_per_cell: Option<usize>,
 }
 
+/// How a Kratos variable's value becomes a Loam parameter's (and back, for `loam export kratos`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Conversion {
+    /// The same number in the same unit.
+    Same,
+    /// Kratos' angle in radians, Loam's in degrees.
+    RadiansToDegrees,
+    /// Kratos' stress with compression negative, Loam's positive pressure (must be a compression).
+    CompressionNegative,
+}
+
+impl Conversion {
+    /// The Loam value of Kratos' `x`.
+    pub fn to_loam(self, x: f64) -> f64 {
+        match self {
+            Conversion::Same => x,
+            Conversion::RadiansToDegrees => x.to_degrees(),
+            Conversion::CompressionNegative => -x,
+        }
+    }
+
+    /// The Kratos value of Loam's `x` (the inverse of [`Conversion::to_loam`]).
+    pub fn to_kratos(self, x: f64) -> f64 {
+        match self {
+            Conversion::Same => x,
+            Conversion::RadiansToDegrees => x.to_radians(),
+            Conversion::CompressionNegative => -x,
+        }
+    }
+}
+
+/// One parameter of a law: its Loam key, its Kratos variable and the conversion between them.
+#[derive(Debug, Clone, Copy)]
+pub struct Variable {
+    /// Loam key in `materials.<name>`.
+    pub loam: &'static str,
+    /// Kratos variable in `Material.Variables`.
+    pub kratos: &'static str,
+    /// How the value converts.
+    pub conversion: Conversion,
+}
+
+const fn var(loam: &'static str, kratos: &'static str, conversion: Conversion) -> Variable {
+    Variable { loam, kratos, conversion }
+}
+
+/// A law known to both codes: Loam's `law` name, the Kratos law name stems (the first is the
+/// one `loam export kratos` writes) and the parameters.
+#[derive(Debug, Clone, Copy)]
+pub struct LawMap {
+    /// Loam `law`.
+    pub loam: &'static str,
+    /// Kratos law name stems (before the formulation suffix).
+    pub kratos: &'static [&'static str],
+    /// Parameters, every one required by both codes.
+    pub variables: &'static [Variable],
+}
+
+use Conversion::{CompressionNegative, RadiansToDegrees, Same};
+
+/// The elastic constants every solid law has.
+const DENSITY: Variable = var("density", "DENSITY", Same);
+const YOUNG: Variable = var("young_modulus", "YOUNG_MODULUS", Same);
+const POISSON: Variable = var("poisson_ratio", "POISSON_RATIO", Same);
+
+/// The laws of the table in the module doc, the one mapping of import and export.
+pub const LAWS: &[LawMap] = &[
+    // `LinearElastic…`: StructuralMechanicsApplication's name of the same law
+    LawMap {
+        loam: "linear_elastic",
+        kratos: &["LinearElasticIsotropic", "LinearElastic"],
+        variables: &[DENSITY, YOUNG, POISSON],
+    },
+    // `HyperElastic…`: StructuralMechanicsApplication's isotropic Neo-Hookean
+    LawMap {
+        loam: "neo_hookean",
+        kratos: &["HyperElasticNeoHookean", "HyperElastic"],
+        variables: &[DENSITY, YOUNG, POISSON],
+    },
+    LawMap {
+        loam: "mohr_coulomb",
+        kratos: &["HenckyMCPlastic"],
+        variables: &[
+            DENSITY,
+            YOUNG,
+            POISSON,
+            var("cohesion", "COHESION", Same),
+            var("friction_angle", "INTERNAL_FRICTION_ANGLE", RadiansToDegrees),
+            var("dilatancy_angle", "INTERNAL_DILATANCY_ANGLE", RadiansToDegrees),
+        ],
+    },
+    LawMap {
+        loam: "mohr_coulomb_softening",
+        kratos: &["HenckyMCStrainSofteningPlastic"],
+        variables: &[
+            DENSITY,
+            YOUNG,
+            POISSON,
+            var("peak_cohesion", "COHESION", Same),
+            var("residual_cohesion", "COHESION_RESIDUAL", Same),
+            var("peak_friction_angle", "INTERNAL_FRICTION_ANGLE", RadiansToDegrees),
+            var("residual_friction_angle", "INTERNAL_FRICTION_ANGLE_RESIDUAL", RadiansToDegrees),
+            var("peak_dilatancy_angle", "INTERNAL_DILATANCY_ANGLE", RadiansToDegrees),
+            var("residual_dilatancy_angle", "INTERNAL_DILATANCY_ANGLE_RESIDUAL", RadiansToDegrees),
+            var("shape_factor", "SHAPE_FUNCTION_BETA", Same),
+        ],
+    },
+    LawMap {
+        loam: "modified_cam_clay",
+        kratos: &["HenckyBorjaCamClayPlastic"],
+        variables: &[
+            DENSITY,
+            var("preconsolidation_pressure", "PRE_CONSOLIDATION_STRESS", CompressionNegative),
+            var("ocr", "OVER_CONSOLIDATION_RATIO", Same),
+            var("swelling_slope", "SWELLING_SLOPE", Same),
+            var("compression_slope", "NORMAL_COMPRESSION_SLOPE", Same),
+            var("critical_state_slope", "CRITICAL_STATE_LINE", Same),
+            var("initial_shear_modulus", "INITIAL_SHEAR_MODULUS", Same),
+            var("alpha_shear", "ALPHA_SHEAR", Same),
+        ],
+    },
+    LawMap {
+        loam: "newtonian_fluid",
+        kratos: &["DispNewtonianFluid"],
+        variables: &[DENSITY, var("viscosity", "DYNAMIC_VISCOSITY", Same), var("bulk_modulus", "BULK_MODULUS", Same)],
+    },
+];
+
+/// The law whose Kratos name has the stem `stem`.
+pub fn law_of_stem(stem: &str) -> Option<&'static LawMap> {
+    LAWS.iter().find(|l| l.kratos.contains(&stem))
+}
+
+/// Kratos' formulation suffixes of law names (`…PlaneStrain2DLaw`) and Loam's `formulation`.
+pub const FORMULATIONS: [(&str, &str); 4] =
+    [("PlaneStrain2D", "plane_strain"), ("PlaneStress2D", "plane_stress"), ("Axisym2D", "axisymmetric"), ("3D", "3d")];
+
+/// The Kratos law name of `stem` in `formulation` (a Loam name), `UP` for the mixed form:
+/// the inverse of [`split_law_name`].
+pub fn law_name(stem: &str, formulation: &str, mixed_up: bool) -> Option<String> {
+    let (suffix, _) = FORMULATIONS.iter().find(|f| f.1 == formulation)?;
+    Some(format!("{stem}{}Law", if mixed_up { up_suffix(suffix) } else { suffix.to_string() }))
+}
+
+/// The suffix of the mixed u–p form of a formulation suffix (`PlaneStrain2D` → `PlaneStrainUP2D`).
+fn up_suffix(suffix: &str) -> String {
+    suffix.replacen("2D", "UP2D", 1).replacen("3D", "UP3D", 1)
+}
+
 /// Reads the materials file `file` (its text `text`); notes collect what is not taken over.
 pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Vec<BodyMaterial>, ImportError> {
     let root = super::json::parse_json(text, file)?;
@@ -64,80 +213,19 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Vec<BodyM
         let (stem, formulation, mixed_up) = split_law_name(&name)
             .ok_or_else(|| law.error("name", format!("Kratos law '{name}' has no Loam counterpart")))?;
         let vars = mat.object("Variables")?;
-        let num = |key: &str| vars.number(key);
-        let elastic = |law: &str| -> Result<Map<String, Value>, ImportError> {
-            let mut m = Map::new();
-            m.insert("law".into(), json!(law));
-            m.insert("density".into(), json!(num("DENSITY")?));
-            m.insert("young_modulus".into(), json!(num("YOUNG_MODULUS")?));
-            m.insert("poisson_ratio".into(), json!(num("POISSON_RATIO")?));
-            Ok(m)
-        };
-        let material = match stem {
-            "LinearElasticIsotropic" | "LinearElastic" => elastic("linear_elastic")?,
-            // `HyperElastic…`, `LinearElastic…`: StructuralMechanicsApplication's names of the same laws
-            "HyperElasticNeoHookean" | "HyperElastic" => elastic("neo_hookean")?,
-            "HenckyMCPlastic" => {
-                let mut m = elastic("mohr_coulomb")?;
-                m.insert("cohesion".into(), json!(num("COHESION")?));
-                m.insert("friction_angle".into(), json!(num("INTERNAL_FRICTION_ANGLE")?.to_degrees()));
-                m.insert("dilatancy_angle".into(), json!(num("INTERNAL_DILATANCY_ANGLE")?.to_degrees()));
-                m
+        let map = law_of_stem(stem)
+            .ok_or_else(|| law.error("name", format!("Kratos law '{name}' has no Loam counterpart")))?;
+        let mut material = Map::new();
+        material.insert("law".into(), json!(map.loam));
+        for v in map.variables {
+            let x = vars.number(v.kratos)?;
+            if v.conversion == Conversion::CompressionNegative && x >= 0.0 {
+                return Err(
+                    vars.error(v.kratos, format!("{x} is not a compression (Kratos takes compression negative)"))
+                );
             }
-            "HenckyMCStrainSofteningPlastic" => {
-                let mut m = Map::new();
-                m.insert("law".into(), json!("mohr_coulomb_softening"));
-                for (loam, kratos, angle) in [
-                    ("density", "DENSITY", false),
-                    ("young_modulus", "YOUNG_MODULUS", false),
-                    ("poisson_ratio", "POISSON_RATIO", false),
-                    ("peak_cohesion", "COHESION", false),
-                    ("residual_cohesion", "COHESION_RESIDUAL", false),
-                    ("peak_friction_angle", "INTERNAL_FRICTION_ANGLE", true),
-                    ("residual_friction_angle", "INTERNAL_FRICTION_ANGLE_RESIDUAL", true),
-                    ("peak_dilatancy_angle", "INTERNAL_DILATANCY_ANGLE", true),
-                    ("residual_dilatancy_angle", "INTERNAL_DILATANCY_ANGLE_RESIDUAL", true),
-                    ("shape_factor", "SHAPE_FUNCTION_BETA", false),
-                ] {
-                    let v = num(kratos)?;
-                    m.insert(loam.into(), json!(if angle { v.to_degrees() } else { v }));
-                }
-                m
-            }
-            "HenckyBorjaCamClayPlastic" => {
-                let preconsolidation = num("PRE_CONSOLIDATION_STRESS")?;
-                if preconsolidation >= 0.0 {
-                    return Err(vars.error(
-                        "PRE_CONSOLIDATION_STRESS",
-                        format!("{preconsolidation} is not a compression (Kratos takes compression negative)"),
-                    ));
-                }
-                let mut m = Map::new();
-                m.insert("law".into(), json!("modified_cam_clay"));
-                m.insert("density".into(), json!(num("DENSITY")?));
-                m.insert("preconsolidation_pressure".into(), json!(-preconsolidation));
-                for (loam, kratos) in [
-                    ("ocr", "OVER_CONSOLIDATION_RATIO"),
-                    ("swelling_slope", "SWELLING_SLOPE"),
-                    ("compression_slope", "NORMAL_COMPRESSION_SLOPE"),
-                    ("critical_state_slope", "CRITICAL_STATE_LINE"),
-                    ("initial_shear_modulus", "INITIAL_SHEAR_MODULUS"),
-                    ("alpha_shear", "ALPHA_SHEAR"),
-                ] {
-                    m.insert(loam.into(), json!(num(kratos)?));
-                }
-                m
-            }
-            "DispNewtonianFluid" => {
-                let mut m = Map::new();
-                m.insert("law".into(), json!("newtonian_fluid"));
-                m.insert("density".into(), json!(num("DENSITY")?));
-                m.insert("viscosity".into(), json!(num("DYNAMIC_VISCOSITY")?));
-                m.insert("bulk_modulus".into(), json!(num("BULK_MODULUS")?));
-                m
-            }
-            _ => return Err(law.error("name", format!("Kratos law '{name}' has no Loam counterpart"))),
-        };
+            material.insert(v.loam.into(), json!(v.conversion.to_loam(x)));
+        }
         let thickness = vars.optional_number("THICKNESS")?;
         let points_per_cell = vars.optional_number("MATERIAL_POINTS_PER_ELEMENT")?.map(|v| v as usize);
         vars.finish(notes);
@@ -165,14 +253,8 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Vec<BodyM
 /// `HyperElasticNeoHookeanPlaneStrainUP2DLaw`.
 pub fn split_law_name(name: &str) -> Option<(&str, &'static str, bool)> {
     let body = name.strip_suffix("Law")?;
-    for (suffix, formulation) in [
-        ("PlaneStrain2D", "plane_strain"),
-        ("PlaneStress2D", "plane_stress"),
-        ("Axisym2D", "axisymmetric"),
-        ("3D", "3d"),
-    ] {
-        let with_up = suffix.replacen("2D", "UP2D", 1).replacen("3D", "UP3D", 1);
-        if let Some(stem) = body.strip_suffix(with_up.as_str()) {
+    for (suffix, formulation) in FORMULATIONS {
+        if let Some(stem) = body.strip_suffix(up_suffix(suffix).as_str()) {
             return Some((stem, formulation, true));
         }
         if let Some(stem) = body.strip_suffix(suffix) {

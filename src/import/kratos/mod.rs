@@ -210,6 +210,9 @@ pub(crate) fn mpm_case(
         if mixed_up {
             d["element_formulation"] = json!("mixed_up");
         }
+        if project.consistent_mass_matrix == Some(false) {
+            d["mass_matrix"] = json!("lumped");
+        }
         domains.push(d);
     }
 

@@ -73,6 +73,8 @@ pub struct Project {
     pub axisymmetric: bool,
     /// `pressure_dofs` (mixed u–p elements).
     pub pressure_dofs: bool,
+    /// `consistent_mass_matrix`, if given (`false`: Loam's `mass_matrix: "lumped"`).
+    pub consistent_mass_matrix: Option<bool>,
     /// Loam `analysis`.
     pub analysis: Value,
     /// Loam `solver`.
@@ -82,6 +84,23 @@ pub struct Project {
     /// Grid conditions in file order.
     pub conditions: Vec<Condition>,
 }
+
+/// Kratos' MPM solver types (the names its solver wrapper accepts; the first is the one
+/// `loam export kratos` writes) and Loam's `analysis.type`.
+pub const SOLVER_TYPES: [(&[&str], &str); 3] = [
+    (&["Static", "static"], "static"),
+    (&["Quasi-static", "quasi_static", "QuasiStatic"], "quasi_static"),
+    (&["Dynamic", "dynamic"], "dynamic"),
+];
+
+/// Kratos' convergence criteria and Loam's `solver.convergence_criterion` (Kratos' MPM solver
+/// builds the first two; the combined ones are StructuralMechanics' names).
+pub const CRITERIA: [(&str, &str); 4] = [
+    ("residual_criterion", "residual"),
+    ("displacement_criterion", "displacement"),
+    ("and_criterion", "and"),
+    ("or_criterion", "or"),
+];
 
 /// Reads `ProjectParameters.json` (text `text`, named `file`); notes collect what is not taken over.
 pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Project, ImportError> {
@@ -115,6 +134,7 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Project, 
     s.take("problem_domain_sub_model_part_list");
     s.take("processes_sub_model_part_list");
     let pressure_dofs = s.optional_bool("pressure_dofs")?.unwrap_or(false);
+    let consistent_mass_matrix = s.optional_bool("consistent_mass_matrix")?;
     let axisymmetric = s.optional_bool("axis_symmetric_flag")?.unwrap_or(false);
     s.ignore("auxiliary_variables_list", "Loam computes what it needs", notes);
     s.ignore("linear_solver_settings", "Loam's direct solvers: solver.linear_solver auto", notes);
@@ -146,6 +166,7 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Project, 
         domain_size,
         axisymmetric,
         pressure_dofs,
+        consistent_mass_matrix,
         analysis,
         solver,
         gravity,
@@ -185,17 +206,14 @@ pub(crate) fn analysis_and_solver(
         notes.push(pd.note("start_time", format!("{start}: Loam's time starts at 0 (times shifted)")));
     }
     let mut analysis = Map::new();
-    let kind = match solver_type.as_str() {
-        "Static" | "static" => "static",
-        "Quasi-static" | "quasi_static" | "QuasiStatic" => "quasi_static",
-        "Dynamic" | "dynamic" => "dynamic",
-        other => {
-            return Err(s.error(
+    let kind = SOLVER_TYPES.iter().find(|(kratos, _)| kratos.contains(&solver_type.as_str())).map(|t| t.1).ok_or_else(
+        || {
+            s.error(
                 "solver_type",
-                format!("\"{other}\" is not a Kratos solver type Loam imports (Static, Quasi-static, Dynamic)"),
-            ))
-        }
-    };
+                format!("\"{solver_type}\" is not a Kratos solver type Loam imports (Static, Quasi-static, Dynamic)"),
+            )
+        },
+    )?;
     analysis.insert("type".into(), json!(kind));
     analysis.insert("time_step".into(), json!(dt));
     analysis.insert("end_time".into(), json!(loam_end));
@@ -223,13 +241,11 @@ pub(crate) fn analysis_and_solver(
 
     let mut solver = Map::new();
     if let Some(c) = s.optional_string("convergence_criterion")? {
-        let loam = match c.as_str() {
-            "residual_criterion" => "residual",
-            "displacement_criterion" => "displacement",
-            "and_criterion" => "and",
-            "or_criterion" => "or",
-            other => return Err(s.error("convergence_criterion", format!("\"{other}\" has no Loam counterpart"))),
-        };
+        let loam = CRITERIA
+            .iter()
+            .find(|(kratos, _)| *kratos == c)
+            .map(|t| t.1)
+            .ok_or_else(|| s.error("convergence_criterion", format!("\"{c}\" has no Loam counterpart")))?;
         solver.insert("convergence_criterion".into(), json!(loam));
     }
     for key in [
