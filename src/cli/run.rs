@@ -272,8 +272,10 @@ fn run_case(
             );
             match end {
                 RunEnd::Finished => {
+                    let on =
+                        if ranks.is_distributed() { format!(" on {} MPI ranks", ranks.size()) } else { String::new() };
                     println!(
-                        "loam: finished t = {:.6e} s{}: {summary}; results in {}",
+                        "loam: finished t = {:.6e} s{}{on}: {summary}; results in {}",
                         sim.time(),
                         if sim.at_rest { " (at rest)" } else { "" },
                         out.display()
