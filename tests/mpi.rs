@@ -151,3 +151,30 @@ fn coupled_split_beam_on_2_and_4_ranks_equals_the_serial_run() {
         1e-9,
     );
 }
+
+/// Bad input under `mpirun`: a case that names a direct solver cannot run on 2 ranks; the
+/// one-line error names `solver.linear_solver` and the exit code is 2 (that of every rank).
+#[test]
+fn a_direct_solver_on_ranks_is_refused_naming_the_key() {
+    let dir = temp_dir("direct");
+    let mut case: Value =
+        serde_json::from_str(&std::fs::read_to_string(root().join("cases/cantilever_fem.json")).unwrap()).unwrap();
+    case["solver"]["linear_solver"] = json!("lu");
+    let path = dir.join("cantilever_lu.json");
+    std::fs::write(&path, case.to_string()).unwrap();
+    let output = Command::new("mpirun")
+        .args(["-n", "2", "--oversubscribe", env!("CARGO_BIN_EXE_loam"), "run"])
+        .arg(&path)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .output()
+        .expect("mpirun");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let first = stderr.lines().next().unwrap_or_default();
+    println!("{first}");
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(first.starts_with("error: solver.linear_solver: ") && first.contains("\"petsc\""), "{first}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

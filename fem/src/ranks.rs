@@ -247,6 +247,30 @@ mod tests {
         assert_eq!(Ownership::new(ranks(0, 4), 2).owner(1), 1);
     }
 
+    /// Three springs on four 1D nodes, node 0 fixed (equations 0, 1, 2 for nodes 1, 2, 3), on
+    /// 2 ranks: rank 0 owns equations 0–1 and assembles every spring (their lowest equations
+    /// are 0, 0 and 1); rank 1 owns row 2 and assembles nothing, yet preallocates row 2's
+    /// whole pattern (columns 1 and 2), to which rank 0 contributes.
+    #[test]
+    fn a_rank_share_has_its_blocks_and_its_rows_of_the_whole_pattern() {
+        let dofs = DofMap::new(1, &[true, false, false, false]);
+        let mut layout = BlockLayout::default();
+        layout.push([0, 1]);
+        layout.push([1, 2]);
+        layout.push([2, 3]);
+        let whole = AssemblyPattern::new(&dofs, &layout);
+        let first = RankShare::new(ranks(0, 2), &dofs, &layout, &whole);
+        assert_eq!(first.owned_rows.ownership.rows(), 0..2);
+        assert_eq!(first.owned_rows.row_ptr, vec![0, 2, 5]);
+        assert_eq!(first.owned_rows.cols, vec![0, 1, 0, 1, 2]);
+        assert_eq!(first.pattern.nnz(), whole.nnz(), "rank 0 assembles every spring here");
+        let second = RankShare::new(ranks(1, 2), &dofs, &layout, &whole);
+        assert_eq!(second.owned_rows.row_ptr, vec![0, 2]);
+        assert_eq!(second.owned_rows.cols, vec![1, 2]);
+        assert_eq!(second.pattern.nnz(), 0);
+        assert!(second.pattern.reached_dofs().is_empty());
+    }
+
     #[test]
     fn one_rank_owns_everything() {
         let o = Ownership::new(Ranks::single(), 5);
