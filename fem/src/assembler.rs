@@ -15,6 +15,12 @@
 //!    sparse direct (or Krylov) solve, whose solution goes back to every DOF of its
 //!    equation and to the global frame as the correction `δu`.
 //!
+//! **Distributed** (more than one MPI rank, [`crate::ranks`]): the model, and so every element
+//! buffer, is on every rank; step 2 gathers this rank's blocks only and sums the residual
+//! over the ranks (every rank then holds the whole residual), step 3 gathers this rank's
+//! blocks of the matrix, which PETSc adds across the ranks before its solve, and the whole
+//! correction comes back to every rank.
+//!
 //! Residual and correction norms are also reported per block (soil, interface, structure)
 //! of the monolithic system, from the node roles of the DOF map.
 //!
@@ -384,11 +390,6 @@ impl Assembler {
     pub fn whole_tangent(&mut self) {
         self.friction.apply_to_matrices(&mut self.matrices);
         self.pattern.gather_matrix(&self.matrices, &mut self.values);
-    }
-
-    /// Whether this system is distributed over more than one rank.
-    pub fn is_distributed(&self) -> bool {
-        self.share.is_some()
     }
 
     /// Frictional slip nodes that stick and that slide at the last residual.
