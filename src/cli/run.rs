@@ -203,6 +203,8 @@ fn run_case(
     });
     let mut sim = match built {
         Ok(s) => s,
+        // every rank reads the same case: rank 0 says what is wrong, all exit with 2
+        Err(_) if ranks.rank() != 0 => return ExitCode::from(2),
         Err(e) => return bad_input(&e),
     };
     let out = out.unwrap_or_else(|| default_out_dir(&sim.case.name));
