@@ -25,9 +25,11 @@ fn main() {
             "Petsc(InitializeNoArguments|Initialized|Finalize|Finalized|OptionsSetValue|OptionsClearValue|PushErrorHandler|PopErrorHandler|ReturnErrorHandler|ErrorMessage)",
         )
         .allowlist_function(
-            "Mat(Create|SetSizes|SetType|SeqAIJSetPreallocationCSR|SeqAIJGetArray|SeqAIJRestoreArray|AssemblyBegin|AssemblyEnd|SetBlockSize|Destroy|CreateVecs|SetOption)",
+            "Mat(Create|SetSizes|SetType|SeqAIJSetPreallocationCSR|MPIAIJSetPreallocationCSR|SeqAIJGetArray|SeqAIJRestoreArray|ZeroEntries|SetValues|AssemblyBegin|AssemblyEnd|SetBlockSize|Destroy|CreateVecs|SetOption)",
         )
-        .allowlist_function("Vec(GetArray|RestoreArray|GetArrayRead|RestoreArrayRead|Destroy|GetSize|Duplicate)")
+        .allowlist_function(
+            "Vec(GetArray|RestoreArray|GetArrayRead|RestoreArrayRead|Destroy|GetSize|GetLocalSize|Duplicate|CreateMPI|ZeroEntries|SetValues|AssemblyBegin|AssemblyEnd|ScatterCreateToAll|ScatterBegin|ScatterEnd|ScatterDestroy)",
+        )
         .allowlist_function("MatNullSpace(Create|Destroy)|MatSetNearNullSpace")
         .allowlist_function(
             "KSP(Create|SetOperators|SetType|GetType|GetPC|SetTolerances|SetFromOptions|SetOptionsPrefix|Solve|GetIterationNumber|GetConvergedReason|GetResidualNorm|Destroy|GMRESSetRestart|SetNormType|SetPCSide|SetInitialGuessNonzero|SetUp)",
@@ -36,8 +38,8 @@ fn main() {
         .allowlist_function("MPI_(Init_thread|Initialized|Finalize|Finalized)")
         .allowlist_var("PETSC_COMM_WORLD")
         .allowlist_var("MPI_THREAD_.*")
-        .allowlist_type("KSPConvergedReason|KSPNormType|PCSide|MatAssemblyType|MatOption|PetscBool|InsertMode")
-        .rustified_enum("KSPNormType|PCSide|MatAssemblyType|MatOption|PetscBool")
+        .allowlist_type("KSPConvergedReason|KSPNormType|PCSide|MatAssemblyType|MatOption|PetscBool|InsertMode|ScatterMode")
+        .rustified_enum("KSPNormType|PCSide|MatAssemblyType|MatOption|PetscBool|InsertMode|ScatterMode")
         .derive_debug(true)
         .layout_tests(false)
         .generate_comments(false);

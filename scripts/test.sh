@@ -6,6 +6,9 @@
 #                                 #[ignore = "long ..."] (about 25 minutes in all)
 #   LOAM_PETSC=1 scripts/test.sh  also the `petsc` feature's tests (needs scripts/install_petsc.sh;
 #                                 the feature's build adds 1.5-2.5 minutes)
+#   LOAM_MPI=1 scripts/test.sh    also the `mpi` feature's tests: mpirun -n 2 and -n 4 against the
+#                                 serial PETSc run (tests/mpi.rs; needs scripts/install_petsc.sh,
+#                                 which brings Open MPI; the build adds 3-5 minutes, the tests ~20 s)
 # The Rust part needs no Python: the Rust tests that need the .venv (the meshio reading of VTK
 # files, the FMU tutorial's fmpy loop) are #[ignore]d there and run in the Python part, with
 # the .venv's interpreter.
@@ -30,6 +33,15 @@ if [ "${LOAM_PETSC:-0}" = "1" ]; then
   echo "== Rust: the petsc feature (PETSc found by pkg-config)"
   cargo test --release --features petsc --test petsc
   cargo test --release --manifest-path petsc/Cargo.toml --target-dir target
+fi
+
+if [ "${LOAM_MPI:-0}" = "1" ]; then
+  if ! pkg-config --exists petsc 2>/dev/null || ! command -v mpirun >/dev/null; then
+    echo "LOAM_MPI=1: PETSc (pkg-config) or mpirun not found; run scripts/install_petsc.sh" >&2
+    exit 1
+  fi
+  echo "== Rust: the mpi feature (mpirun -n 2 and -n 4, oversubscribed where cores are fewer)"
+  cargo test --release --features mpi --test mpi
 fi
 
 echo "== Python: virtual environment for meshio/fmpy checks (.venv)"

@@ -98,6 +98,7 @@ mod tests {
             case_file: None,
             version: "0".into(),
             threads: 1,
+            ranks: 1,
             formulation: "plane_strain".into(),
             thickness: 1.0,
             status: RunStatus::Running,

@@ -15,6 +15,12 @@
 //!    sparse direct (or Krylov) solve, whose solution goes back to every DOF of its
 //!    equation and to the global frame as the correction `δu`.
 //!
+//! **Distributed** (more than one MPI rank, [`crate::ranks`]): the model, and so every element
+//! buffer, is on every rank; step 2 gathers this rank's blocks only and sums the residual
+//! over the ranks (every rank then holds the whole residual), step 3 gathers this rank's
+//! blocks of the matrix, which PETSc adds across the ranks before its solve, and the whole
+//! correction comes back to every rank.
+//!
 //! Residual and correction norms are also reported per block (soil, interface, structure)
 //! of the monolithic system, from the node roles of the DOF map.
 //!
@@ -35,6 +41,7 @@ use crate::friction::NodalFriction;
 use crate::linear_solver::{
     CholeskyFactorisation, LinearSolver, LinearSolverError, LinearSolverKind, PetscOptions, SolverTimings,
 };
+use crate::ranks::{RankShare, Ranks};
 use crate::slip::{axis_normal_dofs, Slip, SlipRotations};
 
 /// What decides the equations of a model: nodes, roles, constraints and ties.
@@ -61,6 +68,8 @@ pub struct SystemLayout<'a> {
     pub cholesky: CholeskyFactorisation,
     /// Extra options of the `petsc` solver.
     pub petsc_options: &'a PetscOptions,
+    /// The ranks of a distributed run ([`crate::ranks`]; one process: [`Ranks::single`]).
+    pub ranks: Ranks,
 }
 
 /// The global system of one sparsity pattern (see the module doc).
@@ -93,6 +102,10 @@ pub struct Assembler {
     /// The step length Δt of the Newton tangent whose factors the solver keeps (set by
     /// [`Assembler::keep_factors_for`]; `None` after any other solve).
     factors_for: Option<f64>,
+    /// This rank's share of a distributed run (`None` on one process): its blocks are
+    /// gathered, the residual summed over the ranks, the matrix assembled and solved by PETSc
+    /// across them ([`crate::ranks`]).
+    share: Option<RankShare>,
 }
 
 impl Assembler {
@@ -141,6 +154,10 @@ impl Assembler {
         if system.solver == LinearSolverKind::Petsc {
             solver.set_petsc_options(system.petsc_options.clone());
         }
+        let share = system.ranks.is_distributed().then(|| RankShare::new(system.ranks, &dofs, &layout, &pattern));
+        if let Some(share) = &share {
+            solver.distribute(share.owned_rows.clone());
+        }
         if !scale.is_empty() {
             let mut signs = vec![1i8; n_eq];
             for (g, &e) in dofs.equations().iter().enumerate() {
@@ -165,6 +182,7 @@ impl Assembler {
             friction,
             solver,
             factors_for: None,
+            share,
             dofs,
             pattern,
             domain_matrix,
@@ -296,7 +314,13 @@ impl Assembler {
     /// equation; returns `‖R‖` over the equations (pressure equations equilibrated, see the
     /// module doc).
     pub fn residual(&mut self, f_ext: &[f64]) -> f64 {
-        self.pattern.gather_vector(&self.vectors, &mut self.residual);
+        match &mut self.share {
+            None => self.pattern.gather_vector(&self.vectors, &mut self.residual),
+            Some(share) => {
+                share.pattern.gather_vector(&self.vectors, &mut self.residual);
+                share.sum_over_ranks(&mut self.residual);
+            }
+        }
         for (r, f) in self.residual.iter_mut().zip(f_ext) {
             *r -= f;
         }
@@ -350,8 +374,20 @@ impl Assembler {
     }
 
     /// Step 3a: gathers the element matrices into the global matrix (with the friction's
-    /// tangent, written into the blocks: call once per assembly, after the residual).
+    /// tangent, written into the blocks: call once per assembly, after the residual); in a
+    /// distributed run this rank's blocks only (PETSc adds the ranks' parts at the solve).
     pub fn tangent(&mut self) {
+        self.friction.apply_to_matrices(&mut self.matrices);
+        match &mut self.share {
+            None => self.pattern.gather_matrix(&self.matrices, &mut self.values),
+            Some(share) => share.pattern.gather_matrix(&self.matrices, &mut share.values),
+        }
+    }
+
+    /// Step 3a with every block, also in a distributed run (whose model is replicated: every
+    /// rank holds every block): the whole matrix for [`Assembler::tangent_matrix`] and the
+    /// diagnosis of a failed step ([`crate::rigid_modes`]); not for a solve.
+    pub fn whole_tangent(&mut self) {
         self.friction.apply_to_matrices(&mut self.matrices);
         self.pattern.gather_matrix(&self.matrices, &mut self.values);
     }
@@ -365,18 +401,22 @@ impl Assembler {
     /// and `‖δu‖` over the equations is returned.
     pub fn solve(&mut self) -> Result<f64, LinearSolverError> {
         self.factors_for = None;
-        let (solver, pattern) = (&mut self.solver, &self.pattern);
+        let (pattern, values) = match &mut self.share {
+            None => (&self.pattern, &mut self.values),
+            Some(share) => (&share.pattern, &mut share.values),
+        };
+        let solver = &mut self.solver;
         if self.scale.is_empty() {
-            solver.solve(pattern, &self.values, &mut self.rhs)?;
+            solver.solve(pattern, values, &mut self.rhs)?;
         } else {
             // D K D x̂ = D (−R), δ = D x̂ (module doc); the values are restored after
-            pattern.scale_symmetric(&mut self.values, &self.scale);
+            pattern.scale_symmetric(values, &self.scale);
             for (r, d) in self.rhs.iter_mut().zip(&self.scale) {
                 *r *= d;
             }
-            let solved = solver.solve(pattern, &self.values, &mut self.rhs);
+            let solved = solver.solve(pattern, values, &mut self.rhs);
             let inverse: Vec<f64> = self.scale.iter().map(|d| 1.0 / d).collect();
-            pattern.scale_symmetric(&mut self.values, &inverse);
+            pattern.scale_symmetric(values, &inverse);
             solved?;
             for (r, d) in self.rhs.iter_mut().zip(&self.scale) {
                 *r *= d;

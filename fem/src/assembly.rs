@@ -73,13 +73,22 @@ pub struct AssemblyPattern {
 impl AssemblyPattern {
     /// Builds the pattern of the equations of `dofs` touched by the blocks of `layout`.
     pub fn new(dofs: &DofMap, layout: &BlockLayout) -> Self {
+        Self::of_blocks(dofs, layout, |_| true)
+    }
+
+    /// The pattern and gather lists of the blocks `b` of `layout` for which `selected(b)`
+    /// holds (a rank's share of a distributed assembly, [`crate::ranks`]): the matrix has all
+    /// the equations of `dofs` (empty columns where no selected block reaches), and the
+    /// gathers read the selected blocks' entries of the whole element buffers.
+    pub fn of_blocks(dofs: &DofMap, layout: &BlockLayout, selected: impl Fn(usize) -> bool) -> Self {
         let n = dofs.num_equations();
         assert!(layout.matrix_len() < u32::MAX as usize, "element buffer exceeds u32 indexing");
+        let blocks: Vec<usize> = (0..layout.num_blocks()).filter(|&b| selected(b)).collect();
         // the free couplings as (row, source) pairs bucketed by column (a counting sort: two
         // passes over the blocks), each column's few pairs then sorted by row and source
         let free_equations = |bd: &[usize]| bd.iter().filter(|&&g| dofs.equation(g) != CONSTRAINED).count();
         let mut bucket_ptr = vec![0usize; n + 1];
-        for b in 0..layout.num_blocks() {
+        for &b in &blocks {
             let bd = &layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]];
             let rows = free_equations(bd);
             for &gc in bd {
@@ -94,7 +103,7 @@ impl AssemblyPattern {
         }
         let mut pairs = vec![(0u32, 0u32); bucket_ptr[n]];
         let mut fill = bucket_ptr.clone();
-        for b in 0..layout.num_blocks() {
+        for &b in &blocks {
             let bd = &layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]];
             let nd = bd.len();
             let off = layout.matrix_offset[b];
@@ -152,17 +161,19 @@ impl AssemblyPattern {
             }
         }
         // vector gather over all DOFs
+        let entries = || blocks.iter().flat_map(|&b| layout.dof_ptr[b]..layout.dof_ptr[b + 1]);
         let mut counts = vec![0usize; dofs.num_dofs() + 1];
-        for &g in &layout.dofs {
-            counts[g + 1] += 1;
+        for i in entries() {
+            counts[layout.dofs[i] + 1] += 1;
         }
         for g in 0..dofs.num_dofs() {
             counts[g + 1] += counts[g];
         }
         let vector_gather_ptr = counts.clone();
         let mut fill = counts;
-        let mut vector_gather_src = vec![0u32; layout.dofs.len()];
-        for (i, &g) in layout.dofs.iter().enumerate() {
+        let mut vector_gather_src = vec![0u32; fill[dofs.num_dofs()]];
+        for i in entries() {
+            let g = layout.dofs[i];
             vector_gather_src[fill[g]] = i as u32;
             fill[g] += 1;
         }
@@ -173,6 +184,13 @@ impl AssemblyPattern {
     /// Number of equations.
     pub fn num_equations(&self) -> usize {
         self.symbolic.nrows()
+    }
+
+    /// The DOFs (constrained or not) that the gathered blocks reach.
+    pub fn reached_dofs(&self) -> Vec<usize> {
+        (0..self.vector_gather_ptr.len() - 1)
+            .filter(|&g| self.vector_gather_ptr[g + 1] > self.vector_gather_ptr[g])
+            .collect()
     }
 
     /// Number of stored nonzeros.
@@ -298,6 +316,15 @@ mod tests {
         assert_eq!(r, vec![1.0, 5.0, 4.0]);
         assert_eq!(pattern.asymmetry(&values), 0.0);
         assert!(pattern.is_symmetric(&values, 0.0));
+        // the second spring alone: rows and columns of equations 0 and 1, and DOFs 1 and 2
+        let second = AssemblyPattern::of_blocks(&dofs, &layout, |b| b == 1);
+        let mut part = vec![0.0; second.nnz()];
+        second.gather_matrix(&buf, &mut part);
+        let dense_part = second.matrix(&part).to_dense();
+        assert_eq!((dense_part[(0, 0)], dense_part[(0, 1)], dense_part[(1, 1)]), (3.0, -3.0, 3.0));
+        second.gather_vector(&[1.0, 2.0, 3.0, 4.0], &mut r);
+        assert_eq!(r, vec![0.0, 3.0, 4.0]);
+        assert_eq!(second.reached_dofs(), vec![1, 2]);
         values[pattern.transpose[1]] += 1e-6;
         assert!(!pattern.is_symmetric(&values, 1e-9));
         assert!(pattern.is_symmetric(&values, 1e-6));

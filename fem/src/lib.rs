@@ -32,6 +32,7 @@ pub mod newton;
 pub mod pattern_lu;
 #[cfg(feature = "petsc")]
 mod petsc_solver;
+pub mod ranks;
 pub mod rigid_modes;
 pub mod scheme;
 pub mod simd_state;

@@ -406,6 +406,8 @@ pub struct LinearSolver {
     /// The PETSc solver of this pattern (`petsc` kind, after the first solve).
     #[cfg(feature = "petsc")]
     petsc: Option<crate::petsc_solver::PetscSolver>,
+    /// In a distributed run, this rank's rows of the matrix ([`LinearSolver::distribute`]).
+    owned_rows: Option<crate::ranks::OwnedRows>,
     /// Accumulated timings.
     pub timings: SolverTimings,
 }
@@ -435,6 +437,7 @@ impl LinearSolver {
             near_null_space: Vec::new(),
             #[cfg(feature = "petsc")]
             petsc: None,
+            owned_rows: None,
             timings: SolverTimings::default(),
         }
     }
@@ -449,6 +452,14 @@ impl LinearSolver {
     /// Sets the extra PETSc options of the `petsc` kind (before the first solve).
     pub fn set_petsc_options(&mut self, options: PetscOptions) {
         self.petsc_options = options;
+    }
+
+    /// Makes the solves distributed over the ranks (before the first solve; the `petsc` kind
+    /// only): this rank owns `rows` of the matrix, each solve receives this rank's part of
+    /// the matrix (the blocks it assembles) and the whole right-hand side, and returns the
+    /// whole solution on every rank ([`crate::ranks`]).
+    pub fn distribute(&mut self, rows: crate::ranks::OwnedRows) {
+        self.owned_rows = Some(rows);
     }
 
     /// What this solver has learnt about its pattern's matrices.
@@ -550,6 +561,11 @@ impl LinearSolver {
         if self.kind == LinearSolverKind::Petsc {
             return self.solve_petsc(pattern, values, rhs);
         }
+        if self.owned_rows.is_some() {
+            return Err(LinearSolverError::Factorisation(
+                "a distributed run (more than one MPI rank) needs the `petsc` linear solver".into(),
+            ));
+        }
         if n == 0 {
             return Ok(());
         }
@@ -625,8 +641,12 @@ impl LinearSolver {
         }
         if self.petsc.is_none() {
             let t = Instant::now();
-            self.petsc =
-                Some(crate::petsc_solver::PetscSolver::new(pattern, &self.petsc_options, &self.near_null_space)?);
+            self.petsc = Some(crate::petsc_solver::PetscSolver::new(
+                pattern,
+                &self.petsc_options,
+                &self.near_null_space,
+                self.owned_rows.as_ref(),
+            )?);
             self.timings.symbolic += t.elapsed().as_secs_f64();
         }
         let solver = self.petsc.as_mut().expect("PETSc solver present");

@@ -417,6 +417,7 @@ impl Model {
             solver: self.settings.linear_solver,
             cholesky: self.settings.cholesky_factorisation,
             petsc_options: &self.petsc_options,
+            ranks: self.settings.ranks,
         };
         let mut assembler = Assembler::new(&system, &self.domains);
         if self.settings.linear_solver == crate::linear_solver::LinearSolverKind::Petsc {
@@ -714,7 +715,7 @@ impl Model {
         if assembled.is_err() {
             return error;
         }
-        assembler.tangent();
+        assembler.whole_tangent();
         match free_rigid_motion(assembler, &self.positions(), self.dim) {
             Some(motion) => {
                 let mut of_component = vec![false; self.num_dofs()];

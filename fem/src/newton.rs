@@ -34,6 +34,7 @@ use crate::convergence::{Convergence, ConvergenceCriterion};
 use crate::domain::{AssemblyInput, Domain, NodalState};
 use crate::linear_solver::{CholeskyFactorisation, LinearSolverKind};
 use crate::model::{StepError, StepReport};
+use crate::ranks::Ranks;
 use crate::scheme::TimeScheme;
 
 /// Newton–Raphson settings, as in the case file's `solver` object.
@@ -75,6 +76,10 @@ pub struct NewtonSettings {
     /// `loam run --trace-newton` sets it).
     #[serde(skip)]
     pub trace: bool,
+    /// The ranks of a distributed run (not a case key: `loam run` under `mpirun` sets it;
+    /// one process by default), see [`crate::ranks`].
+    #[serde(skip)]
+    pub ranks: Ranks,
 }
 
 /// When a Newton iteration solves with the factors of an earlier tangent instead of
@@ -116,6 +121,7 @@ impl Default for NewtonSettings {
             mpm_pattern_rings: DEFAULT_MPM_PATTERN_RINGS,
             tangent_reuse: TangentReuse::Off,
             trace: false,
+            ranks: Ranks::single(),
         }
     }
 }

@@ -1,5 +1,5 @@
 //! `linear_solver: "petsc"` (issue 26, `docs/distributed.md`): PETSc's Krylov solvers with
-//! algebraic multigrid on one process, through the safe layer of `loam-petsc`. Built only with
+//! algebraic multigrid on one process or distributed over MPI ranks, through the safe layer of `loam-petsc`. Built only with
 //! the `petsc` Cargo feature.
 //!
 //! **Defaults.** CG when the assembled tangent is symmetric (the check `auto` makes, to
@@ -22,6 +22,13 @@
 //! column indices of the compressed-row matrix, and row `i`'s entry `(i, j)` is the stored
 //! entry at the transpose position of `(j, i)`.
 //!
+//! **Distributed** (a run on several MPI ranks, [`crate::ranks`]): one `MPIAIJ` matrix per
+//! pattern, each rank owning a contiguous range of rows, preallocated exactly from the
+//! replicated whole pattern; each rank adds its part (the blocks it assembles, on the same
+//! transposed positions) with `ADD_VALUES`, gives its owned entries of the (replicated)
+//! right-hand side and receives the whole solution; CG or GMRES is chosen when every rank's
+//! part is symmetric (one `MPI_Allreduce`), so that every rank takes the same path.
+//!
 //! **Failure.** A Krylov solve that PETSc reports as diverged (iteration limit, breakdown,
 //! an indefinite preconditioner) is [`LinearSolverError::NotConverged`] with the iterations
 //! and PETSc's reason: the step fails and is retried with a shorter one, as after a failed
@@ -29,10 +36,11 @@
 
 use std::time::Instant;
 
-use loam_petsc::{reason_name, KrylovSettings, KrylovSolver};
+use loam_petsc::{reason_name, KrylovSettings, KrylovSolver, RowPattern};
 
 use crate::assembly::AssemblyPattern;
 use crate::linear_solver::{LinearSolverError, PetscOptions, SolverTimings};
+use crate::ranks::{OwnedRows, Ranks};
 
 /// Default relative tolerance of the Krylov iterations (`-ksp_rtol` overrides it): below
 /// the Newton tolerances by orders of magnitude, so Newton's path does not depend on the
@@ -56,6 +64,8 @@ pub(crate) struct PetscSolver {
     /// Set once CG failed on this pattern (e.g. an indefinite preconditioner): GMRES from
     /// then on, as the direct solver turns to LU after a failed Cholesky.
     cg_failed: bool,
+    /// The ranks of a distributed solve (one process: [`Ranks::single`]).
+    ranks: Ranks,
 }
 
 fn petsc_error(e: loam_petsc::Error) -> LinearSolverError {
@@ -64,11 +74,14 @@ fn petsc_error(e: loam_petsc::Error) -> LinearSolverError {
 
 impl PetscSolver {
     /// The solver of `pattern` with the case's extra `options` and the near null space of
-    /// its matrices (the rigid-body modes per equation, for GAMG; may be empty).
+    /// its matrices (the rigid-body modes per equation, for GAMG; may be empty). Distributed
+    /// (`owned_rows` given, collective): `pattern` is this rank's part of the matrix (the
+    /// blocks it assembles, global equation numbers), `owned_rows` the rows PETSc keeps here.
     pub(crate) fn new(
         pattern: &AssemblyPattern,
         options: &PetscOptions,
         near_null_space: &[Vec<f64>],
+        owned_rows: Option<&OwnedRows>,
     ) -> Result<Self, LinearSolverError> {
         let mut settings = KrylovSettings {
             ksp_type: "gmres".into(),
@@ -98,11 +111,32 @@ impl PetscSolver {
             passed.push((name.clone(), value.clone()));
         }
         let symbolic = pattern.symbolic();
-        let mut krylov = KrylovSolver::new(symbolic.col_ptr(), symbolic.row_idx(), &passed).map_err(petsc_error)?;
+        let (col_ptr, row_idx) = (symbolic.col_ptr(), symbolic.row_idx());
+        let n = pattern.num_equations();
+        let (krylov, ranks) = match owned_rows {
+            None => (KrylovSolver::new(col_ptr, row_idx, &passed), Ranks::single()),
+            Some(owned) => {
+                // this rank's contribution: the non-empty rows of its part (column c of the
+                // structurally symmetric pattern is row c)
+                let rows: Vec<usize> = (0..n).filter(|&c| col_ptr[c + 1] > col_ptr[c]).collect();
+                let first = rows.first().map_or(0, |&c| col_ptr[c]);
+                let row_ptr: Vec<usize> = std::iter::once(first).chain(rows.iter().map(|&c| col_ptr[c + 1])).collect();
+                let owned_list: Vec<usize> = owned.ownership.rows().collect();
+                let solver = KrylovSolver::distributed(
+                    n,
+                    owned.ownership.rows(),
+                    RowPattern { rows: &owned_list, row_ptr: &owned.row_ptr, cols: &owned.cols },
+                    RowPattern { rows: &rows, row_ptr: &row_ptr, cols: row_idx },
+                    &passed,
+                );
+                (solver, owned.ownership.ranks())
+            }
+        };
+        let mut krylov = krylov.map_err(petsc_error)?;
         if settings.pc_type == "gamg" && near_null_space.iter().all(|v| v.len() == pattern.num_equations()) {
             krylov.set_near_null_space(near_null_space).map_err(petsc_error)?;
         }
-        Ok(Self { krylov, settings, ksp_given, configured_symmetric: None, cg_failed: false })
+        Ok(Self { krylov, settings, ksp_given, configured_symmetric: None, cg_failed: false, ranks })
     }
 
     /// Solves `A x = b` in place (`rhs`: `b` on entry, `x` on exit) for the matrix with the
@@ -115,7 +149,8 @@ impl PetscSolver {
         timings: &mut SolverTimings,
     ) -> Result<(), LinearSolverError> {
         let t = Instant::now();
-        let symmetric = !self.ksp_given && !self.cg_failed && pattern.is_symmetric(values, 1e-10);
+        // distributed: symmetric if every rank's part is (the same decision on every rank)
+        let symmetric = !self.ksp_given && !self.cg_failed && self.ranks.all(pattern.is_symmetric(values, 1e-10));
         self.configure(symmetric)?;
         let transpose = pattern.transpose_positions();
         self.krylov.set_values(|k| values[transpose[k]]).map_err(petsc_error)?;

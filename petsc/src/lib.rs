@@ -1,13 +1,18 @@
 //! Thin bindings to PETSc (the system library, found by pkg-config; bindgen over
 //! `petscksp.h` in `build.rs`, allowlisted to what Loam calls) and a small safe layer: one
-//! sequential AIJ matrix with a fixed nonzero pattern, its two vectors and a Krylov solver
-//! (issue 26, `docs/distributed.md`).
+//! AIJ matrix with a fixed nonzero pattern, its two vectors and a Krylov solver (issue 26,
+//! `docs/distributed.md`), sequential (`MATSEQAIJ`, values written in place) or distributed
+//! over the ranks of `PETSC_COMM_WORLD` (`MATMPIAIJ`, rows split in contiguous ranges, each
+//! rank adding its contribution with `ADD_VALUES` through PETSc's stash, the solution
+//! gathered to every rank by `VecScatterCreateToAll`); and [`VectorSum`], the sum over the
+//! ranks of a vector that each rank holds a part of.
 //!
 //! **Process-wide state.** PETSc (and the MPI it initialises) is initialised once per process,
 //! lazily, by the first [`KrylovSolver::new`], with `MPI_THREAD_SERIALIZED`, PETSc's signal
 //! handlers off (`-no_signal_handler`: Loam's own SIGINT/SIGTERM handling checkpoints) and
 //! PETSc's error handler replaced by the returning one (an error is a [`Error`], not a
-//! traceback on stderr). PETSc built without thread safety must not be entered by two threads
+//! traceback on stderr). If MPI is already running (an `mpi` build initialises it with rsmpi
+//! before PETSc), it is left to its owner: [`finalize`] then ends PETSc only. PETSc built without thread safety must not be entered by two threads
 //! at once: every call of this crate holds one process-wide lock, which is what makes
 //! [`KrylovSolver`] `Send`. [`finalize`] ends PETSc and MPI; a process that never calls it
 //! exits without (Open MPI's singleton mode does not complain).
@@ -18,10 +23,14 @@
 //! levels) without touching another solver's.
 
 pub mod sys;
+mod vector_sum;
+
+pub use vector_sum::VectorSum;
 
 use std::ffi::{c_char, CStr, CString};
+use std::ops::Range;
 use std::ptr;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
 /// An error reported by PETSc or MPI.
@@ -49,8 +58,10 @@ static LOCK: Mutex<()> = Mutex::new(());
 static INIT: OnceLock<Result<(), Error>> = OnceLock::new();
 /// Solvers created: the next options prefix.
 static PREFIXES: AtomicUsize = AtomicUsize::new(0);
+/// Whether [`initialize`] started MPI (else its owner, e.g. rsmpi's `Universe`, ends it).
+static STARTED_MPI: AtomicBool = AtomicBool::new(false);
 
-fn lock() -> MutexGuard<'static, ()> {
+pub(crate) fn lock() -> MutexGuard<'static, ()> {
     // a panic while the lock was held leaves PETSc as consistent as the panic left it; the
     // caller's error handling decides, not the poisoning
     LOCK.lock().unwrap_or_else(|e| e.into_inner())
@@ -58,7 +69,7 @@ fn lock() -> MutexGuard<'static, ()> {
 
 /// `Ok` for PETSc's success code, the [`Error`] with PETSc's message otherwise (call with
 /// the lock held).
-fn check(call: &'static str, code: sys::PetscErrorCode) -> Result<(), Error> {
+pub(crate) fn check(call: &'static str, code: sys::PetscErrorCode) -> Result<(), Error> {
     if code == 0 {
         return Ok(());
     }
@@ -97,6 +108,7 @@ pub fn initialize() -> Result<(), Error> {
                 sys::MPI_Init_thread(ptr::null_mut(), ptr::null_mut(), sys::MPI_THREAD_SERIALIZED as i32, &mut provided)
             };
             check("MPI_Init_thread", code)?;
+            STARTED_MPI.store(true, Ordering::Relaxed);
         }
         let no_signals = c_string("-no_signal_handler");
         // SAFETY: PETSc documents PetscOptionsSetValue before PetscInitialize (the options
@@ -117,8 +129,9 @@ pub fn initialize() -> Result<(), Error> {
     .clone()
 }
 
-/// Ends PETSc and MPI if [`initialize`] started them (call at the end of the process, after
-/// every [`KrylovSolver`] has been dropped; none can be created afterwards).
+/// Ends PETSc if [`initialize`] started it, and MPI if it started that too (call at the end of
+/// the process, after every [`KrylovSolver`] and [`VectorSum`] has been dropped; none can be
+/// created afterwards; an MPI started by rsmpi is ended by its `Universe`, after this).
 pub fn finalize() -> Result<(), Error> {
     if !matches!(INIT.get(), Some(Ok(()))) {
         return Ok(());
@@ -130,6 +143,9 @@ pub fn finalize() -> Result<(), Error> {
     if done == sys::PetscBool::PETSC_FALSE {
         // SAFETY: PETSc was initialised by `initialize` and not finalised (checked above).
         check("PetscFinalize", unsafe { sys::PetscFinalize() })?;
+    }
+    if !STARTED_MPI.load(Ordering::Relaxed) {
+        return Ok(());
     }
     let mut mpi_done = 0;
     // SAFETY: MPI_Finalized may be called at any time.
@@ -206,14 +222,55 @@ pub struct KrylovSettings {
     pub right_preconditioning: bool,
 }
 
-/// A sequential AIJ matrix with a fixed nonzero pattern, its vectors and a KSP.
+/// Rows of a matrix in compressed-row form: row `rows[i]` (a global equation) has the
+/// columns `cols[row_ptr[i]..row_ptr[i + 1]]` (global, sorted within the row).
+#[derive(Debug, Clone, Copy)]
+pub struct RowPattern<'a> {
+    /// Global index of each row.
+    pub rows: &'a [usize],
+    /// Start of each row in `cols`; `rows.len() + 1` entries.
+    pub row_ptr: &'a [usize],
+    /// Global column indices.
+    pub cols: &'a [usize],
+}
+
+/// How the matrix is stored across the ranks.
+enum Layout {
+    /// `MATSEQAIJ` on one process: the values are written in place, in the order of the
+    /// compressed-row pattern it was preallocated with.
+    Sequential,
+    /// `MATMPIAIJ` over the ranks of `PETSC_COMM_WORLD`: this rank's contribution (rows of
+    /// any rank) is added with `ADD_VALUES`; the solution is gathered to every rank.
+    Distributed {
+        /// The rows this rank contributes to, as PETSc indices.
+        rows: Vec<sys::PetscInt>,
+        /// Start of each contributed row in `cols` and in the values.
+        row_ptr: Vec<usize>,
+        /// Columns of the contributed entries, as PETSc indices.
+        cols: Vec<sys::PetscInt>,
+        /// The contributed values of the current matrix.
+        values: Vec<f64>,
+        /// `VecScatterCreateToAll` from the solution to `x_all`.
+        gather: sys::VecScatter,
+        /// The whole solution on this rank (a sequential vector of `n` entries).
+        x_all: sys::Vec,
+    },
+}
+
+/// An AIJ matrix with a fixed nonzero pattern, its vectors and a KSP: sequential
+/// ([`KrylovSolver::new`]) or distributed over the ranks ([`KrylovSolver::distributed`]).
 pub struct KrylovSolver {
     mat: sys::Mat,
     x: sys::Vec,
     b: sys::Vec,
     ksp: sys::KSP,
+    /// Number of equations (global).
     n: usize,
+    /// The equations whose rows (and vector entries) this rank owns (`0..n` on one process).
+    owned: Range<usize>,
+    /// Stored entries of the sequential matrix, or of this rank's contribution.
     nnz: usize,
+    layout: Layout,
     /// Options prefix `loam<k>_`.
     prefix: String,
     /// Full names of the options this solver put into PETSc's database (cleared on drop).
@@ -229,49 +286,39 @@ impl std::fmt::Debug for KrylovSolver {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("KrylovSolver")
             .field("n", &self.n)
+            .field("owned", &self.owned)
             .field("nnz", &self.nnz)
             .field("prefix", &self.prefix)
             .finish()
     }
 }
 
+/// The indices as PETSc's (32-bit) integers, or the error naming `what` if one does not fit.
+pub(crate) fn petsc_indices(values: &[usize], what: &str) -> Result<Vec<sys::PetscInt>, Error> {
+    values.iter().map(|&v| sys::PetscInt::try_from(v)).collect::<Result<_, _>>().map_err(|_| Error {
+        call: "KrylovSolver",
+        code: 0,
+        message: format!("{what} exceed PETSc's 32-bit indices"),
+    })
+}
+
 impl KrylovSolver {
-    /// A solver for `n × n` matrices with the compressed-row pattern `row_ptr` (`n + 1`
-    /// entries), `col_idx` (sorted within each row), and the extra PETSc `options` (name with
-    /// its leading `-`, value or `None` for a flag) under its own prefix.
+    /// A solver on one process for `n × n` matrices with the compressed-row pattern
+    /// `row_ptr` (`n + 1` entries), `col_idx` (sorted within each row), and the extra PETSc
+    /// `options` (name with its leading `-`, value or `None` for a flag) under its own prefix.
     pub fn new(row_ptr: &[usize], col_idx: &[usize], options: &[(String, Option<String>)]) -> Result<Self, Error> {
         initialize()?;
         let n = row_ptr.len().saturating_sub(1);
-        let nnz = col_idx.len();
-        let too_big = |v: usize| i32::try_from(v).is_err();
-        if too_big(n) || too_big(nnz) {
-            return Err(Error {
-                call: "KrylovSolver::new",
-                code: 0,
-                message: format!("{n} equations / {nnz} nonzeros exceed PETSc's 32-bit indices"),
-            });
-        }
-        let ia: Vec<sys::PetscInt> = row_ptr.iter().map(|&v| v as sys::PetscInt).collect();
-        let ja: Vec<sys::PetscInt> = col_idx.iter().map(|&v| v as sys::PetscInt).collect();
-        let prefix = format!("loam{}_", PREFIXES.fetch_add(1, Ordering::Relaxed));
-        let mut solver = Self {
-            mat: ptr::null_mut(),
-            x: ptr::null_mut(),
-            b: ptr::null_mut(),
-            ksp: ptr::null_mut(),
-            n,
-            nnz,
-            prefix,
-            options: Vec::new(),
-        };
-        let _guard = lock();
-        // SAFETY (every call of this block): PETSc is initialised; the object handles are
-        // written by the Create calls before use and owned by `solver` (destroyed by its
-        // Drop, also on an early return); the CSR arrays outlive the preallocation call,
-        // which copies them (values null: zeros); the strings outlive their calls.
+        let ia = petsc_indices(row_ptr, "the nonzeros")?;
+        let ja = petsc_indices(col_idx, "the equations")?;
+        let mut solver = Self::unset(n, 0..n, col_idx.len(), Layout::Sequential);
+        // SAFETY (every call of this block): PETSc is initialised; the matrix handle is
+        // written by MatCreate before use and owned by `solver` (destroyed by its Drop, also
+        // on an early return); the CSR arrays outlive the preallocation call, which copies
+        // them (values null: zeros); the type name outlives its call.
         unsafe {
-            let comm = sys::PETSC_COMM_WORLD;
-            check("MatCreate", sys::MatCreate(comm, &mut solver.mat))?;
+            let _guard = lock();
+            check("MatCreate", sys::MatCreate(sys::PETSC_COMM_WORLD, &mut solver.mat))?;
             let size = n as sys::PetscInt;
             check("MatSetSizes", sys::MatSetSizes(solver.mat, size, size, size, size))?;
             let seqaij = c_string("seqaij");
@@ -280,18 +327,110 @@ impl KrylovSolver {
                 "MatSeqAIJSetPreallocationCSR",
                 sys::MatSeqAIJSetPreallocationCSR(solver.mat, ia.as_ptr(), ja.as_ptr(), ptr::null()),
             )?;
+        }
+        solver.finish_creation(options)?;
+        Ok(solver)
+    }
+
+    /// A solver distributed over the ranks of `PETSC_COMM_WORLD` (collective: every rank
+    /// calls it, with its own arguments) for `n × n` matrices: this rank owns the equations
+    /// `owned` (contiguous, in rank order, together `0..n`), whose rows have the pattern
+    /// `owned_pattern` (its `rows` are `owned`: PETSc's exact preallocation), and contributes
+    /// the entries of `contribution` (rows of any rank) to every matrix
+    /// ([`KrylovSolver::set_values`]); `options` as for [`KrylovSolver::new`].
+    pub fn distributed(
+        n: usize,
+        owned: Range<usize>,
+        owned_pattern: RowPattern<'_>,
+        contribution: RowPattern<'_>,
+        options: &[(String, Option<String>)],
+    ) -> Result<Self, Error> {
+        initialize()?;
+        assert!(owned.end <= n && owned_pattern.rows.len() == owned.len(), "owned rows within the equations");
+        let first = owned_pattern.row_ptr.first().copied().unwrap_or(0);
+        let ia: Vec<sys::PetscInt> = petsc_indices(owned_pattern.row_ptr, "the nonzeros")?
+            .into_iter()
+            .map(|k| k - first as sys::PetscInt)
+            .collect();
+        let ja = petsc_indices(
+            &owned_pattern.cols[first..*owned_pattern.row_ptr.last().unwrap_or(&first)],
+            "the equations",
+        )?;
+        let layout = Layout::Distributed {
+            rows: petsc_indices(contribution.rows, "the equations")?,
+            row_ptr: contribution.row_ptr.to_vec(),
+            cols: petsc_indices(contribution.cols, "the equations")?,
+            values: vec![0.0; contribution.cols.len()],
+            gather: ptr::null_mut(),
+            x_all: ptr::null_mut(),
+        };
+        let mut solver = Self::unset(n, owned.clone(), contribution.cols.len(), layout);
+        petsc_indices(&[n], "the equations")?;
+        // SAFETY (every call of this block): PETSc is initialised; the matrix handle is
+        // written by MatCreate before use and owned by `solver` (destroyed by its Drop);
+        // the local CSR arrays (local row pointers from 0, global sorted columns) outlive
+        // the preallocation call, which copies them (values null: zeros) and assembles;
+        // the type name outlives its call.
+        unsafe {
+            let _guard = lock();
+            check("MatCreate", sys::MatCreate(sys::PETSC_COMM_WORLD, &mut solver.mat))?;
+            let (local, global) = (owned.len() as sys::PetscInt, n as sys::PetscInt);
+            check("MatSetSizes", sys::MatSetSizes(solver.mat, local, local, global, global))?;
+            let mpiaij = c_string("mpiaij");
+            check("MatSetType", sys::MatSetType(solver.mat, mpiaij.as_ptr()))?;
+            check(
+                "MatMPIAIJSetPreallocationCSR",
+                sys::MatMPIAIJSetPreallocationCSR(solver.mat, ia.as_ptr(), ja.as_ptr(), ptr::null()),
+            )?;
+        }
+        solver.finish_creation(options)?;
+        let _guard = lock();
+        if let Layout::Distributed { gather, x_all, .. } = &mut solver.layout {
+            // SAFETY: `solver.x` is the live parallel vector of the matrix's layout; the
+            // scatter and the sequential vector it creates are owned by the layout and
+            // destroyed by Drop.
+            check("VecScatterCreateToAll", unsafe { sys::VecScatterCreateToAll(solver.x, gather, x_all) })?;
+        }
+        Ok(solver)
+    }
+
+    /// A solver without PETSc objects yet (every handle null: Drop accepts that).
+    fn unset(n: usize, owned: Range<usize>, nnz: usize, layout: Layout) -> Self {
+        let prefix = format!("loam{}_", PREFIXES.fetch_add(1, Ordering::Relaxed));
+        Self {
+            mat: ptr::null_mut(),
+            x: ptr::null_mut(),
+            b: ptr::null_mut(),
+            ksp: ptr::null_mut(),
+            n,
+            owned,
+            nnz,
+            layout,
+            prefix,
+            options: Vec::new(),
+        }
+    }
+
+    /// After the matrix is created and preallocated: its fixed pattern, its vectors, the KSP
+    /// with this solver's prefix and `options` in PETSc's database under it.
+    fn finish_creation(&mut self, options: &[(String, Option<String>)]) -> Result<(), Error> {
+        let _guard = lock();
+        // SAFETY (every call of this block): the matrix is live and preallocated; the vector
+        // and KSP handles are written by their Create calls and owned by self; the strings
+        // outlive their calls (PETSc copies them).
+        unsafe {
             // the pattern is fixed: a value outside it is an error, not a reallocation
             check(
                 "MatSetOption",
-                sys::MatSetOption(solver.mat, sys::MatOption::MAT_NEW_NONZERO_LOCATION_ERR, sys::PetscBool::PETSC_TRUE),
+                sys::MatSetOption(self.mat, sys::MatOption::MAT_NEW_NONZERO_LOCATION_ERR, sys::PetscBool::PETSC_TRUE),
             )?;
-            check("MatCreateVecs", sys::MatCreateVecs(solver.mat, &mut solver.x, &mut solver.b))?;
-            check("KSPCreate", sys::KSPCreate(comm, &mut solver.ksp))?;
-            let prefix = c_string(&solver.prefix);
-            check("KSPSetOptionsPrefix", sys::KSPSetOptionsPrefix(solver.ksp, prefix.as_ptr()))?;
+            check("MatCreateVecs", sys::MatCreateVecs(self.mat, &mut self.x, &mut self.b))?;
+            check("KSPCreate", sys::KSPCreate(sys::PETSC_COMM_WORLD, &mut self.ksp))?;
+            let prefix = c_string(&self.prefix);
+            check("KSPSetOptionsPrefix", sys::KSPSetOptionsPrefix(self.ksp, prefix.as_ptr()))?;
             for (name, value) in options {
                 let name = name.trim_start_matches('-');
-                let full = c_string(&format!("-{}{name}", solver.prefix));
+                let full = c_string(&format!("-{}{name}", self.prefix));
                 let value = value.as_deref().map(c_string);
                 check(
                     "PetscOptionsSetValue",
@@ -301,10 +440,10 @@ impl KrylovSolver {
                         value.as_ref().map_or(ptr::null(), |v| v.as_ptr()),
                     ),
                 )?;
-                solver.options.push(full);
+                self.options.push(full);
             }
         }
-        Ok(solver)
+        Ok(())
     }
 
     /// Number of equations.
@@ -318,8 +457,9 @@ impl KrylovSolver {
     }
 
     /// Gives the matrix a near null space (for PCGAMG: the rigid-body modes of elasticity),
-    /// `vectors` of the solver's size; they are orthonormalised here (modified Gram–Schmidt),
-    /// and a vector that depends on the others is dropped.
+    /// `vectors` of the solver's (global) size, the same on every rank; they are
+    /// orthonormalised here (modified Gram–Schmidt), and a vector that depends on the others
+    /// is dropped.
     pub fn set_near_null_space(&mut self, vectors: &[Vec<f64>]) -> Result<(), Error> {
         let mut basis: Vec<Vec<f64>> = Vec::with_capacity(vectors.len());
         for v in vectors {
@@ -343,8 +483,9 @@ impl KrylovSolver {
         }
         let _guard = lock();
         let mut vecs: Vec<sys::Vec> = Vec::with_capacity(basis.len());
+        let owned = self.owned.clone();
         // SAFETY: the matrix and `self.x` are live; each duplicate is written through the
-        // array PETSc lends (n values, valid until the restore); MatNullSpaceCreate takes its
+        // array PETSc lends (the owned entries, valid until the restore); MatNullSpaceCreate takes its
         // own references to the vectors and MatSetNearNullSpace its own to the null space, so
         // ours are destroyed here (also on an error, by the closure's caller below).
         let result = (|| unsafe {
@@ -354,8 +495,8 @@ impl KrylovSolver {
                 vecs.push(v);
                 let mut a: *mut f64 = ptr::null_mut();
                 check("VecGetArray", sys::VecGetArray(v, &mut a))?;
-                if self.n > 0 {
-                    std::slice::from_raw_parts_mut(a, self.n).copy_from_slice(b);
+                if !owned.is_empty() {
+                    std::slice::from_raw_parts_mut(a, owned.len()).copy_from_slice(&b[owned.clone()]);
                 }
                 check("VecRestoreArray", sys::VecRestoreArray(v, &mut a))?;
             }
@@ -418,25 +559,62 @@ impl KrylovSolver {
         Ok(())
     }
 
-    /// Writes the matrix values in the compressed-row order of the pattern: `value(k)` for
-    /// nonzero `k`. The pattern (and PETSc's preallocation) stays; the preconditioner is
-    /// rebuilt at the next solve.
+    /// Writes the matrix values: `value(k)` for entry `k` of the compressed-row pattern given
+    /// at creation (on one process: the matrix's; distributed: this rank's contribution, added
+    /// to the other ranks' with `ADD_VALUES` through PETSc's stash, collective). The pattern
+    /// (and PETSc's preallocation) stays; the preconditioner is rebuilt at the next solve.
     pub fn set_values(&mut self, value: impl Fn(usize) -> f64) -> Result<(), Error> {
         let _guard = lock();
-        let mut array: *mut f64 = ptr::null_mut();
-        // SAFETY: the matrix is a live SeqAIJ of `nnz` stored entries in the order of the
-        // CSR pattern it was preallocated with (sorted columns per row, as given); the array
-        // PETSc lends is valid until MatSeqAIJRestoreArray, which also marks the values as
-        // changed (the PC's next set-up sees a new matrix state).
-        unsafe {
-            check("MatSeqAIJGetArray", sys::MatSeqAIJGetArray(self.mat, &mut array))?;
-            if self.nnz > 0 {
-                let values = std::slice::from_raw_parts_mut(array, self.nnz);
+        let nnz = self.nnz;
+        match &mut self.layout {
+            Layout::Sequential => {
+                let mut array: *mut f64 = ptr::null_mut();
+                // SAFETY: the matrix is a live SeqAIJ of `nnz` stored entries in the order of
+                // the CSR pattern it was preallocated with (sorted columns per row, as given);
+                // the array PETSc lends is valid until MatSeqAIJRestoreArray, which also marks
+                // the values as changed (the PC's next set-up sees a new matrix state).
+                unsafe {
+                    check("MatSeqAIJGetArray", sys::MatSeqAIJGetArray(self.mat, &mut array))?;
+                    if nnz > 0 {
+                        let values = std::slice::from_raw_parts_mut(array, nnz);
+                        for (k, v) in values.iter_mut().enumerate() {
+                            *v = value(k);
+                        }
+                    }
+                    check("MatSeqAIJRestoreArray", sys::MatSeqAIJRestoreArray(self.mat, &mut array))?;
+                }
+            }
+            Layout::Distributed { rows, row_ptr, cols, values, .. } => {
                 for (k, v) in values.iter_mut().enumerate() {
                     *v = value(k);
                 }
+                // SAFETY: the matrix is a live MPIAIJ preallocated with the union of every
+                // rank's contribution pattern (so no new nonzero is created); row `i`'s
+                // columns and values are the slices `row_ptr[i]..row_ptr[i + 1]` of `cols`
+                // and `values`, alive during the call, which copies them (or stashes them
+                // for their owner).
+                unsafe {
+                    check("MatZeroEntries", sys::MatZeroEntries(self.mat))?;
+                    for (i, row) in rows.iter().enumerate() {
+                        let (a, b) = (row_ptr[i], row_ptr[i + 1]);
+                        check(
+                            "MatSetValues",
+                            sys::MatSetValues(
+                                self.mat,
+                                1,
+                                row,
+                                (b - a) as sys::PetscInt,
+                                cols[a..b].as_ptr(),
+                                values[a..b].as_ptr(),
+                                sys::InsertMode::ADD_VALUES,
+                            ),
+                        )?;
+                    }
+                }
             }
-            check("MatSeqAIJRestoreArray", sys::MatSeqAIJRestoreArray(self.mat, &mut array))?;
+        }
+        // SAFETY: the matrix is live; assembly is collective (every rank calls set_values).
+        unsafe {
             check("MatAssemblyBegin", sys::MatAssemblyBegin(self.mat, sys::MatAssemblyType::MAT_FINAL_ASSEMBLY))?;
             check("MatAssemblyEnd", sys::MatAssemblyEnd(self.mat, sys::MatAssemblyType::MAT_FINAL_ASSEMBLY))?;
         }
@@ -444,8 +622,10 @@ impl KrylovSolver {
     }
 
     /// Solves `A x = b` for the current values (`rhs` holds `b` on entry and `x` on exit,
-    /// from a zero initial guess). A solve that PETSc reports as diverged returns `Ok` with
-    /// `converged == false` and `rhs` unchanged; the caller decides.
+    /// from a zero initial guess; distributed: the whole `b` on every rank, of which each
+    /// gives PETSc its owned entries, and the whole `x` gathered back to every rank, so that
+    /// every rank holds the same solution). A solve that PETSc reports as diverged returns
+    /// `Ok` with `converged == false` and `rhs` unchanged; the caller decides.
     pub fn solve(&mut self, rhs: &mut [f64]) -> Result<SolveReport, Error> {
         assert_eq!(rhs.len(), self.n, "right-hand side of the solver's size");
         let _guard = lock();
@@ -457,13 +637,15 @@ impl KrylovSolver {
             setup_seconds: 0.0,
             solve_seconds: 0.0,
         };
-        // SAFETY: KSP, matrix and vectors are live and of size n (checked above for rhs);
-        // the arrays PETSc lends are valid between Get and Restore and hold n values.
+        let owned = self.owned.clone();
+        // SAFETY: KSP, matrix and vectors are live, of global size n (checked above for rhs)
+        // with the owned entries on this rank; the arrays PETSc lends are valid between Get
+        // and Restore and hold the owned entries (the gathered vector: all n).
         unsafe {
             let mut b: *mut f64 = ptr::null_mut();
             check("VecGetArray", sys::VecGetArray(self.b, &mut b))?;
-            if self.n > 0 {
-                std::slice::from_raw_parts_mut(b, self.n).copy_from_slice(rhs);
+            if !owned.is_empty() {
+                std::slice::from_raw_parts_mut(b, owned.len()).copy_from_slice(&rhs[owned.clone()]);
             }
             check("VecRestoreArray", sys::VecRestoreArray(self.b, &mut b))?;
             check("KSPSetOperators", sys::KSPSetOperators(self.ksp, self.mat, self.mat))?;
@@ -484,12 +666,21 @@ impl KrylovSolver {
             report.converged = reason > 0;
             report.residual_norm = norm;
             if report.converged {
+                let whole = match &self.layout {
+                    Layout::Sequential => self.x,
+                    Layout::Distributed { gather, x_all, .. } => {
+                        let (forward, insert) = (sys::ScatterMode::SCATTER_FORWARD, sys::InsertMode::INSERT_VALUES);
+                        check("VecScatterBegin", sys::VecScatterBegin(*gather, self.x, *x_all, insert, forward))?;
+                        check("VecScatterEnd", sys::VecScatterEnd(*gather, self.x, *x_all, insert, forward))?;
+                        *x_all
+                    }
+                };
                 let mut x: *const f64 = ptr::null();
-                check("VecGetArrayRead", sys::VecGetArrayRead(self.x, &mut x))?;
+                check("VecGetArrayRead", sys::VecGetArrayRead(whole, &mut x))?;
                 if self.n > 0 {
                     rhs.copy_from_slice(std::slice::from_raw_parts(x, self.n));
                 }
-                check("VecRestoreArrayRead", sys::VecRestoreArrayRead(self.x, &mut x))?;
+                check("VecRestoreArrayRead", sys::VecRestoreArrayRead(whole, &mut x))?;
             }
         }
         Ok(report)
@@ -504,6 +695,10 @@ impl Drop for KrylovSolver {
         // NUL-terminated. Errors cannot be reported from Drop and are ignored.
         unsafe {
             sys::KSPDestroy(&mut self.ksp);
+            if let Layout::Distributed { gather, x_all, .. } = &mut self.layout {
+                sys::VecScatterDestroy(gather);
+                sys::VecDestroy(x_all);
+            }
             sys::VecDestroy(&mut self.x);
             sys::VecDestroy(&mut self.b);
             sys::MatDestroy(&mut self.mat);

@@ -5,7 +5,10 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 
+use loam_fem::ranks::Ranks;
+
 use super::bad_input;
+use crate::case::CaseError;
 use crate::checkpoint;
 use crate::interrupt::Interrupt;
 use crate::run::{default_out_dir, run, RunEnd, RunOptions};
@@ -28,8 +31,30 @@ pub struct RunArgs {
     pub trace_newton: bool,
 }
 
-/// `loam run`: checks the thread count and runs the case inside a pool of that many threads.
+/// `loam run`: in a build with the `mpi` feature MPI is started first (rsmpi; under `mpirun`
+/// every rank runs this, [`loam_fem::ranks`]), PETSc then runs on `MPI_COMM_WORLD` and is
+/// ended before MPI.
 pub fn run_command(args: RunArgs) -> ExitCode {
+    #[cfg(feature = "mpi")]
+    {
+        let Some((universe, _)) = mpi::initialize_with_threading(mpi::Threading::Serialized) else {
+            eprintln!("error: MPI could not be initialised");
+            return ExitCode::from(1);
+        };
+        let code = run_on_ranks(args, Ranks::world().unwrap_or_default());
+        if let Err(e) = loam_fem::ranks::finalize_petsc() {
+            eprintln!("warning: {e}");
+        }
+        drop(universe);
+        code
+    }
+    #[cfg(not(feature = "mpi"))]
+    run_on_ranks(args, Ranks::single())
+}
+
+/// `loam run` on `ranks`: checks the thread count (default under `mpirun`: one per rank) and
+/// runs the case inside a pool of that many threads.
+fn run_on_ranks(args: RunArgs, ranks: Ranks) -> ExitCode {
     let RunArgs { case, mut out, threads, quiet, resume, trace_newton } = args;
     let kratos = case.is_dir()
         && (case.join("ProjectParameters.json").is_file()
@@ -49,8 +74,9 @@ pub fn run_command(args: RunArgs) -> ExitCode {
     // the whole run inside the pool: parallel loops called from one of its threads
     // run there, without waking a worker and sleeping on every call (which cost about
     // 1 ms per step at 448 material points)
+    let threads = threads.or(ranks.is_distributed().then_some(1));
     match rayon::ThreadPoolBuilder::new().num_threads(threads.unwrap_or(0)).build() {
-        Ok(pool) => pool.install(|| run_case(&case, out, quiet, resume, trace_newton)),
+        Ok(pool) => pool.install(|| run_case(&case, out, quiet, resume, trace_newton, ranks)),
         Err(e) => {
             eprintln!("error: thread pool: {e}");
             ExitCode::from(1)
@@ -133,22 +159,52 @@ fn interrupt_handler() -> Option<Arc<Interrupt>> {
     installed.ok().map(|()| interrupt)
 }
 
+/// A case run on `ranks` (more than one: the replicated model of [`loam_fem::ranks`]): the
+/// linear solver must be PETSc's, the only one that distributes; `auto` (the default) then
+/// means `petsc`.
+fn distribute(case: &mut crate::case::Case, ranks: Ranks) -> Result<(), CaseError> {
+    use loam_fem::linear_solver::LinearSolverKind;
+    case.solver.ranks = ranks;
+    if !ranks.is_distributed() {
+        return Ok(());
+    }
+    match case.solver.linear_solver {
+        LinearSolverKind::Auto => case.solver.linear_solver = LinearSolverKind::Petsc,
+        LinearSolverKind::Petsc => {}
+        _ => {
+            return Err(CaseError::new(
+                "solver.linear_solver",
+                format!(
+                    "a direct solver runs on one process; a run on {} MPI ranks needs \"petsc\" (or \"auto\", the default, which is then \"petsc\")",
+                    ranks.size()
+                ),
+            ))
+        }
+    }
+    Ok(())
+}
+
 /// `loam run`: builds the case (and restores a checkpoint with `--resume`), runs it with
 /// output to `out` (every Newton iteration on stderr with `trace_newton`) and prints the
-/// summary line.
+/// summary line. On several ranks every rank builds and steps the whole model; rank 0 alone
+/// writes results, checkpoints and the summary ([`run_without_output`] on the others).
 fn run_case(
     case: &Path,
     out: Option<PathBuf>,
     quiet: bool,
     resume: Option<Option<PathBuf>>,
     trace_newton: bool,
+    ranks: Ranks,
 ) -> ExitCode {
     let built = crate::case::Case::load(case).and_then(|mut c| {
-        c.solver.trace = trace_newton;
+        c.solver.trace = trace_newton && ranks.rank() == 0;
+        distribute(&mut c, ranks)?;
         Simulation::new(c)
     });
     let mut sim = match built {
         Ok(s) => s,
+        // every rank reads the same case: rank 0 says what is wrong, all exit with 2
+        Err(_) if ranks.rank() != 0 => return ExitCode::from(2),
         Err(e) => return bad_input(&e),
     };
     let out = out.unwrap_or_else(|| default_out_dir(&sim.case.name));
@@ -181,6 +237,9 @@ fn run_case(
                 return ExitCode::from(2);
             }
         }
+    }
+    if ranks.rank() != 0 {
+        return run_without_output(&mut sim);
     }
     match run(&mut sim, &out, &options) {
         Ok((end, wall)) => {
@@ -215,8 +274,10 @@ fn run_case(
             );
             match end {
                 RunEnd::Finished => {
+                    let on =
+                        if ranks.is_distributed() { format!(" on {} MPI ranks", ranks.size()) } else { String::new() };
                     println!(
-                        "loam: finished t = {:.6e} s{}: {summary}; results in {}",
+                        "loam: finished t = {:.6e} s{}{on}: {summary}; results in {}",
                         sim.time(),
                         if sim.at_rest { " (at rest)" } else { "" },
                         out.display()
@@ -250,4 +311,16 @@ fn run_case(
             ExitCode::from(1)
         }
     }
+}
+
+/// The steps of a rank other than 0 in a distributed run: the same steps as rank 0's run loop
+/// ([`run`]), whose collective operations they meet, without output (exit code 1 if a step
+/// fails, as on rank 0).
+fn run_without_output(sim: &mut Simulation) -> ExitCode {
+    while !sim.finished() {
+        if sim.step_observed(&mut |_| {}).is_err() {
+            return ExitCode::from(1);
+        }
+    }
+    ExitCode::SUCCESS
 }

@@ -213,8 +213,11 @@ pub struct RunSummary {
     pub case_file: Option<PathBuf>,
     /// Loam version.
     pub version: String,
-    /// Worker threads.
+    /// Worker threads (per rank).
     pub threads: usize,
+    /// MPI ranks of a distributed run (`docs/distributed.md`; 1 on one process).
+    #[serde(default = "one_rank")]
+    pub ranks: usize,
     /// `plane_strain`, `plane_stress`, `axisymmetric` or `3d`.
     pub formulation: String,
     /// Out-of-plane thickness of plane problems (m).
@@ -324,6 +327,11 @@ pub fn formulation_name(f: Formulation) -> &'static str {
     }
 }
 
+/// The `ranks` of a report written before there were ranks.
+fn one_rank() -> usize {
+    1
+}
+
 impl RunSummary {
     /// The report of `sim` as it stands, with `status` and the wall times measured so far.
     pub fn of(sim: &Simulation, status: RunStatus, wall_time: WallTimeReport) -> Self {
@@ -347,6 +355,7 @@ impl RunSummary {
             case_file: std::fs::canonicalize(sim.case.directory.join(format!("{}.json", sim.case.name))).ok(),
             version: env!("CARGO_PKG_VERSION").to_string(),
             threads: rayon::current_num_threads(),
+            ranks: sim.model.settings.ranks.size(),
             formulation: formulation_name(sim.case.formulation).to_string(),
             thickness: sim.case.thickness,
             status,

@@ -1,0 +1,217 @@
+//! Issue 26, item 4, first stage (docs/distributed.md, "Distributed runs: stage 1"): `mpirun
+//! -n P loam run CASE` with the replicated model and PETSc's distributed assembly and solve,
+//! on 2 and 4 ranks (oversubscribed where the machine has fewer cores), for a 2D FEM case, a
+//! 3D MPM case and a coupled MPM–FEM case. A build with the `mpi` feature only:
+//! `cargo test --release --features mpi --test mpi` (needs `mpirun` from Open MPI,
+//! scripts/install_petsc.sh).
+//!
+//! Each test checks the distributed run against the closed-form reference of the serial
+//! validation test it mirrors, and every monitor against the **serial PETSc run** (one
+//! process, `solver.linear_solver: "petsc"`): the Krylov tolerance (1e-10 relative) lies
+//! orders of magnitude below the Newton tolerances, so the ranks' different summation orders
+//! change the monitors only at round-off of the Newton iterate; [`RANK_AGREEMENT`] is the
+//! tolerance of `tests/petsc.rs`'s comparison with the direct solver. `summary.json` must
+//! report the ranks, so that a run that silently fell back to one process per rank fails.
+
+#![cfg(feature = "mpi")]
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use common::{report, timoshenko};
+use serde_json::{json, Value};
+
+/// Relative agreement of every monitor with the serial PETSc run (relative to the largest
+/// magnitude of that monitor over the run).
+const RANK_AGREEMENT: f64 = 1e-9;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("loam-mpi-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The rows of `monitors.csv`: the header's names and the values.
+fn monitors(dir: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(dir.join("monitors.csv")).expect("monitors.csv written");
+    let mut lines = text.lines();
+    let names = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    (names, rows)
+}
+
+/// `loam run CASE --out OUT --quiet`, under `mpirun -n ranks` unless `ranks` is `None`.
+fn loam_run(case: &Path, out: &Path, ranks: Option<usize>) {
+    loam_run_with(case, out, ranks, &[]);
+}
+
+/// [`loam_run`] with further arguments of `loam run`.
+fn loam_run_with(case: &Path, out: &Path, ranks: Option<usize>, extra: &[&str]) {
+    let loam = env!("CARGO_BIN_EXE_loam");
+    let mut cmd = match ranks {
+        None => Command::new(loam),
+        Some(p) => {
+            let mut c = Command::new("mpirun");
+            c.args(["-n", &p.to_string(), "--oversubscribe", loam]);
+            c
+        }
+    };
+    // Open MPI refuses to run as root without these (containers, CI)
+    cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+    let output = cmd
+        .arg("run")
+        .arg(case)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .args(extra)
+        .output()
+        .expect("mpirun and loam run");
+    println!("{}", String::from_utf8_lossy(&output.stdout).trim());
+    assert!(output.status.success(), "{ranks:?} ranks: {}", String::from_utf8_lossy(&output.stderr));
+}
+
+/// Runs the bundled case `name` serially with PETSc and on 2 and 4 ranks; checks the ranks
+/// reported and the monitors' agreement; returns the 4-rank run's monitors.
+fn runs_on_ranks_agree(name: &str) -> (Vec<String>, Vec<Vec<f64>>) {
+    let dir = temp_dir(name);
+    let mut case: Value =
+        serde_json::from_str(&std::fs::read_to_string(root().join("cases").join(name)).unwrap()).expect("case JSON");
+    case["solver"]["linear_solver"] = json!("petsc");
+    let serial_case = dir.join(name);
+    std::fs::write(&serial_case, case.to_string()).unwrap();
+    let serial_out = dir.join("serial");
+    loam_run(&serial_case, &serial_out, None);
+    let (names, serial) = monitors(&serial_out);
+    let mut last = (names.clone(), serial.clone());
+    for ranks in [2, 4] {
+        let out = dir.join(format!("ranks{ranks}"));
+        // the bundled case as it is: its default linear solver `auto` is `petsc` on ranks
+        loam_run(&root().join("cases").join(name), &out, Some(ranks));
+        let summary: Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+        assert_eq!(summary["ranks"], json!(ranks), "summary.json reports the ranks");
+        let (n, rows) = monitors(&out);
+        assert_eq!(n, names);
+        assert_eq!(rows.len(), serial.len(), "{name}: as many output rows on {ranks} ranks");
+        for k in 1..names.len() {
+            let scale = serial.iter().map(|r| r[k].abs()).fold(0.0, f64::max).max(1e-300);
+            let diff = rows.iter().zip(&serial).map(|(a, b)| (a[k] - b[k]).abs()).fold(0.0, f64::max);
+            println!(
+                "{name}, {ranks} ranks: {}: largest difference from the serial PETSc run {:.2e} (relative)",
+                names[k],
+                diff / scale
+            );
+            assert!(
+                diff <= RANK_AGREEMENT * scale,
+                "{name} on {ranks} ranks: {} differs by {diff:e} (scale {scale:e})",
+                names[k]
+            );
+        }
+        last = (n, rows);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    last
+}
+
+/// The last value of monitor `name`.
+fn last_value((names, rows): &(Vec<String>, Vec<Vec<f64>>), name: &str) -> f64 {
+    let k = names.iter().position(|n| n == name).expect("monitor");
+    rows.last().unwrap()[k]
+}
+
+/// Benchmark 1, 2D FEM (quad4 56 × 8): the tip deflection on 4 ranks against Timoshenko
+/// within 2 % (as `fem_validation::cantilever_static_tip_deflection`).
+#[test]
+fn fem_2d_cantilever_on_2_and_4_ranks_equals_the_serial_run() {
+    let m = runs_on_ranks_agree("cantilever_fem.json");
+    report("2D FEM cantilever on 4 ranks: tip_uy vs Timoshenko [m]", last_value(&m, "tip_uy"), timoshenko(7.0), 0.02);
+}
+
+/// Benchmark 1, 3D MPM (`cases/cantilever_mpm_3d.json`, hex8 grid h = 1/6 m, 8 points per
+/// cell): the point nearest the free end's mid-section against Timoshenko's tip deflection
+/// within 5 % (as `mpm_validation::hex_grid_mpm_cantilever_matches_beam_theory`), and the
+/// clamp carrying the whole weight ρ g L h b = 68 670 N to 1e-9.
+#[test]
+fn mpm_3d_cantilever_on_2_and_4_ranks_equals_the_serial_run() {
+    let m = runs_on_ranks_agree("cantilever_mpm_3d.json");
+    report("3D MPM cantilever on 4 ranks: tip_uy vs Timoshenko [m]", last_value(&m, "tip_uy"), timoshenko(7.0), 0.05);
+    report(
+        "3D MPM cantilever on 4 ranks: clamp reaction vs weight [N]",
+        last_value(&m, "clamp_reaction_y"),
+        68_670.0,
+        1e-9,
+    );
+}
+
+/// Benchmark 12, the coupled split beam (FEM half, MPM half, shared interface nodes): the
+/// tip within 1.5 % of Timoshenko's −0.67806 m and the force of the MPM half on the FEM half
+/// equal to its weight 39 240 N to 1e-9 (as `coupling::beam_split_fem_clamped_mpm_free`).
+#[test]
+fn coupled_split_beam_on_2_and_4_ranks_equals_the_serial_run() {
+    let m = runs_on_ranks_agree("coupled_beam_split.json");
+    report("coupled split beam on 4 ranks: tip_uy vs Timoshenko [m]", last_value(&m, "tip_uy"), -0.67806, 0.015);
+    report(
+        "coupled split beam on 4 ranks: interface force vs weight of the MPM half [N]",
+        last_value(&m, "interface_force_y"),
+        -39_240.0,
+        1e-9,
+    );
+}
+
+/// Bad input under `mpirun`: a case that names a direct solver cannot run on 2 ranks; the
+/// one-line error names `solver.linear_solver` and the exit code is 2 (that of every rank).
+#[test]
+fn a_direct_solver_on_ranks_is_refused_naming_the_key() {
+    let dir = temp_dir("direct");
+    let mut case: Value =
+        serde_json::from_str(&std::fs::read_to_string(root().join("cases/cantilever_fem.json")).unwrap()).unwrap();
+    case["solver"]["linear_solver"] = json!("lu");
+    let path = dir.join("cantilever_lu.json");
+    std::fs::write(&path, case.to_string()).unwrap();
+    let output = Command::new("mpirun")
+        .args(["-n", "2", "--oversubscribe", env!("CARGO_BIN_EXE_loam"), "run"])
+        .arg(&path)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .output()
+        .expect("mpirun");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let first = stderr.lines().next().unwrap_or_default();
+    println!("{first}");
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(first.starts_with("error: solver.linear_solver: ") && first.contains("\"petsc\""), "{first}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A checkpoint of a run on 2 ranks (rank 0 writes it; the model is replicated, so it is the
+/// one-process checkpoint) resumed on 2 ranks: the coupled split beam checkpointed after step 2
+/// of 4 and resumed from there writes a `monitors.csv` identical to the uninterrupted run's,
+/// byte for byte (runs on 2 ranks are reproducible: each owner sums one other rank's part).
+#[test]
+fn a_checkpoint_on_2_ranks_resumes_on_2_ranks_bit_for_bit() {
+    let dir = temp_dir("resume");
+    let mut case: Value =
+        serde_json::from_str(&std::fs::read_to_string(root().join("cases/coupled_beam_split.json")).unwrap()).unwrap();
+    case["analysis"]["checkpoint"] = json!({"every_steps": 2});
+    let path = dir.join("coupled_checkpointed.json");
+    std::fs::write(&path, case.to_string()).unwrap();
+    let out = dir.join("out");
+    loam_run(&path, &out, Some(2));
+    let whole = std::fs::read_to_string(out.join("monitors.csv")).unwrap();
+    let checkpoint = out.join("checkpoints").join("step_000000002.ckpt");
+    assert!(checkpoint.is_file(), "checkpoint after step 2 written by rank 0");
+    loam_run_with(&path, &out, Some(2), &["--resume", checkpoint.to_str().unwrap()]);
+    let resumed = std::fs::read_to_string(out.join("monitors.csv")).unwrap();
+    println!("monitors.csv of the resumed run: {} rows", resumed.lines().count() - 1);
+    assert_eq!(resumed, whole, "resumed on 2 ranks = uninterrupted on 2 ranks");
+    let _ = std::fs::remove_dir_all(&dir);
+}
