@@ -1,23 +1,11 @@
 //! The `loam` command line: acceptance runs and bad input (one-line message naming the
 //! JSON path, exit code 2, never a panic).
 
+mod common;
+
+use common::cli::{loam, root, temp_dir};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn loam() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_loam"))
-}
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("loam-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn last_monitor(csv: &Path, column: &str) -> f64 {
     let text = std::fs::read_to_string(csv).unwrap();

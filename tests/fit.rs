@@ -10,22 +10,13 @@
 //! - a peak that Mohr–Coulomb cannot give is reported; malformed fit files and CSV files
 //!   exit 2 naming the key or the line; a fit that does not converge writes its best point.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
+
+use common::cli::{loam, temp_dir};
+use std::path::Path;
 
 use loam::fit::{self, FitFile, Problem, Status};
 use serde_json::{json, Value};
-
-fn loam() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_loam"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("loam-fit-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn parse(text: &str) -> FitFile {
     loam::input::parse(text).map(|(f, _)| f).unwrap_or_else(|e| panic!("{e}"))

@@ -12,9 +12,12 @@
 //!   grid-node displacement to 1e-6 relative (Kratos' own elastic tests: the reference file's
 //!   values to 1e-6 relative), and today's exporter must still write that export.
 
+mod common;
+
+use common::cli::{loam, temp_dir, temp_dir_path};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use loam::simulation::Simulation;
 use loam_fem::domain::PointQuantity;
@@ -37,25 +40,8 @@ const KRATOS_RTOL: f64 = 1e-6;
 /// numbers between them).
 const CONSISTENCY_RTOL: f64 = 1e-9;
 
-fn loam() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_loam"))
-}
-
 fn roundtrip_dir(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/kratos").join(format!("roundtrip_{name}"))
-}
-
-/// The temporary folder `name` of this test run (see [`temp_dir`]).
-fn temp_dir_path(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("loam-kratos-export-{}-{name}", std::process::id()))
-}
-
-/// The temporary folder `name`, emptied.
-fn temp_dir(name: &str) -> PathBuf {
-    let d = temp_dir_path(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 /// `loam export kratos CASE -o DIR`, its output.

@@ -8,25 +8,16 @@
 //! compare grid-node displacements with an absolute tolerance of 1e-3 m
 //! (`from_json_check_result_process`; 1e-2 m for the penalty cantilever).
 
+mod common;
+
+use common::cli::{loam, temp_dir};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use serde_json::{json, Value};
 
-fn loam() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_loam"))
-}
-
 fn data(case: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/kratos").join(case)
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("loam-kratos-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 /// Imports `dir` into `out/case.json`; returns the case path and the importer's stderr.

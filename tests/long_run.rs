@@ -7,22 +7,14 @@
 //! it runs. Run with `LOAM_LONG=1 scripts/test.sh`, or
 //! `cargo test --release --test long_run -- --include-ignored --nocapture`.
 
+mod common;
+
+use common::cli::{root, temp_dir};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("loam-long-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// The dynamic MPM cantilever run for `steps` steps, `output` its output section.
 fn case(dir: &Path, steps: usize, output: Value) -> PathBuf {

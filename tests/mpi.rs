@@ -17,26 +17,16 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
+use common::cli::{root, temp_dir};
 use common::{report, timoshenko};
 use serde_json::{json, Value};
 
 /// Relative agreement of every monitor with the serial PETSc run (relative to the largest
 /// magnitude of that monitor over the run).
 const RANK_AGREEMENT: f64 = 1e-9;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("loam-mpi-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// The rows of `monitors.csv`: the header's names and the values.
 fn monitors(dir: &Path) -> (Vec<String>, Vec<Vec<f64>>) {

@@ -3,27 +3,15 @@
 //! show each body where it is, in the colour-map colour of its field; missing fields and
 //! directories refused with one line and exit code 2.
 
+mod common;
+
+use common::cli::{loam, root, temp_dir};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use loam::plot::colormap::Colormap;
 use loam::plot::frame::{fit_view, pixel_of};
 use loam::plot::results::{read_pvd, read_vtu, Cells};
-
-fn loam() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_loam"))
-}
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("loam-plot-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// Runs a bundled case into a fresh directory of its own for test `tag`.
 fn run_case(case: &str, tag: &str) -> PathBuf {

@@ -4,23 +4,11 @@
 //! exit 2; SIGINT finishes the step, writes a checkpoint and exits 130; a failure to write
 //! results saves the state elsewhere.
 
+mod common;
+
+use common::cli::{loam, root, temp_dir};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn loam() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_loam"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("loam_restart_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// A bundled case with `edit` applied, written to `dir/<name>.json`.
 fn case_file(dir: &Path, name: &str, edit: impl FnOnce(&mut serde_json::Value)) -> PathBuf {

@@ -4,20 +4,12 @@
 //! rot. About 20 s of CPU time in all on 2 cores; the FMU tutorial needs Python with fmpy and
 //! is run by scripts/test.sh once it has set up .venv.
 
+mod common;
+
+use common::cli::{root, temp_dir};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("loam-tutorial-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// Runs `loam <command> docs/tutorial/<file> --out D` from the repository root and returns D.
 fn loam(command: &str, file: &str, name: &str) -> PathBuf {
