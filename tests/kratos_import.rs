@@ -124,10 +124,38 @@ fn cantilever_penalty_matches_kratos() {
 }
 
 /// Axisymmetric circular plate under a line load, triangles, 3 points per cell: within
-/// Kratos' 1e-3 m (6e-5 m apart).
+/// Kratos' 1e-3 m (6e-5 m apart). The two codes differ by a uniform factor 1.00082 over the
+/// whole grid at this load (0.08 % of a 0.076 m deflection of a 1 m thick plate): a second-order
+/// (large-deformation) difference in the axisymmetric terms; in the linear range they agree to
+/// 1e-6 ([`circular_plate_axisym_linear_range_matches_kratos`]). Likely cause, from reading
+/// Kratos' source (not confirmed by a run: Kratos refuses `move_mesh_flag: true` here): its
+/// spatial hoop row `N_a / r` takes `r` from the grid's node coordinates, which are not moved
+/// (`move_mesh_flag: false`), so it integrates `σ_θθ N_a / R dv` where the consistent form has
+/// `σ_θθ N_a / r dv` (Loam's `P̃_θθ N_a / R dV`): they differ by `r / R = F_θθ`.
 #[test]
 fn circular_plate_axisym_matches_kratos() {
     compare("circular_plate_axisym", 1, "y", 1e-3, 1e-3);
+}
+
+/// The same plate with the line load scaled by 1e-3 (Kratos 10.4.4 run on the folder with
+/// `LINE_LOAD` modulus 0.10184): the centre deflection within 1e-6 relative of Kratos — the
+/// axisymmetric weights `2πr` of points and line load, the hoop strain and the law agree in
+/// the linear range (measured 8e-7: the remainder of the second-order difference above).
+#[test]
+fn circular_plate_axisym_linear_range_matches_kratos() {
+    let case = "circular_plate_axisym";
+    let dir = data(case);
+    let (json, _) = import(&dir, &temp_dir("axisym-linear"));
+    let mut c: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let load = &mut c["loads"][0]["traction"][1];
+    *load = json!(load.as_f64().unwrap() * 1e-3);
+    std::fs::write(&json, serde_json::to_string_pretty(&c).unwrap()).unwrap();
+    let m =
+        run(&json, vec![json!({ "name": "u", "type": "displacement", "point": grid_node(&dir, 1), "component": "y" })]);
+    let now = kratos_now("circular_plate_axisym_load_1e-3", "NODE_1", "DISPLACEMENT_Y");
+    let error = (m["u"] - now).abs() / now.abs();
+    println!("{case}, load × 1e-3: grid node 1 u_y Loam {:.10e}, Kratos 10.4.4 {now:.10e}, relative {error:.2e} (tolerance 1e-6)", m["u"]);
+    assert!(error <= 1e-6, "axisymmetric plate in the linear range: Loam {} vs Kratos {now}", m["u"]);
 }
 
 /// Cook's membrane, incompressible (ν = 0.499999) Neo-Hookean with pressure unknowns. Kratos'
