@@ -187,9 +187,11 @@ pub struct DomainSpec {
     pub initial_stress: Option<InitialStressSpec>,
     /// Material name (a key of `materials`).
     pub material: String,
-    /// `consistent` (default) or `lumped` mass matrix.
+    /// Mass matrix of an `fem` domain: `consistent` (default) or `lumped`. An `mpm` domain's
+    /// grid mass is always lumped (the row sums `m_I = Σ_p N_I(x_p) m_p`, as in Kratos'
+    /// default and Sulsky's MPM): `lumped` may be written there, `consistent` is refused.
     #[serde(default)]
-    pub mass_matrix: MassMatrix,
+    pub mass_matrix: Option<MassMatrix>,
     /// Unknowns of the domain's elements: `displacement` (default, the irreducible element)
     /// or `mixed_up` (nodal displacements and pressures with a stabilised equal-order
     /// element, for nearly and exactly incompressible materials: undrained soil, rubber).

@@ -123,6 +123,13 @@ fn bad_input_exits_2_naming_the_json_path() {
         &["solver.petsc_options.-ksp_type", "string"],
     );
     expect_bad("unknown top key", check_edited("unknown-top", |j| j["gravityy"] = json!(1)), &["gravityy"]);
+    // an MPM grid's mass is lumped: a consistent mass there would be silently ignored
+    let mut mpm: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(root().join("cases/cantilever_mpm.json")).unwrap()).unwrap();
+    mpm["domains"][0]["mass_matrix"] = json!("consistent");
+    let path = temp_dir("mpm-consistent-mass").join("case.json");
+    std::fs::write(&path, mpm.to_string()).unwrap();
+    expect_bad("consistent mass on an mpm domain", check_file(&path), &["domains[0].mass_matrix", "lumped"]);
     expect_bad(
         "wrong type",
         check_edited("type", |j| j["analysis"]["time_step"] = json!("one")),

@@ -166,9 +166,8 @@ fn axisymmetric_and_mixed_up_round_trips_are_consistent() {
 /// cantilever (`cases/cantilever_mpm_dynamic.json`, 20 steps) with a lumped mass and Bossak
 /// α = −0.1 is exported as `scheme_type: bossak`, `damp_factor_m: -0.1`, `newmark_beta: 0.25`
 /// (Kratos' Bossak β = (1 − α)² β_N, Loam's (1 − α)²/4), `consistent_mass_matrix: false`, and
-/// the re-imported case gives the case's tip history. (Kratos 10.4.4 on this export is not
-/// yet Loam's: 7e-7 relative at the grid node after the first step, 2e-4 after the second —
-/// docs/kratos.md#export.)
+/// the re-imported case gives the case's tip history. (Against Kratos on an export:
+/// [`dynamic_export_follows_kratos`].)
 #[test]
 fn dynamic_case_keeps_scheme_and_mass() {
     let cases = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("cases");
@@ -177,6 +176,8 @@ fn dynamic_case_keeps_scheme_and_mass() {
     c["analysis"]["end_time"] = json!(0.2);
     c["analysis"]["scheme"] = json!({ "bossak": { "alpha": -0.1 } });
     c["domains"][0]["mass_matrix"] = json!("lumped");
+    // what Kratos can express (the exporter notes the default `true`; the importer writes `false`)
+    c["solver"]["hold_grid_boundaries"] = json!(false);
     c["output"] = json!({ "vtk": false });
     let tmp = temp_dir("dynamic");
     let case = tmp.join("dynamic.json");
@@ -209,6 +210,7 @@ fn lattice_body_exported_as_cells() {
         serde_json::from_str(&std::fs::read_to_string(cases.join("slip_slope_mpm.json")).unwrap()).unwrap();
     assert!(c["domains"][0]["material_points"].get("polygon").is_some(), "the case's body is a polygon");
     c["analysis"]["end_time"] = json!(0.2);
+    c["solver"]["hold_grid_boundaries"] = json!(false);
     c["output"] = json!({ "vtk": false });
     let tmp = temp_dir("lattice");
     let case = tmp.join("slip_slope.json");
@@ -267,6 +269,55 @@ fn loam_matches_kratos_on_the_export() {
         println!("{name}: {monitor} (u_{component}): Loam {loam:.12e}, Kratos 10.4.4 on the export {kratos:.12e} (relative {rel:.1e})");
         assert!(rel <= KRATOS_RTOL, "{name}: Loam {loam} vs Kratos {kratos}: {rel:.2e} relative beyond {KRATOS_RTOL}");
     }
+}
+
+/// All values of `DISPLACEMENT_<C>` in a Kratos json_output_process file, one per step.
+fn kratos_history(file: &Path, component: &str) -> Vec<f64> {
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+    let node = r.as_object().unwrap().keys().find(|k| k.starts_with("NODE_")).unwrap().clone();
+    let values = r[&node][format!("DISPLACEMENT_{}", component.to_uppercase())].as_array().unwrap();
+    values.iter().map(|v| v.as_f64().unwrap()).collect()
+}
+
+/// Loam's dynamic MPM cantilever (`cases/cantilever_mpm_dynamic.json`, Newmark, 20 steps of
+/// 0.01 s, with Kratos' grid kinematics `solver.hold_grid_boundaries: false`) against Kratos
+/// 10.4.4 on its export (`roundtrip_cantilever_mpm_dynamic`): the step's displacement of the
+/// grid node (6, 0.5) at every step. Measured: 7.9e-8 relative after the first step, at most
+/// 2.9e-5 over the 20 (the growth after the first step is not explained yet: the two codes'
+/// projection, Newmark update and point update are the same formulas). Checked to 1e-6 at
+/// the first step and 5e-5 at every step; a consistent Kratos mass (the exporter's old
+/// `consistent_mass_matrix: true`, which Loam's MPM never had) was 1.8e-5 off at the first
+/// step and 1.5e-3 by the tenth.
+#[test]
+fn dynamic_export_follows_kratos() {
+    let name = "cantilever_mpm_dynamic";
+    let dir = roundtrip_dir(name);
+    let tmp = temp_dir("kratos-dynamic");
+    exported(&dir.join("case.json"), &tmp.join("kratos"));
+    let today = std::fs::read_to_string(tmp.join("kratos/ProjectParameters.json")).unwrap();
+    let stored = std::fs::read_to_string(dir.join("kratos/ProjectParameters.json")).unwrap();
+    assert!(today == stored, "the exporter no longer writes the stored export: rerun benches/kratos/roundtrip.py");
+    let kratos = kratos_history(&dir.join("kratos_10.4.4_node_uy.json"), "y");
+    run(&dir.join("case.json"), &tmp.join("out")).expect("the case runs");
+    let text = std::fs::read_to_string(tmp.join("out/monitors.csv")).unwrap();
+    let mut lines = text.lines();
+    let k = lines.next().unwrap().split(',').position(|h| h == "node_uy").unwrap();
+    let loam: Vec<f64> = lines.skip(1).map(|l| l.split(',').nth(k).unwrap().parse().unwrap()).collect();
+    assert_eq!(loam.len(), kratos.len(), "one value per step in both");
+    let mut worst: f64 = 0.0;
+    for (step, (l, r)) in loam.iter().zip(&kratos).enumerate() {
+        let rel = (l - r).abs() / r.abs();
+        println!(
+            "step {:2}: grid node (6, 0.5) Δu_y Loam {l:.10e}, Kratos 10.4.4 {r:.10e} (relative {rel:.1e})",
+            step + 1
+        );
+        worst = worst.max(rel);
+        if step == 0 {
+            assert!(rel <= 1e-6, "first step: {rel:.2e} relative beyond 1e-6");
+        }
+    }
+    println!("largest relative difference over {} steps: {worst:.2e} (tolerance 5e-5)", loam.len());
+    assert!(worst <= 5e-5, "the dynamic history departs from Kratos by {worst:.2e}");
 }
 
 /// An edit of an exported file: what it stands for, the file, the edit of its JSON.

@@ -477,7 +477,9 @@ impl Model {
             self.invalidate_pattern();
             self.restored_solver_memory = None;
         }
-        self.hold_grid_boundaries();
+        if self.settings.hold_grid_boundaries {
+            self.hold_grid_boundaries();
+        }
         Ok(())
     }
 

@@ -72,6 +72,11 @@ pub struct NewtonSettings {
     /// Newton) while the residual contracts fast enough (default `off`; see
     /// [`TangentReuse`]).
     pub tangent_reuse: TangentReuse,
+    /// Whether a grid node's projected velocity and acceleration are set to rest where a
+    /// boundary holds it, after the projection of every step (default `true`; see
+    /// `Model::hold_grid_boundaries`). `false` keeps the projected values, as Kratos' MPM
+    /// does: `loam import kratos` sets it so that imported dynamic cases reproduce Kratos.
+    pub hold_grid_boundaries: bool,
     /// Print every iteration's residual and correction norms on stderr (not a case key:
     /// `loam run --trace-newton` sets it).
     #[serde(skip)]
@@ -120,6 +125,7 @@ impl Default for NewtonSettings {
             cholesky_factorisation: CholeskyFactorisation::Supernodal,
             mpm_pattern_rings: DEFAULT_MPM_PATTERN_RINGS,
             tangent_reuse: TangentReuse::Off,
+            hold_grid_boundaries: true,
             trace: false,
             ranks: Ranks::single(),
         }

@@ -307,6 +307,12 @@ fn check_keys(case: &Case, k: usize) -> Result<(), CaseError> {
             if d.material_points.is_none() {
                 return Err(CaseError::new(format!("{loc}.material_points"), "an mpm domain needs material_points"));
             }
+            if d.mass_matrix == Some(MassMatrix::Consistent) {
+                return Err(CaseError::new(
+                    format!("{loc}.mass_matrix"),
+                    "\"consistent\": an mpm domain's grid mass is lumped (m_I = Σ N_I(x_p) m_p); omit the key or write \"lumped\"",
+                ));
+            }
         }
     }
     if let Some(v0) = &d.initial_velocity {
@@ -1042,7 +1048,7 @@ fn number(
             case.formulation,
             case.thickness,
             laws[d.material.as_str()].clone(),
-            d.mass_matrix == MassMatrix::Lumped,
+            d.mass_matrix == Some(MassMatrix::Lumped),
         )
         .map_err(|e| CaseError::new(format!("domains[{k}].mesh"), format!("element {}: {}", e.element, e.message)))?;
         parts.push((k, Part::Fem(k, Box::new(domain))));

@@ -75,11 +75,10 @@ fn model(case: &Case, raw: &Value, notes: &mut Vec<String>) -> Result<(), Export
                 "Kratos integrates over the material points' volumes (material_points)",
             );
         }
-        if d.mass_matrix != case.domains[0].mass_matrix || d.element_formulation != case.domains[0].element_formulation
-        {
+        if d.element_formulation != case.domains[0].element_formulation {
             return refuse(
-                loc.clone(),
-                "the bodies' mass_matrix and element_formulation must be one (Kratos' solver settings)",
+                format!("{loc}.element_formulation"),
+                "the bodies' element_formulation must be one (Kratos' solver settings)",
             );
         }
         let alpha = d.ghost_penalty.unwrap_or(match case.analysis.kind {

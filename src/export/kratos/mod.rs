@@ -83,7 +83,6 @@ pub fn export(case_path: &Path, dir: &Path) -> Result<Export, ExportError> {
         parts: &parts,
         process_parts: &process_parts,
         pressure_dofs: case.domains[0].element_formulation == ElementFormulation::MixedUp,
-        mass_matrix: case.domains[0].mass_matrix,
     };
     let project = parameters::project(&case, &files, &conditions, gravity, &outputs, &mut notes)?;
 

@@ -12,7 +12,7 @@
 use serde_json::{json, Value};
 
 use super::ExportError;
-use crate::case::{AnalysisType, Case, MassMatrix};
+use crate::case::{AnalysisType, Case};
 use crate::import::kratos::parameters::{Condition, CRITERIA, SOLVER_TYPES};
 use loam_fem::convergence::ConvergenceCriterion;
 use loam_fem::scheme::TimeScheme;
@@ -28,8 +28,6 @@ pub struct Files<'a> {
     pub process_parts: &'a [String],
     /// Whether the bodies carry pressure unknowns (`mixed_up`).
     pub pressure_dofs: bool,
-    /// Mass matrix of the bodies.
-    pub mass_matrix: MassMatrix,
 }
 
 /// `ProjectParameters.json` of `case` with the grid `conditions`, `gravity` and one
@@ -67,7 +65,8 @@ pub fn project(
         "time_stepping": { "time_step": dt },
         "pressure_dofs": files.pressure_dofs,
         "axis_symmetric_flag": case.formulation == loam_fem::formulation::Formulation::Axisymmetric,
-        "consistent_mass_matrix": files.mass_matrix == MassMatrix::Consistent,
+        // Loam's MPM grid mass is lumped
+        "consistent_mass_matrix": false,
         "problem_domain_sub_model_part_list": files.parts,
         "processes_sub_model_part_list": files.process_parts,
         "linear_solver_settings": { "solver_type": "LinearSolversApplication.sparse_lu" },
@@ -185,6 +184,11 @@ fn newton(case: &Case, solver: &mut Value, notes: &mut Vec<String>) {
     solver["displacement_relative_tolerance"] = json!(s.displacement_relative_tolerance);
     solver["displacement_absolute_tolerance"] = json!(s.displacement_absolute_tolerance);
     solver["max_iteration"] = json!(s.max_iterations);
+    if s.hold_grid_boundaries && case.analysis.kind == AnalysisType::Dynamic {
+        notes.push(
+            "solver.hold_grid_boundaries: true has no Kratos counterpart: Kratos keeps the projected velocity and acceleration of fixed grid nodes (Loam's false), so dynamic answers differ by design".into(),
+        );
+    }
 }
 
 /// The Kratos name of Loam's `loam` in the importer's `table` of (Kratos, Loam) names.

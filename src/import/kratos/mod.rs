@@ -210,9 +210,8 @@ pub(crate) fn mpm_case(
         if mixed_up {
             d["element_formulation"] = json!("mixed_up");
         }
-        if project.consistent_mass_matrix == Some(false) {
-            d["mass_matrix"] = json!("lumped");
-        }
+        // Kratos' default and Loam's only MPM grid mass
+        d["mass_matrix"] = json!("lumped");
         domains.push(d);
     }
 

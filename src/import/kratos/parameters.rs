@@ -73,8 +73,6 @@ pub struct Project {
     pub axisymmetric: bool,
     /// `pressure_dofs` (mixed u–p elements).
     pub pressure_dofs: bool,
-    /// `consistent_mass_matrix`, if given (`false`: Loam's `mass_matrix: "lumped"`).
-    pub consistent_mass_matrix: Option<bool>,
     /// Loam `analysis`.
     pub analysis: Value,
     /// Loam `solver`.
@@ -134,7 +132,12 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Project, 
     s.take("problem_domain_sub_model_part_list");
     s.take("processes_sub_model_part_list");
     let pressure_dofs = s.optional_bool("pressure_dofs")?.unwrap_or(false);
-    let consistent_mass_matrix = s.optional_bool("consistent_mass_matrix")?;
+    if s.optional_bool("consistent_mass_matrix")? == Some(true) {
+        notes.push(s.note(
+            "consistent_mass_matrix",
+            "true approximated by a lumped grid mass (Loam's MPM lumps it: mass_matrix \"lumped\")",
+        ));
+    }
     let axisymmetric = s.optional_bool("axis_symmetric_flag")?.unwrap_or(false);
     s.ignore("auxiliary_variables_list", "Loam computes what it needs", notes);
     s.ignore("linear_solver_settings", "Loam's direct solvers: solver.linear_solver auto", notes);
@@ -166,7 +169,6 @@ pub fn read(text: &str, file: &str, notes: &mut Vec<String>) -> Result<Project, 
         domain_size,
         axisymmetric,
         pressure_dofs,
-        consistent_mass_matrix,
         analysis,
         solver,
         gravity,
@@ -260,6 +262,10 @@ pub(crate) fn analysis_and_solver(
     }
     if let Some(n) = s.optional_number("max_iteration")? {
         solver.insert("max_iterations".into(), json!(n as usize));
+    }
+    if kind == "dynamic" {
+        // Kratos keeps the projected velocity and acceleration of fixed grid nodes
+        solver.insert("hold_grid_boundaries".into(), json!(false));
     }
     Ok((Value::Object(analysis), Value::Object(solver)))
 }
