@@ -30,6 +30,7 @@ pub mod mixed_kernel;
 pub mod model;
 pub mod newton;
 pub mod pattern_lu;
+pub mod permuted_lower;
 #[cfg(feature = "petsc")]
 mod petsc_solver;
 pub mod ranks;

@@ -44,7 +44,8 @@ use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, IntranodeLbltRef, LdltRef, LltRef, SymbolicCholesky,
+    factorize_symbolic_cholesky, supernodal, CholeskySymbolicParams, IntranodeLbltRef, LdltRef, LltRef,
+    SymbolicCholesky, SymbolicCholeskyRaw,
 };
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, LuSymbolicParams, NumericLu, SymbolicLu};
 use faer::sparse::linalg::SupernodalThreshold;
@@ -55,6 +56,7 @@ use serde::Deserialize;
 use crate::assembly::AssemblyPattern;
 use crate::krylov::Gmres;
 use crate::pattern_lu::PatternLu;
+use crate::permuted_lower::PermutedLower;
 
 /// Relative residual `‖b − A x‖/‖b‖` a GMRES solve must reach: far below the
 /// Newton tolerances, so that Newton takes the same path as with exact solves.
@@ -225,6 +227,9 @@ struct CholeskyState {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
     scratch: MemBuffer,
+    /// The matrix's lower triangle in the analysis' order, gathered for the supernodal
+    /// factorisation (`None`: simplicial, or no permutation; faer permutes then).
+    lower: Option<PermutedLower>,
 }
 
 /// Symbolic `L D Lᵀ` factorisation (the Cholesky analysis) with the factor, the expected
@@ -237,6 +242,9 @@ struct LdltState {
     subdiag: Vec<f64>,
     perm_forward: Vec<usize>,
     perm_inverse: Vec<usize>,
+    /// The matrix's lower triangle in the analysis' order, for the supernodal `L B Lᵀ`
+    /// (see [`CholeskyState::lower`]).
+    lower: Option<PermutedLower>,
 }
 
 impl LdltState {
@@ -803,6 +811,7 @@ impl LinearSolver {
             ]))?;
             let values = vec![0.0; symbolic.len_val()];
             let n = symbolic.nrows();
+            let lower = permuted_lower(&symbolic, &a);
             self.ldlt = Some(LdltState {
                 symbolic,
                 values,
@@ -810,6 +819,7 @@ impl LinearSolver {
                 subdiag: vec![0.0; n],
                 perm_forward: vec![0; n],
                 perm_inverse: vec![0; n],
+                lower,
             });
             self.timings.symbolic += t.elapsed().as_secs_f64();
         }
@@ -824,17 +834,32 @@ impl LinearSolver {
         // `auto` on a saddle point, and `lblt`: Bunch–Kaufman; `ldlt`: signed regularisation
         let pivoting = self.kind != LinearSolverKind::Ldlt;
         if pivoting {
-            st.symbolic.factorize_numeric_intranode_lblt::<f64>(
-                &mut st.values,
-                &mut st.subdiag,
-                &mut st.perm_forward,
-                &mut st.perm_inverse,
-                a,
-                Side::Lower,
-                par,
-                MemStack::new(&mut st.scratch),
-                Default::default(),
-            );
+            let stack = MemStack::new(&mut st.scratch);
+            if let (Some(lower), SymbolicCholeskyRaw::Supernodal(sn)) = (&mut st.lower, st.symbolic.raw()) {
+                supernodal::factorize_supernodal_numeric_intranode_lblt(
+                    &mut st.values,
+                    &mut st.subdiag,
+                    &mut st.perm_forward,
+                    &mut st.perm_inverse,
+                    lower.matrix(values),
+                    sn,
+                    par,
+                    stack,
+                    Default::default(),
+                );
+            } else {
+                st.symbolic.factorize_numeric_intranode_lblt::<f64>(
+                    &mut st.values,
+                    &mut st.subdiag,
+                    &mut st.perm_forward,
+                    &mut st.perm_inverse,
+                    a,
+                    Side::Lower,
+                    par,
+                    stack,
+                    Default::default(),
+                );
+            }
         } else {
             let regularization = LdltRegularization {
                 dynamic_regularization_signs: Some(&signs),
@@ -881,24 +906,41 @@ impl LinearSolver {
                 symbolic.solve_in_place_scratch::<f64>(1, par),
             ]))?;
             let values = vec![0.0; symbolic.len_val()];
-            self.llt = Some(CholeskyState { symbolic, values, scratch });
+            let lower = permuted_lower(&symbolic, &a);
+            self.llt = Some(CholeskyState { symbolic, values, scratch, lower });
             self.timings.symbolic += t.elapsed().as_secs_f64();
         }
         let t = Instant::now();
         let st = self.llt.as_mut().expect("symbolic Cholesky present");
-        let factor = st.symbolic.factorize_numeric_llt::<f64>(
-            &mut st.values,
-            a,
-            Side::Lower,
-            Default::default(),
-            par,
-            MemStack::new(&mut st.scratch),
-            Default::default(),
-        );
+        let stack = MemStack::new(&mut st.scratch);
+        let factored = match (&mut st.lower, st.symbolic.raw()) {
+            (Some(lower), SymbolicCholeskyRaw::Supernodal(supernodal)) => supernodal::factorize_supernodal_numeric_llt(
+                &mut st.values,
+                lower.matrix(values),
+                Default::default(),
+                supernodal,
+                par,
+                stack,
+                Default::default(),
+            )
+            .is_ok(),
+            _ => st
+                .symbolic
+                .factorize_numeric_llt::<f64>(
+                    &mut st.values,
+                    a,
+                    Side::Lower,
+                    Default::default(),
+                    par,
+                    stack,
+                    Default::default(),
+                )
+                .is_ok(),
+        };
         crate::simd_state::clear_upper_state();
         self.timings.factorisation += t.elapsed().as_secs_f64();
         self.timings.factorisations += 1;
-        Ok(factor.is_ok())
+        Ok(factored)
     }
 }
 
@@ -935,6 +977,15 @@ impl std::fmt::Debug for CholeskyFactor {
 
 /// The symbolic Cholesky analysis (AMD ordering, elimination tree, supernodes) of the
 /// lower triangle of `a`, shared by the `L Lᵀ`, `L D Lᵀ` and Bunch–Kaufman factorisations.
+/// The gather map of `a`'s lower triangle into the order of a supernodal analysis with a
+/// fill-reducing permutation (`None` otherwise: faer's permuting path serves).
+fn permuted_lower(symbolic: &SymbolicCholesky<usize>, a: &SparseColMatRef<'_, usize, f64>) -> Option<PermutedLower> {
+    match (symbolic.raw(), symbolic.perm()) {
+        (SymbolicCholeskyRaw::Supernodal(_), Some(perm)) => Some(PermutedLower::new(a.symbolic(), perm.arrays().1)),
+        _ => None,
+    }
+}
+
 fn symbolic_cholesky(
     a: &SparseColMatRef<'_, usize, f64>,
     factorisation: CholeskyFactorisation,
