@@ -481,39 +481,6 @@ fn collapse_onto_rubber_plate_on_bsplines() {
     assert!(top >= 5e-4, "the rubber plate's top moves {top} m");
 }
 
-/// The current outline of an FEM plate: its structure nodes' positions, and the material
-/// points that lie inside the quadrilateral through the four corners nearest to `corners`
-/// (the plate's reference corners, in order), shrunk by `inset` (m) towards its centre.
-fn points_inside_plate(sim: &Simulation, corners: [[f64; 2]; 4], inset: f64) -> usize {
-    let m = &sim.model;
-    let current = |n: usize| [m.coords[n][0] + m.committed.u[2 * n], m.coords[n][1] + m.committed.u[2 * n + 1]];
-    let structure: Vec<usize> =
-        (0..m.coords.len()).filter(|&n| m.roles[n] == loam_fem::dofs::NodeRole::Structure).collect();
-    let nearest = |c: [f64; 2]| {
-        *structure
-            .iter()
-            .min_by(|&&a, &&b| {
-                let d = |n: usize| (m.coords[n][0] - c[0]).powi(2) + (m.coords[n][1] - c[1]).powi(2);
-                d(a).total_cmp(&d(b))
-            })
-            .expect("the case has an FEM plate")
-    };
-    let quad = corners.map(|c| current(nearest(c)));
-    let centre = [quad.iter().map(|q| q[0]).sum::<f64>() / 4.0, quad.iter().map(|q| q[1]).sum::<f64>() / 4.0];
-    // inside every edge (counter-clockwise corners), at least `inset` from it
-    let inside = |x: [f64; 2]| {
-        (0..4).all(|e| {
-            let (a, b) = (quad[e], quad[(e + 1) % 4]);
-            let (tx, ty) = (b[0] - a[0], b[1] - a[1]);
-            let len = (tx * tx + ty * ty).sqrt();
-            let side = (tx * (x[1] - a[1]) - ty * (x[0] - a[0])) / len;
-            let centre_side = tx * (centre[1] - a[1]) - ty * (centre[0] - a[0]);
-            centre_side > 0.0 && side > inset
-        })
-    };
-    loam::monitor::point_extents(m).iter().filter(|p| inside([p.position[0], p.position[1]])).count()
-}
-
 /// Issue 25, item 5 (benchmark 13 with the wall rotated 10° against the grid,
 /// `cases/coupled_collapse_rubber_rotated.json`, the issue's acceptance): the rubber plate
 /// leans 10° towards the soil, its faces cross the grid's cells, and soil and plate meet by
@@ -527,7 +494,8 @@ fn collapse_onto_rotated_rubber_plate_by_contact() {
     assert!(top >= 5e-4, "the rubber plate's top moves {top} m");
     let (s, c) = 10f64.to_radians().sin_cos();
     let at = |x: f64, y: f64| [0.25 + x * c - y * s, x * s + y * c];
-    let inside = points_inside_plate(&sim, [at(0.0, 0.0), at(0.01, 0.0), at(0.01, 0.06), at(0.0, 0.06)], 1e-3);
+    let inside =
+        common::points_inside_structure(&sim, [at(0.0, 0.0), at(0.01, 0.0), at(0.01, 0.06), at(0.0, 0.06)], 1e-3);
     println!("material points inside the rotated plate (more than 1 mm from its faces): {inside}");
     assert_eq!(inside, 0, "soil entered the plate");
 }

@@ -255,3 +255,36 @@ pub fn euler_bernoulli(x: f64) -> f64 {
     let (q, ei, l) = (1000.0 * 9.81, 9.0e7 / 12.0, 7.0);
     -(q * x * x * (6.0 * l * l - 4.0 * l * x + x * x) / (24.0 * ei))
 }
+
+/// How many material points lie inside an FEM structure's current outline: the convex
+/// quadrilateral through its structure nodes nearest to the reference `corners` (counter-
+/// clockwise), shrunk by `inset` (m) from each edge (2D).
+pub fn points_inside_structure(sim: &Simulation, corners: [[f64; 2]; 4], inset: f64) -> usize {
+    let m = &sim.model;
+    let current = |n: usize| [m.coords[n][0] + m.committed.u[2 * n], m.coords[n][1] + m.committed.u[2 * n + 1]];
+    let structure: Vec<usize> =
+        (0..m.coords.len()).filter(|&n| m.roles[n] == loam_fem::dofs::NodeRole::Structure).collect();
+    let nearest = |c: [f64; 2]| {
+        *structure
+            .iter()
+            .min_by(|&&a, &&b| {
+                let d = |n: usize| (m.coords[n][0] - c[0]).powi(2) + (m.coords[n][1] - c[1]).powi(2);
+                d(a).total_cmp(&d(b))
+            })
+            .expect("the case has an FEM plate")
+    };
+    let quad = corners.map(|c| current(nearest(c)));
+    let centre = [quad.iter().map(|q| q[0]).sum::<f64>() / 4.0, quad.iter().map(|q| q[1]).sum::<f64>() / 4.0];
+    // inside every edge (counter-clockwise corners), at least `inset` from it
+    let inside = |x: [f64; 2]| {
+        (0..4).all(|e| {
+            let (a, b) = (quad[e], quad[(e + 1) % 4]);
+            let (tx, ty) = (b[0] - a[0], b[1] - a[1]);
+            let len = (tx * tx + ty * ty).sqrt();
+            let side = (tx * (x[1] - a[1]) - ty * (x[0] - a[0])) / len;
+            let centre_side = tx * (centre[1] - a[1]) - ty * (centre[0] - a[0]);
+            centre_side > 0.0 && side > inset
+        })
+    };
+    loam::monitor::point_extents(m).iter().filter(|p| inside([p.position[0], p.position[1]])).count()
+}
