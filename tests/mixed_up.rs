@@ -483,6 +483,17 @@ fn print_curve(label: &str, sim: &Simulation, h: &History, every: usize) {
     println!("{label}: settlement (m): q/s_u  {}", points.join(", "));
 }
 
+/// Prints a footing's load curve and its plateau (the mean over the last 20 % of the
+/// settlement) and checks the plateau against Prandtl's 2 + π within `tolerance`; returns
+/// the plateau and the final settlement.
+fn plateau_near_prandtl(label: &str, sim: &Simulation, h: &History, tolerance: f64) -> (f64, f64) {
+    print_curve(label, sim, h, 5);
+    let (value, end) = plateau(sim, h);
+    println!("{label}: plateau over the last 20 % of {end:.3} m: {value:.3}");
+    report(&format!("{label}: q/s_u plateau vs Prandtl 2 + π"), value, PRANDTL, tolerance);
+    (value, end)
+}
+
 /// Benchmark 11 in MPM (the acceptance of issue 15), which is also benchmark 15 with a smooth
 /// contact: the concrete footing (rigid for the soil) on undrained Tresca soil, u–p
 /// (ν = 0.4999) and displacement (ν = 0.495) on the same grid (h = B/20, 3 × 3 points per
@@ -523,10 +534,7 @@ fn footing_on_undrained_soil_mpm() {
 #[test]
 fn footing_fem_on_mpm_by_contact() {
     let (sim, h) = run(case("footing_fem_on_mpm.json"));
-    print_curve("FEM footing on MPM u–p by contact, B/20", &sim, &h, 5);
-    let (plateau, end) = plateau(&sim, &h);
-    println!("FEM footing by contact: plateau over the last 20 % of {end:.3} m: {plateau:.3}");
-    report("FEM footing on MPM u–p by contact: q/s_u plateau vs Prandtl 2 + π", plateau, PRANDTL, 0.05);
+    let (_, end) = plateau_near_prandtl("FEM footing on MPM u–p by contact, B/20", &sim, &h, 0.05);
     let (q, f) = (monitor(&sim, "q_over_su"), monitor(&sim, "interface_q"));
     let last = &h.last().unwrap().1;
     report("FEM footing by contact: contact force vs the footing's top reaction", last[f], last[q], 1e-6);
@@ -587,10 +595,7 @@ fn footing_fem_on_mpm_by_contact_converges() {
 #[ignore = "about 80 s in release; run with --ignored"]
 fn coupled_footing_rough_contact() {
     let (sim, h) = run(case("coupled_footing_rough_up.json"));
-    print_curve("footing MPM u–p, rough", &sim, &h, 5);
-    let (plateau, end) = plateau(&sim, &h);
-    println!("footing MPM rough: plateau over the last 20 % of {end:.3} m: {plateau:.3}");
-    report("footing MPM u–p rough: q/s_u plateau vs Prandtl 2 + π", plateau, PRANDTL, 0.05);
+    plateau_near_prandtl("footing MPM u–p, rough", &sim, &h, 0.05);
 }
 
 /// Benchmark 11's MPM footing refined, h = B/10, B/20, B/40, with a clay a hundred times
