@@ -346,7 +346,7 @@ pub fn tie_facets(
     let fail = |message: String| InterfaceError { interface: None, message };
     let mesh = structure.mesh;
     if mesh.element.dim() != 2 {
-        return Err(fail("a tie is 2D only so far (issue 25)".into()));
+        return Err(fail("a non-conforming interface (tie or contact) is 2D only so far (issue 25)".into()));
     }
     let region: std::collections::HashSet<usize> = region.iter().copied().collect();
     let facets: Vec<[usize; 2]> = mesh
@@ -364,7 +364,7 @@ pub fn tie_facets(
         length += (x1[0] - x0[0]).hypot(x1[1] - x0[1]);
         if let Some(x) = [x0, x1].into_iter().find(|x| grid.locate(x).is_none()) {
             return Err(fail(format!(
-                "the node of '{}' at ({}, {}) lies outside the soil's grid: a tie needs the grid around its facets",
+                "the node of '{}' at ({}, {}) lies outside the soil's grid: a non-conforming interface needs the grid around its facets",
                 structure.name, x[0], x[1]
             )));
         }
