@@ -479,6 +479,11 @@ pub struct InterfaceSpec {
     /// Coulomb coefficient μ ≥ 0 of a contact (default 0: frictionless).
     #[serde(default)]
     pub friction: Option<f64>,
+    /// Augmented Lagrangian of a contact: the largest penetration (m) a converged step may
+    /// leave; above it the contact pressures become multipliers and the step is solved again
+    /// (absent: pure penalty, penetration `t_N/β_N`).
+    #[serde(default)]
+    pub gap_tolerance: Option<f64>,
 }
 
 /// How an interface joins soil and structure.

@@ -80,6 +80,9 @@ pub struct RunStats {
     pub iterations: usize,
     /// Step cuts after failures.
     pub cuts: usize,
+    /// Augmented-Lagrangian updates (each a further Newton solve of its step).
+    #[serde(default)]
+    pub augmentations: usize,
     /// Accumulated phase timings.
     pub timings: PhaseTimings,
     /// Largest converged residual per block (soil, interface, structure) over the run.
@@ -425,6 +428,7 @@ impl Simulation {
                     self.stats.last_block_residuals = summary.block_residual;
                     self.stats.steps += 1;
                     self.stats.iterations += report.iterations;
+                    self.stats.augmentations += report.augmentations;
                     self.stats.timings += report.timings;
                     if self.time() < target - eps {
                         // a converged sub-step of a cut step: a step of its own

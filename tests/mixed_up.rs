@@ -19,14 +19,22 @@ use serde_json::json;
 /// Prandtl's bearing capacity factor of a strip footing on weightless Tresca soil, `2 + π`.
 const PRANDTL: f64 = 2.0 + std::f64::consts::PI;
 
-/// A bundled case with some of its JSON replaced (`pointer`, value) before parsing, its
-/// relative paths still taken from `cases/`.
+/// A bundled case with some of its JSON replaced or added (`pointer`, value) before parsing,
+/// its relative paths still taken from `cases/`.
 fn variant(name: &str, edits: &[(&str, serde_json::Value)]) -> Case {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases");
     let text = std::fs::read_to_string(dir.join(name)).expect("bundled case");
     let mut json: serde_json::Value = serde_json::from_str(&text).expect("case JSON");
     for (pointer, value) in edits {
-        *json.pointer_mut(pointer).unwrap_or_else(|| panic!("{name}: no {pointer}")) = value.clone();
+        // an existing value replaced, or a new key added to an existing object
+        let (parent, key) = pointer.rsplit_once('/').expect("a JSON pointer");
+        match json.pointer_mut(pointer) {
+            Some(v) => *v = value.clone(),
+            None => {
+                let object = json.pointer_mut(parent).and_then(|p| p.as_object_mut());
+                object.unwrap_or_else(|| panic!("{name}: no {parent}")).insert(key.to_string(), value.clone());
+            }
+        }
     }
     let mut case = Case::parse(&json.to_string()).expect("case parses");
     case.directory = dir;
@@ -587,6 +595,43 @@ fn footing_fem_on_mpm_by_contact_converges() {
     );
     assert!((p[1] - p[2]).abs() < (p[0] - p[1]).abs(), "the differences shrink under refinement");
     report("FEM footing by contact, B/40 plateau vs Prandtl 2 + π", p[2], PRANDTL, 0.05);
+}
+
+/// Issue 25, item 2 (the augmented Lagrangian removes the penalty error): benchmark 15 by
+/// contact at h = B/10 with a normal penalty 100 times softer than the default (1e6 Pa/m).
+/// Pure penalty, the footing sinks 15 mm into the soil (`t_N/β_N`) and the plateau is 0.7 %
+/// below the default penalty's; with `gap_tolerance` 1e-5 m the largest penetration is below
+/// the tolerance after the augmented-Lagrangian updates (measured 7.2e-6 m) and the plateau
+/// within 0.1 % of the default penalty's (measured 0.03 %). About 40 s.
+#[test]
+fn footing_contact_augmented_lagrangian_removes_the_penalty_gap() {
+    let coarse = |edits: &[(&str, serde_json::Value)]| {
+        let mut all = vec![
+            ("/domains/0/grid/cells", json!([50, 54])),
+            ("/domains/0/material_points/cells/mesh/rectangle/cells", json!([50, 50])),
+            ("/domains/1/mesh/rectangle/cells", json!([5, 5])),
+        ];
+        all.extend(edits.iter().cloned());
+        let (sim, h) = run(variant("footing_fem_on_mpm.json", &all));
+        let (value, _) = plateau(&sim, &h);
+        let (_, gap) = point_field(&sim, "footing_contact", "normal_gap");
+        let penetration = gap.iter().fold(0.0f64, |m, g| m.max(-g));
+        (value, penetration, sim.stats.augmentations)
+    };
+    let (reference, reference_gap, _) = coarse(&[]);
+    let (soft, soft_gap, _) = coarse(&[("/interfaces/0/penalty", json!(1.0e6))]);
+    let (augmented, augmented_gap, updates) =
+        coarse(&[("/interfaces/0/penalty", json!(1.0e6)), ("/interfaces/0/gap_tolerance", json!(1.0e-5))]);
+    println!(
+        "footing by contact, B/10: plateau / largest penetration: default penalty {reference:.4} / {reference_gap:.2e} m; \
+         100 times softer {soft:.4} / {soft_gap:.2e} m; softer with the augmented Lagrangian {augmented:.4} / \
+         {augmented_gap:.2e} m ({updates} updates)"
+    );
+    assert!(soft_gap > 1e-3, "the soft penalty lets the footing sink: {soft_gap:.2e} m");
+    assert!((soft - reference).abs() > 0.005 * reference, "the soft penalty moves the plateau");
+    assert!(augmented_gap <= 1e-5, "the augmented Lagrangian keeps the penetration below 1e-5 m: {augmented_gap:.2e}");
+    assert!(updates > 0, "the multipliers were updated");
+    report("augmented Lagrangian, soft penalty: plateau vs the default penalty's", augmented, reference, 1e-3);
 }
 
 /// Benchmark 15 with a rough contact: the concrete footing tied to the u–p soil; Prandtl's

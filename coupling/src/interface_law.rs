@@ -94,8 +94,11 @@ pub struct LawResponse {
 }
 
 impl InterfaceLaw {
-    /// The response at gap `g` (m) of a point whose facet has the outward unit normal `n`.
-    pub fn response(&self, g: [f64; 2], n: [f64; 2]) -> LawResponse {
+    /// The response at gap `g` (m) of a point whose facet has the outward unit normal `n`,
+    /// with the contact pressure's augmented-Lagrangian multiplier `λ_N ≥ 0` (Pa; 0: pure
+    /// penalty; ignored by a tie): `t_N = λ_N − β_N g_N` where positive (closed), else open
+    /// (Laursen 2002, §6.4; Wriggers 2006, §6.3.3).
+    pub fn response(&self, g: [f64; 2], n: [f64; 2], multiplier: f64) -> LawResponse {
         match *self {
             InterfaceLaw::Tie { penalty } => LawResponse {
                 traction: g.map(|gk| penalty * gk),
@@ -107,7 +110,8 @@ impl InterfaceLaw {
             InterfaceLaw::Contact { normal_penalty, tangential_penalty, friction } => {
                 let tau = [-n[1], n[0]];
                 let (gn, gt) = (dot(g, n), dot(g, tau));
-                if gn >= 0.0 {
+                let pressure = multiplier - normal_penalty * gn;
+                if pressure <= 0.0 {
                     return LawResponse {
                         traction: [0.0; 2],
                         tangent: [[0.0; 2]; 2],
@@ -116,7 +120,6 @@ impl InterfaceLaw {
                         state: PointState::Open,
                     };
                 }
-                let pressure = -normal_penalty * gn;
                 let trial = tangential_penalty * gt;
                 let limit = friction * pressure;
                 // (t_T, ∂t_T/∂g_N, ∂t_T/∂g_T, state)
@@ -126,8 +129,8 @@ impl InterfaceLaw {
                     let s = trial.signum();
                     (limit * s, -friction * normal_penalty * s, 0.0, PointState::Slip)
                 };
-                // T = β_N g_N n + t_T τ
-                let traction = std::array::from_fn(|i| normal_penalty * gn * n[i] + tt * tau[i]);
+                // T = −t_N n + t_T τ
+                let traction = std::array::from_fn(|i| -pressure * n[i] + tt * tau[i]);
                 let tangent = std::array::from_fn(|i| {
                     std::array::from_fn(|j| normal_penalty * n[i] * n[j] + tau[i] * (dtt_dgn * n[j] + dtt_dgt * tau[j]))
                 });
@@ -191,17 +194,22 @@ mod tests {
     }
 
     /// `C` against central differences of `T` in every state, open, stick and slip (both
-    /// directions), relative error < 1e-8; the slip's `C` is unsymmetric.
+    /// directions), without and with an augmented-Lagrangian multiplier (λ_N = 1.5e4 Pa: a
+    /// point closed at a small positive gap), relative error < 1e-8; the slip's `C` is
+    /// unsymmetric.
     #[test]
     fn tangent_matches_central_differences_in_every_state() {
-        for (gn, gt, state) in [
-            (2e-6, 1e-6, PointState::Open),
-            (-1e-5, 2e-6, PointState::Stick),
-            (-1e-5, 2e-5, PointState::Slip),
-            (-1e-5, -2e-5, PointState::Slip),
+        for (gn, gt, lambda, state) in [
+            (2e-6, 1e-6, 0.0, PointState::Open),
+            (-1e-5, 2e-6, 0.0, PointState::Stick),
+            (-1e-5, 2e-5, 0.0, PointState::Slip),
+            (-1e-5, -2e-5, 0.0, PointState::Slip),
+            (1e-6, 1e-6, 1.5e4, PointState::Stick),
+            (2e-6, 2e-5, 1.5e4, PointState::Slip),
+            (6e-6, 1e-6, 1.5e4, PointState::Open),
         ] {
             let (n, g) = frame_and_gap(gn, gt);
-            let r = CONTACT.response(g, n);
+            let r = CONTACT.response(g, n, lambda);
             assert_eq!(r.state, state, "gap ({gn}, {gt})");
             let h = 1e-11;
             let mut worst = 0.0f64;
@@ -209,12 +217,12 @@ mod tests {
                 let (mut p, mut m) = (g, g);
                 p[j] += h;
                 m[j] -= h;
-                let (tp, tm) = (CONTACT.response(p, n).traction, CONTACT.response(m, n).traction);
+                let (tp, tm) = (CONTACT.response(p, n, lambda).traction, CONTACT.response(m, n, lambda).traction);
                 for i in 0..2 {
                     worst = worst.max(((tp[i] - tm[i]) / (2.0 * h) - r.tangent[i][j]).abs() / 3.0e9);
                 }
             }
-            println!("{state:?}: ∂T/∂g vs central differences, relative error {worst:.1e}");
+            println!("{state:?}, λ_N = {lambda}: ∂T/∂g vs central differences, relative error {worst:.1e}");
             assert!(worst < 1e-8, "{state:?}: {worst:.2e}");
             if state == PointState::Slip {
                 assert!((r.tangent[0][1] - r.tangent[1][0]).abs() > 1e6, "slip is unsymmetric");
@@ -229,23 +237,23 @@ mod tests {
     #[test]
     fn tractions_follow_the_laws() {
         let (n, g) = frame_and_gap(-1e-5, 2e-5);
-        let r = CONTACT.response(g, n);
+        let r = CONTACT.response(g, n, 0.0);
         let tau = [-n[1], n[0]];
         let (tn, tt) = (dot(r.traction, n), dot(r.traction, tau));
         println!("slip: t_N = {:.1} Pa (β_N g_N = −3e4), t_T = {tt:.1} Pa (μ t_N = 9e3)", -tn);
         assert!((tn + 3.0e4).abs() < 1e-9 && (tt - 0.3 * 3.0e4).abs() < 1e-9);
         assert!((dot(r.carried, tau) - 9.0e3 / 1.0e9).abs() < 1e-18 && (dot(r.carried, n) + 1e-5).abs() < 1e-18);
         let (_, g) = frame_and_gap(-1e-5, 2e-6);
-        let stick = CONTACT.response(g, n);
+        let stick = CONTACT.response(g, n, 0.0);
         assert!((dot(stick.traction, tau) - 2.0e3).abs() < 1e-9);
         assert!((0..2).all(|k| (stick.carried[k] - g[k]).abs() < 1e-20), "stick carries the gap");
         let frictionless = InterfaceLaw::Contact { normal_penalty: 3.0e9, tangential_penalty: 3.0e9, friction: 0.0 };
-        let r = frictionless.response(g, n);
+        let r = frictionless.response(g, n, 0.0);
         assert!(dot(r.traction, tau).abs() < 1e-9 && r.state == PointState::Slip && dot(r.carried, tau).abs() < 1e-20);
         let (_, open) = frame_and_gap(1e-6, 5e-6);
-        let r = CONTACT.response(open, n);
+        let r = CONTACT.response(open, n, 0.0);
         assert!(r.traction == [0.0; 2] && r.carried == [0.0; 2]);
-        let tie = InterfaceLaw::Tie { penalty: 2.0 }.response([1.0, -3.0], n);
+        let tie = InterfaceLaw::Tie { penalty: 2.0 }.response([1.0, -3.0], n, 0.0);
         assert!(tie.traction == [2.0, -6.0] && tie.carried == [1.0, -3.0]);
     }
 }

@@ -136,6 +136,7 @@ struct ActivePoint {
 #[derive(serde::Serialize, serde::Deserialize)]
 struct TieState {
     gaps: Vec<[f64; 2]>,
+    multipliers: Vec<f64>,
     tractions: Vec<[f64; 2]>,
     states: Vec<PointState>,
     force: [f64; 2],
@@ -156,6 +157,14 @@ pub struct InterfacePoints {
     law: InterfaceLaw,
     /// Per point, the gap `g_n` committed at the end of the last step.
     gaps: Vec<[f64; 2]>,
+    /// Per point, the augmented-Lagrangian multiplier λ_N (Pa) of the contact pressure
+    /// committed at the end of the last step (0 without augmentation).
+    multipliers: Vec<f64>,
+    /// Per point, λ_N within the step (updated by [`Domain::augment`]).
+    trial_multipliers: Vec<f64>,
+    /// The penetration (m) above which a converged step updates the multipliers and is
+    /// solved again (augmented Lagrangian, Uzawa); `None`: pure penalty.
+    gap_tolerance: Option<f64>,
     /// Per point, the traction on the structure (Pa) and the state at the end of the last
     /// step (output).
     tractions: Vec<[f64; 2]>,
@@ -207,12 +216,25 @@ impl InterfacePoints {
             points,
             law,
             gaps: vec![[0.0; 2]; n],
+            multipliers: vec![0.0; n],
+            trial_multipliers: vec![0.0; n],
+            gap_tolerance: None,
             tractions: vec![[0.0; 2]; n],
             states: vec![PointState::Open; n],
             active: Vec::new(),
             force: [0.0; 2],
             energy: 0.0,
         }
+    }
+
+    /// The same interface with the augmented Lagrangian: a converged step whose largest
+    /// penetration `−g_N` exceeds `gap_tolerance` (m) updates every point's multiplier to its
+    /// contact pressure, `λ_N ← max(0, λ_N − β_N g_N)`, and is solved again (Uzawa's
+    /// iteration; Laursen 2002, §6.4), so the penetration falls below the tolerance whatever
+    /// the penalty. Contact only (a tie keeps its penalty gap).
+    pub fn with_gap_tolerance(mut self, gap_tolerance: f64) -> Self {
+        self.gap_tolerance = Some(gap_tolerance);
+        self
     }
 
     /// The penalty `β` (Pa/m; β_N of contact).
@@ -264,7 +286,7 @@ impl InterfacePoints {
                 gap[k] += d * u[k];
             }
         }
-        let response = self.law.response(gap, p.normal);
+        let response = self.law.response(gap, p.normal, self.trial_multipliers[p.point]);
         let nd = 2 * dg.len();
         let w = point.weight;
         let residual: Vec<f64> = dg.iter().flat_map(|d| response.traction.map(|t| w * d * t)).collect();
@@ -404,6 +426,7 @@ impl Domain for InterfacePoints {
             let functions = if soil(&functions) { Some(functions) } else { self.extrapolated(&x, &reached) };
             let Some(functions) = functions.filter(|f| soil(f)) else {
                 self.gaps[p] = [0.0; 2];
+                self.multipliers[p] = 0.0;
                 continue;
             };
             let (nodes, values) = functions.into_iter().unzip();
@@ -413,6 +436,7 @@ impl Domain for InterfacePoints {
         let changed = active.len() != self.active.len()
             || active.iter().zip(&self.active).any(|(a, b)| a.point != b.point || a.nodes != b.nodes);
         self.active = active;
+        self.trial_multipliers.clone_from(&self.multipliers);
         Ok(changed)
     }
 
@@ -473,6 +497,37 @@ impl Domain for InterfacePoints {
         self.states = states;
         self.force = force;
         self.energy = energy;
+        // the multipliers of the points the soil reached; the others release
+        let mut multipliers = vec![0.0; n];
+        for p in &self.active {
+            multipliers[p.point] = self.trial_multipliers[p.point];
+        }
+        self.multipliers = multipliers;
+    }
+
+    fn augment(&mut self, input: &AssemblyInput<'_>) -> bool {
+        let Some(tolerance) = self.gap_tolerance else { return false };
+        if !self.law.is_contact() {
+            return false;
+        }
+        let mut updated = Vec::with_capacity(self.active.len());
+        let mut penetration = 0.0f64;
+        for p in &self.active {
+            let (_, _, response) = self.point_block(p, input);
+            let pressure = -(response.traction[0] * p.normal[0] + response.traction[1] * p.normal[1]);
+            if response.state != PointState::Open {
+                let gn = (pressure - self.trial_multipliers[p.point]) / -self.law.penalty();
+                penetration = penetration.max(-gn);
+            }
+            updated.push((p.point, pressure.max(0.0)));
+        }
+        if penetration <= tolerance {
+            return false;
+        }
+        for (point, pressure) in updated {
+            self.trial_multipliers[point] = pressure;
+        }
+        true
     }
 
     fn kinetic_energy(&self, _v: &[f64]) -> f64 {
@@ -491,6 +546,7 @@ impl Domain for InterfacePoints {
     fn save_state(&self) -> Vec<u8> {
         let state = TieState {
             gaps: self.gaps.clone(),
+            multipliers: self.multipliers.clone(),
             tractions: self.tractions.clone(),
             states: self.states.clone(),
             force: self.force,
@@ -502,7 +558,11 @@ impl Domain for InterfacePoints {
     fn restore_state(&mut self, bytes: &[u8]) -> Result<(), String> {
         let state: TieState = bincode::deserialize(bytes).map_err(|e| format!("interface '{}': {e}", self.name))?;
         let n = self.points.len();
-        if state.gaps.len() != n || state.tractions.len() != n || state.states.len() != n {
+        if state.gaps.len() != n
+            || state.multipliers.len() != n
+            || state.tractions.len() != n
+            || state.states.len() != n
+        {
             return Err(format!(
                 "interface '{}': the checkpoint has {} tie points, the case {}",
                 self.name,
@@ -511,6 +571,7 @@ impl Domain for InterfacePoints {
             ));
         }
         self.gaps = state.gaps;
+        self.multipliers = state.multipliers;
         self.tractions = state.tractions;
         self.states = state.states;
         self.force = state.force;

@@ -68,6 +68,8 @@ pub struct Convergence {
     pub displacement_absolute: f64,
     /// First residual of the step.
     r0: f64,
+    /// Whether `r0` was given (an earlier solve's) rather than taken at iteration 0.
+    fixed_r0: bool,
 }
 
 impl Convergence {
@@ -79,12 +81,27 @@ impl Convergence {
         displacement_relative: f64,
         displacement_absolute: f64,
     ) -> Self {
-        Self { criterion, residual_relative, residual_absolute, displacement_relative, displacement_absolute, r0: 0.0 }
+        Self {
+            criterion,
+            residual_relative,
+            residual_absolute,
+            displacement_relative,
+            displacement_absolute,
+            r0: 0.0,
+            fixed_r0: false,
+        }
+    }
+
+    /// Takes `r0` as the first residual of the step (from an earlier solve of it) instead of
+    /// the residual at iteration 0.
+    pub fn set_reference(&mut self, r0: f64) {
+        self.r0 = r0;
+        self.fixed_r0 = true;
     }
 
     /// The residual criterion at `r` (records `r_0` at iteration 0).
     fn residual_met(&mut self, iteration: usize, r: f64) -> bool {
-        if iteration == 0 {
+        if iteration == 0 && !self.fixed_r0 {
             self.r0 = r;
         }
         r <= self.residual_absolute || r <= self.residual_relative * self.r0

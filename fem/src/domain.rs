@@ -290,6 +290,14 @@ pub trait Domain: Send + Sync {
         vectors: &mut [f64],
     ) -> Result<(), DomainError>;
 
+    /// After the step's Newton iteration has converged at `input`'s iterate: updates the
+    /// domain's own unknowns that the iteration holds fixed (the augmented-Lagrangian
+    /// multipliers of a contact) and returns `true` if the step must be solved again with
+    /// them (default: nothing to update).
+    fn augment(&mut self, _input: &AssemblyInput<'_>) -> bool {
+        false
+    }
+
     /// The step has converged: commit histories (input as for the last assembly).
     fn commit(&mut self, input: &AssemblyInput<'_>);
 

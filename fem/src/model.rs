@@ -206,6 +206,11 @@ impl std::ops::Sub for PhaseTimings {
     }
 }
 
+/// Most augmented-Lagrangian updates per step ([`Domain::augment`]): Uzawa's iteration
+/// contracts the penetration by about `β / (β + k)` per update (`k` the soil's stiffness at
+/// the interface), so a penalty of tens of times `k` needs a few.
+pub const MAX_AUGMENTATIONS: usize = 20;
+
 /// What one converged step did.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct StepReport {
@@ -222,6 +227,8 @@ pub struct StepReport {
     pub block_corrections: Vec<BlockNorms>,
     /// Phase timings of this step.
     pub timings: PhaseTimings,
+    /// Augmented-Lagrangian updates (each followed by a further Newton solve of the step).
+    pub augmentations: usize,
 }
 
 /// Seconds of one [`Model::assemble_only`], by half.
@@ -679,7 +686,27 @@ impl Model {
             f_ext: &f_ext,
             kinematic_dofs: self.coords.len() * self.dim,
         };
-        let result = NewtonStrategy { settings: self.settings }.solve(&mut problem, &mut report);
+        let mut result =
+            NewtonStrategy { settings: self.settings, reference_residual: None }.solve(&mut problem, &mut report);
+        let first_residual = report.residuals.first().copied();
+        // augmented Lagrangian: domains with multipliers update them at the converged iterate
+        // and the step is solved again from there, until none asks for it
+        for _ in 0..MAX_AUGMENTATIONS {
+            if result.is_err() {
+                break;
+            }
+            let input = assembly_input(self.scheme, problem.state, problem.committed, &[], dt, t_new, gravity, false);
+            let mut again = false;
+            for d in problem.domains.iter_mut() {
+                again |= d.augment(&input);
+            }
+            if !again {
+                break;
+            }
+            report.augmentations += 1;
+            result = NewtonStrategy { settings: self.settings, reference_residual: first_residual }
+                .solve(&mut problem, &mut report);
+        }
         // phase 3: convective phase
         if result.is_ok() {
             let t = Instant::now();

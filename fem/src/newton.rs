@@ -211,6 +211,10 @@ pub fn assembly_input<'b>(
 pub struct NewtonStrategy {
     /// Settings from the case file.
     pub settings: NewtonSettings,
+    /// The first residual of an earlier solve of the same step, as the reference of the
+    /// relative residual criterion (a step solved again after an augmented-Lagrangian update
+    /// converges to the step's tolerance, not to a fraction of the update's small residual).
+    pub reference_residual: Option<f64>,
 }
 
 impl NewtonStrategy {
@@ -219,6 +223,9 @@ impl NewtonStrategy {
     pub fn solve(&self, problem: &mut StepProblem<'_>, report: &mut StepReport) -> Result<(), StepError> {
         let settings = &self.settings;
         let mut convergence = settings.convergence();
+        if let Some(r0) = self.reference_residual {
+            convergence.set_reference(r0);
+        }
         let n = problem.state.u.len();
         let mut inertial = vec![0.0; n];
         let mut du_step = vec![0.0; n];
@@ -290,7 +297,7 @@ impl NewtonStrategy {
                 return Err(StepError::NoConvergence { iterations: it, residual: r_norm, largest: None });
             }
             if convergence.converged(it, r_norm, displacement_met) {
-                report.iterations = it;
+                report.iterations += it;
                 return Ok(());
             }
             if it == settings.max_iterations {

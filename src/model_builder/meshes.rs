@@ -812,6 +812,9 @@ fn couple_grids(
             if spec.tangential_penalty.is_some() {
                 return only_contact("tangential_penalty");
             }
+            if spec.gap_tolerance.is_some() {
+                return only_contact("gap_tolerance");
+            }
         }
         if spec.coupling.is_non_conforming() {
             let refuse = |key: &str, why: &str| Err(CaseError::new(format!("{loc}.{key}"), why.to_string()));
@@ -832,6 +835,9 @@ fn couple_grids(
             }
             if let Some(beta) = spec.tangential_penalty {
                 check_positive(&format!("{loc}.tangential_penalty"), beta)?;
+            }
+            if let Some(tolerance) = spec.gap_tolerance {
+                check_positive(&format!("{loc}.gap_tolerance"), tolerance)?;
             }
             if let Some(mu) = spec.friction {
                 if !(mu.is_finite() && mu >= 0.0) {
@@ -1021,7 +1027,7 @@ fn number(
                     law: Some(law),
                 };
                 interfaces[t.interface] = Some(ResolvedInterface { summary, part: part_key, soil_nodes: nodes });
-                ties.push(InterfacePoints::new(
+                let interface = InterfacePoints::new(
                     &spec.name,
                     case.formulation,
                     case.thickness,
@@ -1030,7 +1036,11 @@ fn number(
                     domain.soil_nodes(),
                     facets,
                     law,
-                ));
+                );
+                ties.push(match spec.gap_tolerance {
+                    Some(tolerance) => interface.with_gap_tolerance(tolerance),
+                    None => interface,
+                });
             }
         }
         parts.push((part_key, Part::Grid(Box::new(GridPart { domain, bodies, coupling }))));

@@ -15,7 +15,7 @@
 //!   "status": "at_rest",
 //!   "end": { "reason": "at rest (analysis.stop_at_rest) at t = 0.68 s", "time": 0.68, "end_time": 2.0 },
 //!   "steps": 781,
-//!   "newton": { "iterations": 4711, "step_cuts": 3,
+//!   "newton": { "iterations": 4711, "step_cuts": 3, "augmentations": 0,
 //!               "residual_per_block": { "last": [2.1e-7, 3.0e-9, 1.1e-8], "max": [6.9e-2, 3.0e-5, 2.3e-5] } },
 //!   "linear_solver": { "factorisations": 4711, "krylov_solves": 0, "krylov_iterations": 0 },
 //!   "wall_time": { "total": 53.1, "search": 1.2, "pattern": 0.4, "assembly": 20.3,
@@ -82,6 +82,10 @@ pub struct NewtonReport {
     pub iterations: usize,
     /// Step halvings after failed steps.
     pub step_cuts: usize,
+    /// Augmented-Lagrangian updates of contacts (`interfaces[].gap_tolerance`), each
+    /// followed by a further Newton solve of its step.
+    #[serde(default)]
+    pub augmentations: usize,
     /// Converged residual norms (N) per block, of the last step and the largest over the
     /// run: soil (grid nodes), interface (shared nodes), structure (FEM nodes).
     #[serde(default)]
@@ -364,6 +368,7 @@ impl RunSummary {
             newton: NewtonReport {
                 iterations: sim.stats.iterations,
                 step_cuts: sim.stats.cuts,
+                augmentations: sim.stats.augmentations,
                 residual_per_block: BlockResiduals {
                     last: blocks(sim.stats.last_block_residuals),
                     max: blocks(sim.stats.max_block_residuals),
