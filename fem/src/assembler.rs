@@ -327,11 +327,12 @@ impl Assembler {
     pub fn rebalance(&mut self, domains: &mut [Box<dyn Domain>], positions: &[[f64; 3]]) -> bool {
         let Some(owners) = &self.owners else { return false };
         let costs = block_costs(domains);
-        if imbalance(owners, &costs) <= REBALANCE_THRESHOLD {
+        if owners.imbalance(&costs) <= REBALANCE_THRESHOLD {
             return false;
         }
         let dim = self.dofs.dim();
         let owners = partition(owners.ranks(), &self.layout, dim, self.dofs.displacement_dofs(), positions, &costs);
+        with_stats(|s| s.rebalances += 1);
         let share = RankShare::new(&owners, &self.dofs, &self.layout, &self.pattern);
         self.solver.distribute(share.owned_rows.clone());
         self.share = Some(share);
@@ -693,20 +694,6 @@ fn block_costs(domains: &[Box<dyn Domain>]) -> Vec<f64> {
     costs
 }
 
-/// Largest kernel cost of a rank over the mean.
-fn imbalance(owners: &BlockOwners, costs: &[f64]) -> f64 {
-    let mut load = vec![0.0; owners.ranks().size()];
-    for (b, c) in costs.iter().enumerate().take(owners.len()) {
-        load[owners.owner(b)] += c;
-    }
-    let mean = load.iter().sum::<f64>() / load.len() as f64;
-    if mean > 0.0 {
-        load.iter().fold(0.0f64, |m, &l| m.max(l)) / mean
-    } else {
-        1.0
-    }
-}
-
 /// The blocks of `layout` partitioned among `ranks` by a recursive coordinate bisection of
 /// their centroids (the mean of their nodes' `positions`) weighted by their kernel `costs`
 /// (plus [`BLOCK_WEIGHT_FLOOR`]); the partition's measures go to the run's statistics.
@@ -738,7 +725,7 @@ fn partition(
     let weights: Vec<f64> = costs.iter().map(|c| c + BLOCK_WEIGHT_FLOOR).collect();
     let owners = BlockOwners::new(ranks, rcb(&centroids, &weights, ranks.size()));
     let own: f64 = costs.iter().enumerate().filter(|&(b, _)| owners.owns(b)).map(|(_, c)| c).sum();
-    let worst = imbalance(&owners, costs);
+    let worst = owners.imbalance(costs);
     with_stats(|s| {
         s.own_cost += own;
         s.total_cost += costs.iter().sum::<f64>();

@@ -236,6 +236,10 @@ pub struct DistributedStats {
     pub imbalance: f64,
     /// Partitions computed (a new pattern, or a rebalance).
     pub partitions: u64,
+    /// Of `partitions`: those made because the points' moves unbalanced the last one
+    /// (`Assembler::rebalance`).
+    #[serde(default)]
+    pub rebalances: u64,
     /// CPU time of the process (user + system, from `/proc/self/stat`) when the statistics
     /// were gathered: the work of a rank, whatever else shares the cores.
     #[serde(default)]
@@ -276,6 +280,7 @@ impl DistributedStats {
             mine.imbalance,
             mine.partitions as f64,
             mine.cpu_seconds,
+            mine.rebalances as f64,
         ];
         ranks
             .all_gather_varcount(&record)
@@ -294,6 +299,7 @@ impl DistributedStats {
                 imbalance: r[10],
                 partitions: r[11] as u64,
                 cpu_seconds: r[12],
+                rebalances: r[13] as u64,
             })
             .collect()
     }
@@ -313,6 +319,7 @@ pub static STATS: std::sync::Mutex<DistributedStats> = std::sync::Mutex::new(Dis
     total_cost: 0.0,
     imbalance: 0.0,
     partitions: 0,
+    rebalances: 0,
     cpu_seconds: 0.0,
 });
 
@@ -358,6 +365,20 @@ impl BlockOwners {
     /// Whether this rank evaluates block `b`.
     pub fn owns(&self, b: usize) -> bool {
         self.owner[b] as usize == self.ranks.rank
+    }
+
+    /// The largest rank's share of the blocks' `costs` over the mean share (1: balanced).
+    pub fn imbalance(&self, costs: &[f64]) -> f64 {
+        let mut load = vec![0.0; self.ranks.size];
+        for (b, c) in costs.iter().enumerate().take(self.owner.len()) {
+            load[self.owner[b] as usize] += c;
+        }
+        let mean = load.iter().sum::<f64>() / load.len() as f64;
+        if mean > 0.0 {
+            load.iter().fold(0.0f64, |m, &l| m.max(l)) / mean
+        } else {
+            1.0
+        }
     }
 
     /// The owners of the blocks `range` (a domain's part), numbered from 0.
@@ -672,6 +693,14 @@ mod tests {
         let counts: Vec<usize> = (0..3).map(|r| three.iter().filter(|&&p| p == r).count()).collect();
         assert!(counts.iter().all(|&c| (4..=6).contains(&c)), "{counts:?}");
         assert_eq!(three, rcb(&points, &[1.0; 16], 3));
+        // the balance of a partition: after material moved to the first 4 points (weight 5
+        // each), the even split by count leaves rank 0 with 20 + 4 of 32 (1.5× the mean)
+        let even = BlockOwners::new(ranks(0, 2), rcb(&points, &[1.0; 16], 2));
+        assert_eq!(even.imbalance(&[1.0; 16]), 1.0);
+        let moved: Vec<f64> = (0..16).map(|k| if k % 8 < 2 { 5.0 } else { 1.0 }).collect();
+        assert_eq!(even.imbalance(&moved), 1.5);
+        let again = BlockOwners::new(ranks(0, 2), rcb(&points, &moved, 2));
+        assert!(again.imbalance(&moved) <= 1.1, "{}", again.imbalance(&moved));
     }
 
     #[test]
