@@ -229,6 +229,28 @@ fn plastic_3d_collapse_on_2_and_4_ranks_equals_the_serial_run() {
     assert!(last_value(&m, "kinetic_energy") > 0.0, "the column moves");
 }
 
+/// Repartitioning as points move: the compaction column (`cases/compaction_column_mpm.json`,
+/// a Neo-Hookean column settling by a third of its height under its weight, its points
+/// crossing several cells of a B-spline grid) on 2 and 4 ranks against the serial PETSc run;
+/// the points' moves unbalance the bisection's parts beyond 10 % between pattern changes, so
+/// the ranks rebalance (measured: once on 2 ranks, 5 times on 4), and the base carries the
+/// column's weight ρ g H b = 1000 · 9.81 · 1 · 0.1 = 981 N to 1e-9.
+#[test]
+fn a_settling_column_rebalances_on_2_and_4_ranks_and_equals_the_serial_run() {
+    let m = runs_on_ranks_agree("compaction_column_mpm.json");
+    let out = temp_dir("rebalance");
+    loam_run(&root().join("cases/compaction_column_mpm.json"), &out, Some(4));
+    let summary: Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let rebalances = summary["distributed"][0]["rebalances"].as_u64().unwrap();
+    println!(
+        "compaction column on 4 ranks: {rebalances} rebalances, last imbalance {}",
+        summary["distributed"][0]["imbalance"]
+    );
+    assert!(rebalances >= 1, "the moving points made the ranks repartition");
+    let _ = std::fs::remove_dir_all(&out);
+    report("compaction column on 4 ranks: base reaction vs weight [N]", last_value(&m, "base_reaction_y"), 981.0, 1e-9);
+}
+
 /// Bad input under `mpirun`: a case that names a direct solver cannot run on 2 ranks; the
 /// one-line error names `solver.linear_solver` and the exit code is 2 (that of every rank).
 #[test]
