@@ -8,7 +8,7 @@
 #                                 the feature's build adds 1.5-2.5 minutes)
 #   LOAM_MPI=1 scripts/test.sh    also the `mpi` feature's tests: mpirun -n 2 and -n 4 against the
 #                                 serial PETSc run (tests/mpi.rs; needs scripts/install_petsc.sh,
-#                                 which brings Open MPI; the build adds 3-5 minutes, the tests ~20 s)
+#                                 which brings Open MPI; the build adds 3-5 minutes, the tests ~25 s)
 # The Rust part needs no Python: the Rust tests that need the .venv (the meshio reading of VTK
 # files, the FMU tutorial's fmpy loop) are #[ignore]d there and run in the Python part, with
 # the .venv's interpreter.

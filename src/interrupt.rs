@@ -111,6 +111,7 @@ mod tests {
             monitors: Default::default(),
             monitor_units: Default::default(),
             grid_motion: Vec::new(),
+            distributed: Vec::new(),
         }
     }
 

@@ -15,11 +15,15 @@
 //!    sparse direct (or Krylov) solve, whose solution goes back to every DOF of its
 //!    equation and to the global frame as the correction `δu`.
 //!
-//! **Distributed** (more than one MPI rank, [`crate::ranks`]): the model, and so every element
-//! buffer, is on every rank; step 2 gathers this rank's blocks only and sums the residual
-//! over the ranks (every rank then holds the whole residual), step 3 gathers this rank's
-//! blocks of the matrix, which PETSc adds across the ranks before its solve, and the whole
-//! correction comes back to every rank.
+//! **Distributed** (more than one MPI rank, [`crate::ranks`]): the model is on every rank, and
+//! the blocks are partitioned among the ranks by a recursive coordinate bisection of their
+//! centroids weighted by their kernels' cost ([`crate::ranks::rcb`]; recomputed at a new
+//! pattern, and by [`Assembler::rebalance`] when the points' moves unbalance it beyond
+//! [`REBALANCE_THRESHOLD`]). Step 1 evaluates the kernels of this rank's blocks (the domains
+//! are told theirs, [`Domain::own_blocks`]); step 2 gathers them and sums the residual over
+//! the ranks (every rank then holds the whole residual), step 3 gathers this rank's blocks of
+//! the matrix, which PETSc adds across the ranks before its solve, and the whole correction
+//! comes back to every rank. A kernel's failure on one rank fails the assembly on every rank.
 //!
 //! Residual and correction norms are also reported per block (soil, interface, structure)
 //! of the monolithic system, from the node roles of the DOF map.
@@ -41,7 +45,7 @@ use crate::friction::NodalFriction;
 use crate::linear_solver::{
     CholeskyFactorisation, LinearSolver, LinearSolverError, LinearSolverKind, PetscOptions, SolverTimings,
 };
-use crate::ranks::{RankShare, Ranks};
+use crate::ranks::{rcb, with_stats, BlockOwners, RankShare, Ranks};
 use crate::slip::{axis_normal_dofs, Slip, SlipRotations};
 
 /// What decides the equations of a model: nodes, roles, constraints and ties.
@@ -70,14 +74,28 @@ pub struct SystemLayout<'a> {
     pub petsc_options: &'a PetscOptions,
     /// The ranks of a distributed run ([`crate::ranks`]; one process: [`Ranks::single`]).
     pub ranks: Ranks,
+    /// Node positions (the centroids of the blocks for the partition of a distributed run).
+    pub positions: &'a [[f64; 3]],
 }
+
+/// Largest kernel cost of a rank over the mean above which [`Assembler::rebalance`]
+/// recomputes the partition (10 %).
+pub const REBALANCE_THRESHOLD: f64 = 1.1;
+
+/// Weight of a block beside its kernel cost (in integration points) in the partition: blocks
+/// without points (the rings of an MPM pattern, walls, interface blocks) are spread too.
+const BLOCK_WEIGHT_FLOOR: f64 = 1e-3;
 
 /// The global system of one sparsity pattern (see the module doc).
 pub struct Assembler {
     dofs: DofMap,
     pattern: AssemblyPattern,
-    /// Global DOF of every entry of the vector buffer.
-    buffer_dofs: Vec<usize>,
+    /// The element blocks (the global DOF of every entry of the vector buffer).
+    layout: BlockLayout,
+    /// Start of each domain's blocks (`len = domains + 1`).
+    domain_blocks: Vec<usize>,
+    /// Which rank evaluates each block (a distributed run).
+    owners: Option<BlockOwners>,
     /// Start of each domain's part of the matrix and vector buffers.
     domain_matrix: Vec<usize>,
     domain_vector: Vec<usize>,
@@ -116,10 +134,12 @@ impl Assembler {
         let mut layout = BlockLayout::default();
         let mut domain_matrix = vec![0];
         let mut domain_vector = vec![0];
+        let mut domain_blocks = vec![0];
         for d in domains {
             d.blocks(&mut layout);
             domain_matrix.push(layout.matrix_len());
             domain_vector.push(layout.vector_len());
+            domain_blocks.push(layout.num_blocks());
         }
         let mut touched = vec![false; num_dofs];
         for &g in &layout.dofs {
@@ -154,7 +174,10 @@ impl Assembler {
         if system.solver == LinearSolverKind::Petsc {
             solver.set_petsc_options(system.petsc_options.clone());
         }
-        let share = system.ranks.is_distributed().then(|| RankShare::new(system.ranks, &dofs, &layout, &pattern));
+        let owners = system.ranks.is_distributed().then(|| {
+            partition(system.ranks, &layout, dim, dofs.displacement_dofs(), system.positions, &block_costs(domains))
+        });
+        let share = owners.as_ref().map(|o| RankShare::new(o, &dofs, &layout, &pattern));
         if let Some(share) = &share {
             solver.distribute(share.owned_rows.clone());
         }
@@ -177,7 +200,9 @@ impl Assembler {
             scale,
             pressure_weights: system.pressure_scales.iter().map(|s| 1.0 / s).collect(),
             solved: false,
-            buffer_dofs: layout.dofs,
+            layout,
+            domain_blocks,
+            owners,
             rotations,
             friction,
             solver,
@@ -284,18 +309,69 @@ impl Assembler {
         self.rotations.to_local(full);
     }
 
-    /// Step 1: every domain fills its part of the element buffers; blocks are rotated to
-    /// the local frames of slip nodes; frictional slip nodes take their slip in the step.
+    /// Tells every domain which of its blocks this rank evaluates (a distributed run; `None`
+    /// on one process): call after building the assembler and after a
+    /// [`Assembler::rebalance`].
+    pub fn distribute_kernels(&self, domains: &mut [Box<dyn Domain>]) {
+        for (k, d) in domains.iter_mut().enumerate() {
+            d.own_blocks(self.owners.as_ref().map(|o| o.part(self.domain_blocks[k]..self.domain_blocks[k + 1])));
+        }
+    }
+
+    /// In a distributed run, recomputes the partition of the blocks if the kernel costs of
+    /// the ranks' blocks (the domains' [`Domain::block_costs`], e.g. after material points
+    /// moved between cells) differ from their mean by more than [`REBALANCE_THRESHOLD`], and
+    /// tells the domains ([`Assembler::distribute_kernels`]); the PETSc matrix keeps its rows,
+    /// this rank's contribution to it is set up again. Returns whether it did. Every rank
+    /// computes the same partition from the same replicated data (no communication).
+    pub fn rebalance(&mut self, domains: &mut [Box<dyn Domain>], positions: &[[f64; 3]]) -> bool {
+        let Some(owners) = &self.owners else { return false };
+        let costs = block_costs(domains);
+        if owners.imbalance(&costs) <= REBALANCE_THRESHOLD {
+            return false;
+        }
+        let dim = self.dofs.dim();
+        let owners = partition(owners.ranks(), &self.layout, dim, self.dofs.displacement_dofs(), positions, &costs);
+        with_stats(|s| s.rebalances += 1);
+        let share = RankShare::new(&owners, &self.dofs, &self.layout, &self.pattern);
+        self.solver.distribute(share.owned_rows.clone());
+        self.share = Some(share);
+        self.owners = Some(owners);
+        self.factors_for = None;
+        self.distribute_kernels(domains);
+        true
+    }
+
+    /// Step 1: every domain fills its part of the element buffers (in a distributed run, the
+    /// kernels of this rank's blocks); blocks are rotated to the local frames of slip nodes;
+    /// frictional slip nodes take their slip in the step.
     pub fn assemble(&mut self, domains: &mut [Box<dyn Domain>], input: &AssemblyInput<'_>) -> Result<(), DomainError> {
+        let t = std::time::Instant::now();
         let mut mats = self.matrices.as_mut_slice();
         let mut vecs = self.vectors.as_mut_slice();
+        let mut result = Ok(());
         for (k, d) in domains.iter_mut().enumerate() {
             let (m, rest_m) = mats.split_at_mut(self.domain_matrix[k + 1] - self.domain_matrix[k]);
             let (v, rest_v) = vecs.split_at_mut(self.domain_vector[k + 1] - self.domain_vector[k]);
-            d.assemble(input, m, v)?;
+            result = d.assemble(input, m, v);
+            if result.is_err() {
+                break;
+            }
             mats = rest_m;
             vecs = rest_v;
         }
+        if let Some(owners) = &self.owners {
+            with_stats(|s| s.kernel_seconds += t.elapsed().as_secs_f64());
+            // collective: a kernel that failed on one rank fails the assembly on every rank
+            if !owners.ranks().all(result.is_ok()) {
+                result = result.and(Err(DomainError {
+                    domain: "(another rank)".into(),
+                    element: 0,
+                    message: "an element kernel failed on another MPI rank".into(),
+                }));
+            }
+        }
+        result?;
         self.rotations.rotate_blocks(&mut self.matrices, &mut self.vectors);
         if !self.friction.is_empty() {
             let matrices = input.with_tangent.then_some(self.matrices.as_slice());
@@ -304,6 +380,7 @@ impl Assembler {
                 (input.time, input.time_step),
                 matrices,
                 input.stiffness,
+                self.owners.as_ref(),
             );
         }
         Ok(())
@@ -525,7 +602,7 @@ impl Assembler {
     /// Indices of the domains whose element blocks touch a DOF for which `touches` holds.
     pub fn domains_touching(&self, touches: impl Fn(usize) -> bool) -> Vec<usize> {
         (0..self.domain_vector.len() - 1)
-            .filter(|&k| self.buffer_dofs[self.domain_vector[k]..self.domain_vector[k + 1]].iter().any(|&g| touches(g)))
+            .filter(|&k| self.layout.dofs[self.domain_vector[k]..self.domain_vector[k + 1]].iter().any(|&g| touches(g)))
             .collect()
     }
 
@@ -589,15 +666,73 @@ impl Assembler {
             if !d.is_soil() {
                 continue;
             }
-            for i in self.domain_vector[k]..self.domain_vector[k + 1] {
-                let g = self.buffer_dofs[i];
-                if shared[g] {
-                    out[g] -= self.vectors[i];
+            for b in self.domain_blocks[k]..self.domain_blocks[k + 1] {
+                if self.owners.as_ref().is_some_and(|o| !o.owns(b)) {
+                    continue;
+                }
+                for i in self.layout.dof_ptr[b]..self.layout.dof_ptr[b + 1] {
+                    let g = self.layout.dofs[i];
+                    if shared[g] {
+                        out[g] -= self.vectors[i];
+                    }
                 }
             }
         }
+        if let Some(owners) = &self.owners {
+            owners.ranks().sum_identically(out);
+        }
         self.rotations.to_global(out);
     }
+}
+
+/// The kernel cost of every block of `domains` ([`Domain::block_costs`]).
+fn block_costs(domains: &[Box<dyn Domain>]) -> Vec<f64> {
+    let mut costs = Vec::new();
+    for d in domains {
+        d.block_costs(&mut costs);
+    }
+    costs
+}
+
+/// The blocks of `layout` partitioned among `ranks` by a recursive coordinate bisection of
+/// their centroids (the mean of their nodes' `positions`) weighted by their kernel `costs`
+/// (plus [`BLOCK_WEIGHT_FLOOR`]); the partition's measures go to the run's statistics.
+fn partition(
+    ranks: Ranks,
+    layout: &BlockLayout,
+    dim: usize,
+    displacement_dofs: usize,
+    positions: &[[f64; 3]],
+    costs: &[f64],
+) -> BlockOwners {
+    let centroids: Vec<[f64; 3]> = (0..layout.num_blocks())
+        .map(|b| {
+            let mut c = [0.0; 3];
+            let mut n = 0.0;
+            for &g in &layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]] {
+                if g < displacement_dofs && g % dim == 0 {
+                    if let Some(x) = positions.get(g / dim) {
+                        for i in 0..3 {
+                            c[i] += x[i];
+                        }
+                        n += 1.0;
+                    }
+                }
+            }
+            c.map(|v| if n > 0.0 { v / n } else { 0.0 })
+        })
+        .collect();
+    let weights: Vec<f64> = costs.iter().map(|c| c + BLOCK_WEIGHT_FLOOR).collect();
+    let owners = BlockOwners::new(ranks, rcb(&centroids, &weights, ranks.size()));
+    let own: f64 = costs.iter().enumerate().filter(|&(b, _)| owners.owns(b)).map(|(_, c)| c).sum();
+    let worst = owners.imbalance(costs);
+    with_stats(|s| {
+        s.own_cost += own;
+        s.total_cost += costs.iter().sum::<f64>();
+        s.imbalance = worst;
+        s.partitions += 1;
+    });
+    owners
 }
 
 /// Euclidean norm.

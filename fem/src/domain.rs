@@ -281,6 +281,25 @@ pub trait Domain: Send + Sync {
     /// in which [`Domain::assemble`] fills its buffers.
     fn blocks(&self, layout: &mut BlockLayout);
 
+    /// Appends the cost of each of this domain's blocks' kernels (in the order of
+    /// [`Domain::blocks`]), in integration points (material points, Gauss points): the
+    /// weights of the distributed partition ([`crate::ranks::rcb`]). By default 0 for every
+    /// block: a domain that does not implement [`Domain::own_blocks`] evaluates every block
+    /// on every rank, so where its blocks go costs no kernel time.
+    fn block_costs(&self, costs: &mut Vec<f64>) {
+        let mut layout = BlockLayout::default();
+        self.blocks(&mut layout);
+        costs.extend(std::iter::repeat_n(0.0, layout.num_blocks()));
+    }
+
+    /// In a distributed run, which rank evaluates each of this domain's blocks (in the order of
+    /// [`Domain::blocks`]; `None`: every block here). A domain may then evaluate the kernels of
+    /// its rank's blocks only (the others are not gathered), provided that the state those
+    /// kernels update reaches every rank when the step is committed
+    /// ([`crate::ranks::Ranks::replicate`] in [`Domain::commit`]); by default it evaluates
+    /// every block, as on one process.
+    fn own_blocks(&mut self, _owners: Option<crate::ranks::BlockOwners>) {}
+
     /// Fills the element matrices (row-major) and residual vectors
     /// `r_e = f_int − f_body + M ã` of this domain's blocks.
     fn assemble(

@@ -85,6 +85,8 @@ pub struct NodalFriction {
     /// (friction node, matrix offset, block DOFs, local node, first) per block that holds a
     /// node; a node's first occurrence carries its diagonal terms.
     occurrences: Vec<(usize, usize, usize, usize, bool)>,
+    /// The block of each occurrence.
+    occurrence_blocks: Vec<usize>,
     /// Whether the last assembly was of the equilibrium equations (not the initial
     /// acceleration's mass system), so that friction acts.
     active: bool,
@@ -110,6 +112,7 @@ impl NodalFriction {
             })
             .collect();
         let mut occurrences = Vec::new();
+        let mut occurrence_blocks = Vec::new();
         if !nodes.is_empty() {
             let index: std::collections::HashMap<usize, usize> =
                 nodes.iter().enumerate().map(|(k, n)| (n.node, k)).collect();
@@ -120,11 +123,12 @@ impl NodalFriction {
                     if let Some(&k) = index.get(&(chunk[0] / dim)) {
                         let first = !std::mem::replace(&mut seen[k], true);
                         occurrences.push((k, layout.matrix_offset[b], dofs.len(), a, first));
+                        occurrence_blocks.push(b);
                     }
                 }
             }
         }
-        Self { dim, nodes, occurrences, active: false, step: None }
+        Self { dim, nodes, occurrences, occurrence_blocks, active: false, step: None }
     }
 
     /// Whether there is any frictional node.
@@ -136,13 +140,15 @@ impl NodalFriction {
     /// `g = Qᵀ (u − u_n)` of the iterate and, at the step's first assembly with matrices, the
     /// stick scales from the (rotated) blocks' diagonals. What a step decides depends on the
     /// step alone (not on when the pattern was built), so that a resumed run repeats the
-    /// uninterrupted one bit for bit.
+    /// uninterrupted one bit for bit. In a distributed run (`owners` of the blocks given) a
+    /// rank holds the matrices of its own blocks only: the diagonals are summed over the ranks.
     pub fn after_assembly(
         &mut self,
         (u, u_committed): (&[f64], &[f64]),
         (time, time_step): (f64, f64),
         matrices: Option<&[f64]>,
         active: bool,
+        owners: Option<&crate::ranks::BlockOwners>,
     ) {
         self.active = active;
         let step = Some((time.to_bits(), time_step.to_bits()));
@@ -168,9 +174,14 @@ impl NodalFriction {
             return;
         }
         let mut diagonal = vec![0.0; self.nodes.len()];
-        for &(k, mo, nd, a, _) in &self.occurrences {
-            let r = a * dim + 1;
-            diagonal[k] += matrices[mo + r * nd + r];
+        for (&(k, mo, nd, a, _), &b) in self.occurrences.iter().zip(&self.occurrence_blocks) {
+            if owners.is_none_or(|o| o.owns(b)) {
+                let r = a * dim + 1;
+                diagonal[k] += matrices[mo + r * nd + r];
+            }
+        }
+        if let Some(o) = owners {
+            o.ranks().sum_identically(&mut diagonal);
         }
         for (n, d) in self.nodes.iter_mut().zip(diagonal) {
             if n.stick_scale == 0.0 {

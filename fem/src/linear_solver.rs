@@ -465,9 +465,16 @@ impl LinearSolver {
     /// Makes the solves distributed over the ranks (before the first solve; the `petsc` kind
     /// only): this rank owns `rows` of the matrix, each solve receives this rank's part of
     /// the matrix (the blocks it assembles) and the whole right-hand side, and returns the
-    /// whole solution on every rank ([`crate::ranks`]).
+    /// whole solution on every rank ([`crate::ranks`]). Called again (a new partition of the
+    /// blocks, [`crate::assembler::Assembler::rebalance`]), the PETSc solver is set up again
+    /// at the next solve, with this rank's new contribution.
     pub fn distribute(&mut self, rows: crate::ranks::OwnedRows) {
         self.owned_rows = Some(rows);
+        #[cfg(feature = "petsc")]
+        {
+            self.petsc = None;
+        }
+        self.kept = KeptFactors::None;
     }
 
     /// What this solver has learnt about its pattern's matrices.

@@ -412,6 +412,7 @@ impl Model {
                 prescribed[d] = true;
             }
         }
+        let positions = self.positions();
         let system = SystemLayout {
             dim: self.dim,
             roles: &self.roles,
@@ -425,11 +426,13 @@ impl Model {
             cholesky: self.settings.cholesky_factorisation,
             petsc_options: &self.petsc_options,
             ranks: self.settings.ranks,
+            positions: &positions,
         };
         let mut assembler = Assembler::new(&system, &self.domains);
+        assembler.distribute_kernels(&mut self.domains);
         if self.settings.linear_solver == crate::linear_solver::LinearSolverKind::Petsc {
             // the near null space of PETSc's AMG: rigid-body modes at the step's start
-            let modes = assembler.rigid_body_modes(&self.positions());
+            let modes = assembler.rigid_body_modes(&positions);
             assembler.set_near_null_space(modes);
         }
         if let Some(memory) = self.restored_solver_memory.take() {
@@ -483,6 +486,13 @@ impl Model {
         if changed {
             self.invalidate_pattern();
             self.restored_solver_memory = None;
+        } else if self.settings.ranks.is_distributed() {
+            // the points moved: the blocks' kernel costs changed (docs/distributed.md)
+            if let Some(mut assembler) = self.assembler.take() {
+                let positions = self.positions();
+                assembler.rebalance(&mut self.domains, &positions);
+                self.assembler = Some(assembler);
+            }
         }
         if self.settings.hold_grid_boundaries {
             self.hold_grid_boundaries();
@@ -734,7 +744,8 @@ impl Model {
         gravity: [f64; 3],
     ) -> StepError {
         let error = self.locate_residual(error, assembler);
-        if self.scheme.is_dynamic() || !error.is_retryable() {
+        // distributed: a rank holds its blocks' matrices only, not the whole tangent
+        if self.scheme.is_dynamic() || !error.is_retryable() || self.settings.ranks.is_distributed() {
             return error;
         }
         self.predict(t, dt);

@@ -23,10 +23,12 @@
 //! entry at the transpose position of `(j, i)`.
 //!
 //! **Distributed** (a run on several MPI ranks, [`crate::ranks`]): one `MPIAIJ` matrix per
-//! pattern, each rank owning a contiguous range of rows, preallocated exactly from the
-//! replicated whole pattern; each rank adds its part (the blocks it assembles, on the same
-//! transposed positions) with `ADD_VALUES`, gives its owned entries of the (replicated)
-//! right-hand side and receives the whole solution; CG or GMRES is chosen when every rank's
+//! pattern, each rank owning a contiguous range of PETSc rows — the equations renumbered so
+//! that a rank's rows are those its blocks mostly reach ([`crate::ranks::Ownership`]; the
+//! right-hand side, the solution and the near null space are permuted to and from that order
+//! here) — preallocated exactly from the replicated whole pattern; each rank adds its part
+//! (the blocks it evaluates, on the same transposed positions) with `ADD_VALUES`, gives its
+//! owned entries of the (replicated) right-hand side and receives the whole solution; CG or GMRES is chosen when every rank's
 //! part is symmetric (one `MPI_Allreduce`), so that every rank takes the same path.
 //!
 //! **Failure.** A Krylov solve that PETSc reports as diverged (iteration limit, breakdown,
@@ -66,6 +68,24 @@ pub(crate) struct PetscSolver {
     cg_failed: bool,
     /// The ranks of a distributed solve (one process: [`Ranks::single`]).
     ranks: Ranks,
+    /// Distributed: this rank's matrix entries per assembly, and those in other ranks' rows
+    /// (through PETSc's stash), for the run's statistics ([`crate::ranks::DistributedStats`]).
+    entries: (u64, u64),
+    /// Distributed: the PETSc row of each equation ([`crate::ranks::Ownership`]; empty: the
+    /// equation's number).
+    row_of: Vec<usize>,
+}
+
+/// A vector per equation in PETSc's order of the rows (`row_of` empty: as it is).
+fn to_rows(row_of: &[usize], v: &[f64]) -> Vec<f64> {
+    if row_of.is_empty() {
+        return v.to_vec();
+    }
+    let mut out = vec![0.0; v.len()];
+    for (e, &r) in row_of.iter().enumerate() {
+        out[r] = v[e];
+    }
+    out
 }
 
 fn petsc_error(e: loam_petsc::Error) -> LinearSolverError {
@@ -113,30 +133,45 @@ impl PetscSolver {
         let symbolic = pattern.symbolic();
         let (col_ptr, row_idx) = (symbolic.col_ptr(), symbolic.row_idx());
         let n = pattern.num_equations();
+        let mut entries = (0, 0);
+        let mut row_of = Vec::new();
         let (krylov, ranks) = match owned_rows {
             None => (KrylovSolver::new(col_ptr, row_idx, &passed), Ranks::single()),
             Some(owned) => {
                 // this rank's contribution: the non-empty rows of its part (column c of the
                 // structurally symmetric pattern is row c)
+                // this rank's contribution: the non-empty rows of its part (column c of the
+                // structurally symmetric pattern is row c), in PETSc's numbering of the rows
+                let ownership = &owned.ownership;
                 let rows: Vec<usize> = (0..n).filter(|&c| col_ptr[c + 1] > col_ptr[c]).collect();
                 let first = rows.first().map_or(0, |&c| col_ptr[c]);
                 let row_ptr: Vec<usize> = std::iter::once(first).chain(rows.iter().map(|&c| col_ptr[c + 1])).collect();
-                let owned_list: Vec<usize> = owned.ownership.rows().collect();
+                let petsc_rows: Vec<usize> = rows.iter().map(|&c| ownership.row(c)).collect();
+                let petsc_cols: Vec<usize> = row_idx.iter().map(|&c| ownership.row(c)).collect();
+                let owned_list: Vec<usize> = ownership.rows().collect();
+                let mine = ownership.rows();
+                let count = |c: &usize| (col_ptr[c + 1] - col_ptr[*c]) as u64;
+                entries = (
+                    rows.iter().map(count).sum(),
+                    rows.iter().filter(|&&c| !mine.contains(&ownership.row(c))).map(count).sum(),
+                );
                 let solver = KrylovSolver::distributed(
                     n,
-                    owned.ownership.rows(),
+                    ownership.rows(),
                     RowPattern { rows: &owned_list, row_ptr: &owned.row_ptr, cols: &owned.cols },
-                    RowPattern { rows: &rows, row_ptr: &row_ptr, cols: row_idx },
+                    RowPattern { rows: &petsc_rows, row_ptr: &row_ptr, cols: &petsc_cols },
                     &passed,
                 );
+                row_of = ownership.rows_of_equations().to_vec();
                 (solver, owned.ownership.ranks())
             }
         };
         let mut krylov = krylov.map_err(petsc_error)?;
         if settings.pc_type == "gamg" && near_null_space.iter().all(|v| v.len() == pattern.num_equations()) {
-            krylov.set_near_null_space(near_null_space).map_err(petsc_error)?;
+            let modes: Vec<Vec<f64>> = near_null_space.iter().map(|v| to_rows(&row_of, v)).collect();
+            krylov.set_near_null_space(&modes).map_err(petsc_error)?;
         }
-        Ok(Self { krylov, settings, ksp_given, configured_symmetric: None, cg_failed: false, ranks })
+        Ok(Self { krylov, settings, ksp_given, configured_symmetric: None, cg_failed: false, ranks, entries, row_of })
     }
 
     /// Solves `A x = b` in place (`rhs`: `b` on entry, `x` on exit) for the matrix with the
@@ -153,7 +188,17 @@ impl PetscSolver {
         let symmetric = !self.ksp_given && !self.cg_failed && self.ranks.all(pattern.is_symmetric(values, 1e-10));
         self.configure(symmetric)?;
         let transpose = pattern.transpose_positions();
+        let assembly = Instant::now();
         self.krylov.set_values(|k| values[transpose[k]]).map_err(petsc_error)?;
+        if self.ranks.is_distributed() {
+            let (all, off) = self.entries;
+            crate::ranks::with_stats(|s| {
+                s.matrix_assembly_seconds += assembly.elapsed().as_secs_f64();
+                s.matrix_entries += all;
+                s.off_process_entries += off;
+                s.matrix_assemblies += 1;
+            });
+        }
         // the symmetry check and the copy of the values count with the preconditioner's set-up
         timings.factorisation += t.elapsed().as_secs_f64();
         let mut report = self.run(rhs, timings)?;
@@ -198,7 +243,16 @@ impl PetscSolver {
         rhs: &mut [f64],
         timings: &mut SolverTimings,
     ) -> Result<loam_petsc::SolveReport, LinearSolverError> {
-        let report = self.krylov.solve(rhs).map_err(petsc_error)?;
+        let report = if self.row_of.is_empty() {
+            self.krylov.solve(rhs).map_err(petsc_error)?
+        } else {
+            let mut x = to_rows(&self.row_of, rhs);
+            let report = self.krylov.solve(&mut x).map_err(petsc_error)?;
+            for (e, &r) in self.row_of.iter().enumerate() {
+                rhs[e] = x[r];
+            }
+            report
+        };
         timings.factorisation += report.setup_seconds;
         timings.solve += report.solve_seconds;
         timings.factorisations += 1;

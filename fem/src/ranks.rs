@@ -1,15 +1,17 @@
-//! The ranks of a distributed run (issue 26, `docs/distributed.md`) and what each owns, for
-//! the first stage: **replicated model, distributed assembly and solve**.
+//! The ranks of a distributed run (issue 26, `docs/distributed.md`) and what each owns:
+//! **replicated model, kernels by owner, distributed assembly and solve** (stage 2).
 //!
 //! Every rank holds the whole model; the equations are split among the ranks in contiguous
 //! ranges of (nearly) equal length, as PETSc's parallel matrices own their rows
-//! ([`Ownership`]), and an element block is assembled into the global system by the rank
-//! that owns the lowest equation it touches (the owner-computes rule: most of a block's
-//! rows are then the assembling rank's own, and only the rows beyond a range boundary go
-//! through PETSc's stash to their owner). Blocks with no equation (every DOF prescribed)
-//! carry only reactions and are assembled by rank 0. This is a deterministic split by
-//! equation numbers, not yet the recursive coordinate bisection of the design: with the
-//! node-ordered numbering of Loam's meshes and grids it gives every rank a slab of nodes.
+//! ([`Ownership`]). The element blocks (FEM elements, MPM supports, walls, interface blocks)
+//! are partitioned among the ranks by a recursive coordinate bisection of their centroids,
+//! weighted by their kernels' cost ([`rcb`], [`BlockOwners`]): each rank evaluates the
+//! kernels of its blocks only and adds them to the global system, rows of other ranks through
+//! PETSc's stash. The state that a kernel updates (material points' and Gauss points' stress,
+//! law history, deformation gradient) is made whole again on every rank after a converged
+//! step by [`Ranks::replicate`] (an `MPI_Allgatherv` of the owners' records), so that the
+//! model stays replicated. The sums every rank needs (the residual, the reactions, the
+//! soil's forces on the structure) are summed over the ranks.
 //!
 //! [`Ranks::world`] exists only in a build with the `mpi` feature, after MPI is
 //! initialised; without it there is one rank ([`Ranks::single`]) and the collectives of
@@ -18,7 +20,8 @@
 use std::ops::Range;
 
 use crate::assembly::{AssemblyPattern, BlockLayout};
-use crate::dofs::{DofMap, CONSTRAINED};
+use crate::dofs::DofMap;
+use crate::kernel::PointOutput;
 
 /// This process's rank among the processes of the run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -86,29 +89,257 @@ impl Ranks {
     }
 }
 
-/// Ends PETSc (after every solver is dropped), before MPI's owner (rsmpi's `Universe`) ends
-/// MPI.
-#[cfg(feature = "mpi")]
-pub fn finalize_petsc() -> Result<(), String> {
-    loam_petsc::finalize().map_err(|e| e.to_string())
+impl Ranks {
+    /// The records that other ranks' owners computed, for every rank to hold them: record `i`
+    /// (of `count`, each `record_len` values) is written by the rank `owner(i)` (`pack`), and
+    /// one `MPI_Allgatherv` of the owned records (packed in ascending `i`) gives every rank
+    /// the others' (collective; every rank must give the same `owner`). Returns the indices of
+    /// the records of other ranks, ascending per rank, and their values back to back. The
+    /// bytes received and the time go to [`STATS`]. One process: nothing.
+    pub fn replicate(
+        &self,
+        count: usize,
+        record_len: usize,
+        owner: impl Fn(usize) -> usize,
+        pack: impl Fn(usize, &mut [f64]),
+    ) -> (Vec<usize>, Vec<f64>) {
+        if !self.is_distributed() || record_len == 0 {
+            return (Vec::new(), Vec::new());
+        }
+        let t = std::time::Instant::now();
+        let mut mine = Vec::new();
+        for i in (0..count).filter(|&i| owner(i) == self.rank) {
+            let start = mine.len();
+            mine.resize(start + record_len, 0.0);
+            pack(i, &mut mine[start..]);
+        }
+        let all = self.all_gather_varcount(&mine);
+        let mut ids = Vec::new();
+        let mut data = Vec::new();
+        let mut next = vec![0usize; self.size];
+        for i in 0..count {
+            let r = owner(i);
+            if r != self.rank {
+                let at = next[r];
+                ids.push(i);
+                data.extend_from_slice(&all[r][at..at + record_len]);
+                next[r] += record_len;
+            }
+        }
+        with_stats(|s| {
+            s.exchange_seconds += t.elapsed().as_secs_f64();
+            s.exchange_bytes += 8 * data.len() as u64;
+            s.exchanges += 1;
+        });
+        (ids, data)
+    }
+
+    /// [`Ranks::replicate`] of integration points' kernel output: point `p` (its `out[p]`
+    /// and law history `state[p·sl..(p+1)·sl]`) computed by rank `owner[p]` reaches every rank.
+    pub fn replicate_points(&self, owner: &[usize], out: &mut [PointOutput], state: &mut [f64], sl: usize) {
+        let len = 27 + sl;
+        let (ids, data) = self.replicate(
+            owner.len(),
+            len,
+            |p| owner[p],
+            |p, rec| {
+                let o = &out[p];
+                rec[..9].copy_from_slice(o.deformation_gradient.as_slice());
+                rec[9..18].copy_from_slice(o.cauchy.as_slice());
+                rec[18..27].copy_from_slice(o.stress.as_slice());
+                rec[27..].copy_from_slice(&state[p * sl..(p + 1) * sl]);
+            },
+        );
+        for (&p, rec) in ids.iter().zip(data.chunks_exact(len)) {
+            let o = &mut out[p];
+            o.deformation_gradient.as_mut_slice().copy_from_slice(&rec[..9]);
+            o.cauchy.as_mut_slice().copy_from_slice(&rec[9..18]);
+            o.stress.as_mut_slice().copy_from_slice(&rec[18..27]);
+            state[p * sl..(p + 1) * sl].copy_from_slice(&rec[27..]);
+        }
+    }
+
+    /// Sums `v` over the ranks, every rank receiving the same bits (each rank's part gathered
+    /// to all, then summed in rank order; collective).
+    pub fn sum_identically(&self, v: &mut [f64]) {
+        if !self.is_distributed() {
+            return;
+        }
+        let all = self.all_gather_varcount(v);
+        v.fill(0.0);
+        for part in &all {
+            for (x, y) in v.iter_mut().zip(part) {
+                *x += y;
+            }
+        }
+    }
+
+    /// Every rank's `mine`, in rank order (`MPI_Allgatherv`).
+    fn all_gather_varcount(&self, mine: &[f64]) -> Vec<Vec<f64>> {
+        #[cfg(feature = "mpi")]
+        {
+            use mpi::collective::CommunicatorCollectives;
+            use mpi::datatype::PartitionMut;
+            let world = mpi::topology::SimpleCommunicator::world();
+            let count = i32::try_from(mine.len()).expect("a rank's records fit MPI's i32 count");
+            let mut counts = vec![0i32; self.size];
+            world.all_gather_into(&count, &mut counts[..]);
+            let displs: Vec<i32> = counts
+                .iter()
+                .scan(0i32, |acc, &c| {
+                    let d = *acc;
+                    *acc += c;
+                    Some(d)
+                })
+                .collect();
+            let total = counts.iter().map(|&c| c as usize).sum();
+            let mut buf = vec![0.0f64; total];
+            {
+                let mut partition = PartitionMut::new(&mut buf[..], &counts[..], &displs[..]);
+                world.all_gather_varcount_into(mine, &mut partition);
+            }
+            counts.iter().zip(&displs).map(|(&c, &d)| buf[d as usize..(d + c) as usize].to_vec()).collect()
+        }
+        #[cfg(not(feature = "mpi"))]
+        unreachable!("more than one rank needs the `mpi` feature (Ranks::world): {}", mine.len())
+    }
 }
 
-/// Which equations each rank owns, and which element blocks this rank assembles (module
-/// doc).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Ownership {
+/// What a distributed run measured of its communication and its shares, accumulated over the
+/// run in this process (written to `summary.json` under `distributed`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DistributedStats {
+    /// Time in this rank's element kernels (s).
+    pub kernel_seconds: f64,
+    /// Time of PETSc's matrix assembly, `MatSetValues` with the stash and
+    /// `MatAssemblyBegin/End` (s).
+    pub matrix_assembly_seconds: f64,
+    /// Time of the exchange of the points' (and Gauss points') updated state (s).
+    pub exchange_seconds: f64,
+    /// Bytes this rank received in those exchanges.
+    pub exchange_bytes: u64,
+    /// Exchanges made (one per domain with owned kernels and converged step).
+    pub exchanges: u64,
+    /// Matrix entries this rank added to rows of other ranks (through PETSc's stash), per
+    /// matrix assembly, summed over the assemblies.
+    pub off_process_entries: u64,
+    /// Matrix entries this rank added in all, per assembly, summed over the assemblies.
+    pub matrix_entries: u64,
+    /// Matrix assemblies.
+    pub matrix_assemblies: u64,
+    /// Kernel cost (material points and Gauss points) of this rank's blocks and of every
+    /// block, summed over the partitions made (their ratio times the ranks is the balance).
+    pub own_cost: f64,
+    /// See `own_cost`.
+    pub total_cost: f64,
+    /// Largest rank share of the cost over the mean, of the last partition.
+    pub imbalance: f64,
+    /// Partitions computed (a new pattern, or a rebalance).
+    pub partitions: u64,
+    /// Of `partitions`: those made because the points' moves unbalanced the last one
+    /// (`Assembler::rebalance`).
+    #[serde(default)]
+    pub rebalances: u64,
+    /// CPU time of the process (user + system, from `/proc/self/stat`) when the statistics
+    /// were gathered: the work of a rank, whatever else shares the cores.
+    #[serde(default)]
+    pub cpu_seconds: f64,
+}
+
+/// User + system CPU time of this process (s; 0 where `/proc/self/stat` is not readable).
+fn process_cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else { return 0.0 };
+    // the fields after the command name (which may hold spaces) in parentheses
+    let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else { return 0.0 };
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    // utime and stime are fields 14 and 15 of the line, 12 and 13 after the name
+    let ticks: f64 = [11, 12].iter().filter_map(|&k| fields.get(k)?.parse::<f64>().ok()).sum();
+    ticks / 100.0
+}
+
+impl DistributedStats {
+    /// The statistics of every rank, in rank order (collective: `MPI_Allgatherv`).
+    pub fn of_every_rank(ranks: Ranks) -> Vec<Self> {
+        let mut mine = Self::default();
+        with_stats(|s| mine = *s);
+        mine.cpu_seconds = process_cpu_seconds();
+        if !ranks.is_distributed() {
+            return vec![mine];
+        }
+        let record = [
+            mine.kernel_seconds,
+            mine.matrix_assembly_seconds,
+            mine.exchange_seconds,
+            mine.exchange_bytes as f64,
+            mine.exchanges as f64,
+            mine.off_process_entries as f64,
+            mine.matrix_entries as f64,
+            mine.matrix_assemblies as f64,
+            mine.own_cost,
+            mine.total_cost,
+            mine.imbalance,
+            mine.partitions as f64,
+            mine.cpu_seconds,
+            mine.rebalances as f64,
+        ];
+        ranks
+            .all_gather_varcount(&record)
+            .iter()
+            .map(|r| Self {
+                kernel_seconds: r[0],
+                matrix_assembly_seconds: r[1],
+                exchange_seconds: r[2],
+                exchange_bytes: r[3] as u64,
+                exchanges: r[4] as u64,
+                off_process_entries: r[5] as u64,
+                matrix_entries: r[6] as u64,
+                matrix_assemblies: r[7] as u64,
+                own_cost: r[8],
+                total_cost: r[9],
+                imbalance: r[10],
+                partitions: r[11] as u64,
+                cpu_seconds: r[12],
+                rebalances: r[13] as u64,
+            })
+            .collect()
+    }
+}
+
+/// This process's [`DistributedStats`].
+pub static STATS: std::sync::Mutex<DistributedStats> = std::sync::Mutex::new(DistributedStats {
+    kernel_seconds: 0.0,
+    matrix_assembly_seconds: 0.0,
+    exchange_seconds: 0.0,
+    exchange_bytes: 0,
+    exchanges: 0,
+    off_process_entries: 0,
+    matrix_entries: 0,
+    matrix_assemblies: 0,
+    own_cost: 0.0,
+    total_cost: 0.0,
+    imbalance: 0.0,
+    partitions: 0,
+    rebalances: 0,
+    cpu_seconds: 0.0,
+});
+
+/// Runs `f` on this process's [`DistributedStats`].
+pub fn with_stats(f: impl FnOnce(&mut DistributedStats)) {
+    f(&mut STATS.lock().unwrap_or_else(|e| e.into_inner()));
+}
+
+/// Which rank evaluates each element block's kernel (and gathers it into the global system):
+/// a partition of the blocks ([`rcb`]), or of one domain's part of them.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct BlockOwners {
     ranks: Ranks,
-    /// Rank `r` owns the equations `starts[r]..starts[r + 1]`.
-    starts: Vec<usize>,
+    owner: Vec<u32>,
 }
 
-impl Ownership {
-    /// `equations` split in contiguous ranges: rank `r` owns `⌊n/P⌋` of them, one more if
-    /// `r < n mod P` (PETSc's own split).
-    pub fn new(ranks: Ranks, equations: usize) -> Self {
-        let (p, n) = (ranks.size, equations);
-        let starts = (0..=p).map(|r| r * (n / p) + r.min(n % p)).collect();
-        Self { ranks, starts }
+impl BlockOwners {
+    /// Blocks with owners `owner` (ranks of `ranks`).
+    pub fn new(ranks: Ranks, owner: Vec<u32>) -> Self {
+        Self { ranks, owner }
     }
 
     /// The ranks.
@@ -116,21 +347,192 @@ impl Ownership {
         self.ranks
     }
 
-    /// The equations this rank owns.
+    /// Number of blocks.
+    pub fn len(&self) -> usize {
+        self.owner.len()
+    }
+
+    /// Whether there is no block.
+    pub fn is_empty(&self) -> bool {
+        self.owner.is_empty()
+    }
+
+    /// The rank that evaluates block `b`.
+    pub fn owner(&self, b: usize) -> usize {
+        self.owner[b] as usize
+    }
+
+    /// Whether this rank evaluates block `b`.
+    pub fn owns(&self, b: usize) -> bool {
+        self.owner[b] as usize == self.ranks.rank
+    }
+
+    /// The largest rank's share of the blocks' `costs` over the mean share (1: balanced).
+    pub fn imbalance(&self, costs: &[f64]) -> f64 {
+        let mut load = vec![0.0; self.ranks.size];
+        for (b, c) in costs.iter().enumerate().take(self.owner.len()) {
+            load[self.owner[b] as usize] += c;
+        }
+        let mean = load.iter().sum::<f64>() / load.len() as f64;
+        if mean > 0.0 {
+            load.iter().fold(0.0f64, |m, &l| m.max(l)) / mean
+        } else {
+            1.0
+        }
+    }
+
+    /// The owners of the blocks `range` (a domain's part), numbered from 0.
+    pub fn part(&self, range: Range<usize>) -> Self {
+        Self { ranks: self.ranks, owner: self.owner[range].to_vec() }
+    }
+}
+
+/// Recursive coordinate bisection (RCB) of weighted points into `parts` parts: the set is cut
+/// across its longest extent (of the points' coordinates) at the weighted median that gives
+/// the two halves `⌊parts/2⌋` and `parts − ⌊parts/2⌋` parts in proportion to their weights,
+/// and each half is cut again (Berger & Bokhari 1987). Ties in a coordinate are broken by the
+/// point's index, so that the partition is a deterministic function of its input (every rank
+/// computes the same one). Returns the part of each point. `O(n log n log parts)`.
+pub fn rcb(points: &[[f64; 3]], weights: &[f64], parts: usize) -> Vec<u32> {
+    let mut part = vec![0u32; points.len()];
+    let mut ids: Vec<usize> = (0..points.len()).collect();
+    bisect(points, weights, &mut ids, 0, parts.max(1), &mut part);
+    part
+}
+
+fn bisect(points: &[[f64; 3]], weights: &[f64], ids: &mut [usize], first: usize, parts: usize, part: &mut [u32]) {
+    if parts == 1 || ids.is_empty() {
+        for &i in ids.iter() {
+            part[i] = first as u32;
+        }
+        return;
+    }
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for &i in ids.iter() {
+        for d in 0..3 {
+            lo[d] = lo[d].min(points[i][d]);
+            hi[d] = hi[d].max(points[i][d]);
+        }
+    }
+    let axis = (0..3).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])).then(b.cmp(&a))).unwrap_or(0);
+    ids.sort_unstable_by(|&a, &b| points[a][axis].total_cmp(&points[b][axis]).then(a.cmp(&b)));
+    let left_parts = parts / 2;
+    let total: f64 = ids.iter().map(|&i| weights[i]).sum();
+    let target = total * left_parts as f64 / parts as f64;
+    let mut sum = 0.0;
+    let mut cut = ids.len();
+    for (k, &i) in ids.iter().enumerate() {
+        // the cut before `k` if that is nearer the target than the cut after it
+        if sum + 0.5 * weights[i] > target {
+            cut = k;
+            break;
+        }
+        sum += weights[i];
+    }
+    let (left, right) = ids.split_at_mut(cut);
+    bisect(points, weights, left, first, left_parts, part);
+    bisect(points, weights, right, first + left_parts, parts - left_parts, part);
+}
+
+/// Ends PETSc (after every solver is dropped), before MPI's owner (rsmpi's `Universe`) ends
+/// MPI.
+#[cfg(feature = "mpi")]
+pub fn finalize_petsc() -> Result<(), String> {
+    loam_petsc::finalize().map_err(|e| e.to_string())
+}
+
+/// Which equations (rows of PETSc's matrix) each rank owns (module doc). PETSc's parallel
+/// matrices give each rank a contiguous range of rows, so the equations are renumbered for
+/// PETSc: an equation belongs to the lowest rank among the owners of the blocks that touch it
+/// (so that a rank's blocks add mostly to its own rows), and its PETSc row is its place in
+/// the ranks' order, ascending within a rank.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Ownership {
+    ranks: Ranks,
+    /// Rank `r` owns the PETSc rows `starts[r]..starts[r + 1]`.
+    starts: Vec<usize>,
+    /// The PETSc row of each equation (empty: the equation's own number).
+    row_of: Vec<usize>,
+}
+
+impl Ownership {
+    /// `equations` split in contiguous ranges, unpermuted: rank `r` owns `⌊n/P⌋` of them,
+    /// one more if `r < n mod P` (PETSc's own split).
+    pub fn new(ranks: Ranks, equations: usize) -> Self {
+        let (p, n) = (ranks.size, equations);
+        let starts = (0..=p).map(|r| r * (n / p) + r.min(n % p)).collect();
+        Self { ranks, starts, row_of: Vec::new() }
+    }
+
+    /// The equations of `dofs` owned by the lowest rank among the `owners` of the blocks of
+    /// `layout` that touch them (rank 0 for an equation no block touches).
+    pub fn of_blocks(owners: &BlockOwners, dofs: &DofMap, layout: &BlockLayout) -> Self {
+        let ranks = owners.ranks();
+        let n = dofs.num_equations();
+        let mut owner = vec![u32::MAX; n];
+        for b in 0..layout.num_blocks() {
+            let r = owners.owner(b) as u32;
+            for &g in &layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]] {
+                let e = dofs.equation(g);
+                if e != crate::dofs::CONSTRAINED {
+                    owner[e] = owner[e].min(r);
+                }
+            }
+        }
+        let mut starts = vec![0usize; ranks.size + 1];
+        for o in owner.iter_mut() {
+            if *o == u32::MAX {
+                *o = 0;
+            }
+            starts[*o as usize + 1] += 1;
+        }
+        for r in 0..ranks.size {
+            starts[r + 1] += starts[r];
+        }
+        let mut next = starts.clone();
+        let row_of = owner
+            .iter()
+            .map(|&o| {
+                next[o as usize] += 1;
+                next[o as usize] - 1
+            })
+            .collect();
+        Self { ranks, starts, row_of }
+    }
+
+    /// The ranks.
+    pub fn ranks(&self) -> Ranks {
+        self.ranks
+    }
+
+    /// The PETSc rows this rank owns.
     pub fn rows(&self) -> Range<usize> {
         self.starts[self.ranks.rank]..self.starts[self.ranks.rank + 1]
     }
 
-    /// The rank that owns equation `e`.
-    pub fn owner(&self, e: usize) -> usize {
-        self.starts.partition_point(|&s| s <= e) - 1
+    /// The PETSc row of equation `e`.
+    pub fn row(&self, e: usize) -> usize {
+        self.row_of.get(e).copied().unwrap_or(e)
     }
 
-    /// Whether this rank assembles the block whose free equations are `equations`: the owner
-    /// of the lowest of them; rank 0 for a block without one.
-    pub fn assembles(&self, equations: impl IntoIterator<Item = usize>) -> bool {
-        let owner = equations.into_iter().min().map_or(0, |e| self.owner(e));
-        owner == self.ranks.rank
+    /// The PETSc row of every equation (empty: unpermuted).
+    pub fn rows_of_equations(&self) -> &[usize] {
+        &self.row_of
+    }
+
+    /// The rank that owns equation `e`.
+    pub fn owner(&self, e: usize) -> usize {
+        let row = self.row(e);
+        self.starts.partition_point(|&s| s <= row) - 1
+    }
+
+    /// The equations this rank owns, in the order of their PETSc rows.
+    pub fn equations(&self) -> Vec<usize> {
+        let n = *self.starts.last().unwrap_or(&0);
+        let mut eqs: Vec<usize> = (0..n).filter(|&e| self.owner(e) == self.ranks.rank).collect();
+        eqs.sort_unstable_by_key(|&e| self.row(e));
+        eqs
     }
 }
 
@@ -141,7 +543,8 @@ impl Ownership {
 pub struct OwnedRows {
     /// Which equations each rank owns.
     pub ownership: Ownership,
-    /// Start of each owned row in `cols` (`rows().len() + 1` entries, from 0).
+    /// Start of each owned row (in PETSc's order) in `cols` (`rows().len() + 1` entries,
+    /// from 0).
     pub row_ptr: Vec<usize>,
     /// Global column indices, sorted within each row.
     pub cols: Vec<usize>,
@@ -150,18 +553,23 @@ pub struct OwnedRows {
 impl OwnedRows {
     /// This rank's rows of the (whole, structurally symmetric) `pattern`: column `c` of the
     /// compressed-column pattern is row `c`.
+    /// The columns are PETSc rows ([`Ownership::row`]), sorted within each row.
     pub fn of(ownership: Ownership, pattern: &AssemblyPattern) -> Self {
         let (col_ptr, row_idx) = (pattern.symbolic().col_ptr(), pattern.symbolic().row_idx());
-        let rows = ownership.rows();
-        let first = col_ptr[rows.start];
-        let row_ptr = col_ptr[rows.start..=rows.end].iter().map(|&k| k - first).collect();
-        let cols = row_idx[first..col_ptr[rows.end]].to_vec();
+        let mut row_ptr = vec![0];
+        let mut cols = Vec::new();
+        for e in ownership.equations() {
+            let start = cols.len();
+            cols.extend(row_idx[col_ptr[e]..col_ptr[e + 1]].iter().map(|&c| ownership.row(c)));
+            cols[start..].sort_unstable();
+            row_ptr.push(cols.len());
+        }
         Self { ownership, row_ptr, cols }
     }
 }
 
 /// A rank's share of the global system in a distributed run: the element blocks it
-/// assembles ([`Ownership::assembles`]), their pattern (all equations, global numbers) and
+/// evaluates and assembles ([`BlockOwners`]), their pattern (all equations, global numbers) and
 /// matrix values, and the sum of the residual over the ranks (PETSc's `VECMPI`, gathered
 /// back to every rank, so that every rank holds the same residual and the same norms).
 #[derive(Debug)]
@@ -177,18 +585,11 @@ pub struct RankShare {
 }
 
 impl RankShare {
-    /// The share of this rank (`ranks`) of the system of `dofs`, the blocks of `layout` and
-    /// their whole `pattern`.
-    pub fn new(ranks: Ranks, dofs: &DofMap, layout: &BlockLayout, pattern: &AssemblyPattern) -> Self {
-        let ownership = Ownership::new(ranks, dofs.num_equations());
-        let assembles = |b: usize| {
-            let free = layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]]
-                .iter()
-                .map(|&g| dofs.equation(g))
-                .filter(|&e| e != CONSTRAINED);
-            ownership.assembles(free)
-        };
-        let share = AssemblyPattern::of_blocks(dofs, layout, assembles);
+    /// The share of this rank of the system of `dofs`, the blocks of `layout` with their
+    /// `owners` and their whole `pattern`.
+    pub fn new(owners: &BlockOwners, dofs: &DofMap, layout: &BlockLayout, pattern: &AssemblyPattern) -> Self {
+        let ownership = Ownership::of_blocks(owners, dofs, layout);
+        let share = AssemblyPattern::of_blocks(dofs, layout, |b| owners.owns(b));
         Self {
             values: vec![0.0; share.nnz()],
             pattern: share,
@@ -224,9 +625,9 @@ mod tests {
     }
 
     /// 10 equations on 3 ranks: 4, 3, 3 in order (PETSc's split); every equation has exactly
-    /// one owner, and a block goes to the owner of its lowest equation.
+    /// one owner.
     #[test]
-    fn equations_are_split_in_contiguous_ranges_and_blocks_follow_their_lowest_row() {
+    fn equations_are_split_in_contiguous_ranges() {
         let owned: Vec<Range<usize>> = (0..3).map(|r| Ownership::new(ranks(r, 3), 10).rows()).collect();
         assert_eq!(owned, vec![0..4, 4..7, 7..10]);
         for r in 0..3 {
@@ -235,12 +636,6 @@ mod tests {
                 assert_eq!(o.owner(e) == r, owned[r].contains(&e), "equation {e} on rank {r}");
             }
         }
-        let block = [8, 3, 5];
-        let assemblers: Vec<usize> =
-            (0..3).filter(|&r| Ownership::new(ranks(r, 3), 10).assembles(block.iter().copied())).collect();
-        assert_eq!(assemblers, vec![0], "lowest equation 3 lies on rank 0");
-        let none: Vec<usize> = (0..3).filter(|&r| Ownership::new(ranks(r, 3), 10).assembles([])).collect();
-        assert_eq!(none, vec![0]);
         // more ranks than equations: the last ones own nothing
         let o = Ownership::new(ranks(3, 4), 2);
         assert!(o.rows().is_empty());
@@ -248,9 +643,10 @@ mod tests {
     }
 
     /// Three springs on four 1D nodes, node 0 fixed (equations 0, 1, 2 for nodes 1, 2, 3), on
-    /// 2 ranks: rank 0 owns equations 0–1 and assembles every spring (their lowest equations
-    /// are 0, 0 and 1); rank 1 owns row 2 and assembles nothing, yet preallocates row 2's
-    /// whole pattern (columns 1 and 2), to which rank 0 contributes.
+    /// 2 ranks. Springs 0, 1 on rank 1 and spring 2 on rank 0: equation 0 (springs 0, 1)
+    /// belongs to rank 1, equations 1 and 2 (spring 2 among theirs) to rank 0, so PETSc's rows
+    /// are 0, 1 for equations 1, 2 (rank 0) and 2 for equation 0 (rank 1); each rank
+    /// preallocates its rows' whole pattern in PETSc's numbering, and gathers its springs.
     #[test]
     fn a_rank_share_has_its_blocks_and_its_rows_of_the_whole_pattern() {
         let dofs = DofMap::new(1, &[true, false, false, false]);
@@ -259,23 +655,58 @@ mod tests {
         layout.push([1, 2]);
         layout.push([2, 3]);
         let whole = AssemblyPattern::new(&dofs, &layout);
-        let first = RankShare::new(ranks(0, 2), &dofs, &layout, &whole);
-        assert_eq!(first.owned_rows.ownership.rows(), 0..2);
-        assert_eq!(first.owned_rows.row_ptr, vec![0, 2, 5]);
-        assert_eq!(first.owned_rows.cols, vec![0, 1, 0, 1, 2]);
-        assert_eq!(first.pattern.nnz(), whole.nnz(), "rank 0 assembles every spring here");
-        let second = RankShare::new(ranks(1, 2), &dofs, &layout, &whole);
+        let first = RankShare::new(&BlockOwners::new(ranks(0, 2), vec![1, 1, 0]), &dofs, &layout, &whole);
+        let ownership = &first.owned_rows.ownership;
+        assert_eq!((ownership.row(0), ownership.row(1), ownership.row(2)), (2, 0, 1));
+        assert_eq!((ownership.owner(0), ownership.owner(1), ownership.owner(2)), (1, 0, 0));
+        assert_eq!(ownership.rows(), 0..2);
+        assert_eq!(first.owned_rows.row_ptr, vec![0, 3, 5]);
+        assert_eq!(first.owned_rows.cols, vec![0, 1, 2, 0, 1]);
+        assert_eq!(first.pattern.nnz(), 4, "spring 2: equations 1 and 2");
+        let second = RankShare::new(&BlockOwners::new(ranks(1, 2), vec![1, 1, 0]), &dofs, &layout, &whole);
+        assert_eq!(second.owned_rows.ownership.rows(), 2..3);
         assert_eq!(second.owned_rows.row_ptr, vec![0, 2]);
-        assert_eq!(second.owned_rows.cols, vec![1, 2]);
-        assert_eq!(second.pattern.nnz(), 0);
-        assert!(second.pattern.reached_dofs().is_empty());
+        assert_eq!(second.owned_rows.cols, vec![0, 2]);
+        assert_eq!(second.pattern.nnz(), 4, "springs 0 and 1: equations 0 and 1");
+        assert_eq!(second.pattern.reached_dofs(), vec![0, 1, 2]);
+    }
+
+    /// RCB of a 8 × 2 lattice of unit weights into 4 parts: cut across x (the longest extent)
+    /// into 4 blocks of 2 × 2, each part's points contiguous in x; the weight is balanced
+    /// exactly, and a heavier half moves the cut towards it.
+    #[test]
+    fn rcb_cuts_across_the_longest_extent_at_the_weighted_median() {
+        let points: Vec<[f64; 3]> = (0..16).map(|k| [(k % 8) as f64, (k / 8) as f64, 0.0]).collect();
+        let part = rcb(&points, &[1.0; 16], 4);
+        for (k, &p) in part.iter().enumerate() {
+            assert_eq!(p as usize, (k % 8) / 2, "point {k}");
+        }
+        // the points with x < 2 weigh 3 each: the first cut (2 parts) falls at x = 2
+        let weights: Vec<f64> = points.iter().map(|p| if p[0] < 2.0 { 3.0 } else { 1.0 }).collect();
+        let part = rcb(&points, &weights, 2);
+        for (k, &p) in part.iter().enumerate() {
+            assert_eq!(p, u32::from(points[k][0] >= 2.0), "point {k}");
+        }
+        assert_eq!(rcb(&points, &[1.0; 16], 1), vec![0; 16]);
+        // 3 parts: weights 5, 5, 6 (or as near as whole points allow) and deterministic
+        let three = rcb(&points, &[1.0; 16], 3);
+        let counts: Vec<usize> = (0..3).map(|r| three.iter().filter(|&&p| p == r).count()).collect();
+        assert!(counts.iter().all(|&c| (4..=6).contains(&c)), "{counts:?}");
+        assert_eq!(three, rcb(&points, &[1.0; 16], 3));
+        // the balance of a partition: after material moved to the first 4 points (weight 5
+        // each), the even split by count leaves rank 0 with 20 + 4 of 32 (1.5× the mean)
+        let even = BlockOwners::new(ranks(0, 2), rcb(&points, &[1.0; 16], 2));
+        assert_eq!(even.imbalance(&[1.0; 16]), 1.0);
+        let moved: Vec<f64> = (0..16).map(|k| if k % 8 < 2 { 5.0 } else { 1.0 }).collect();
+        assert_eq!(even.imbalance(&moved), 1.5);
+        let again = BlockOwners::new(ranks(0, 2), rcb(&points, &moved, 2));
+        assert!(again.imbalance(&moved) <= 1.1, "{}", again.imbalance(&moved));
     }
 
     #[test]
     fn one_rank_owns_everything() {
         let o = Ownership::new(Ranks::single(), 5);
         assert_eq!(o.rows(), 0..5);
-        assert!(o.assembles([4]));
         assert!(Ranks::single().all(true) && !Ranks::single().all(false));
     }
 }

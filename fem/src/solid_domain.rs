@@ -54,6 +54,8 @@ pub struct FemDomain {
     work: Vec<f64>,
     /// Global pressure DOF of each local node (mixed u–p domains).
     pressure_dofs: Option<Vec<usize>>,
+    /// In a distributed run, the rank that evaluates each element ([`Domain::own_blocks`]).
+    owners: Option<crate::ranks::BlockOwners>,
 }
 
 impl FemDomain {
@@ -176,6 +178,7 @@ impl FemDomain {
             mass,
             work: vec![0.0; ne * ngp],
             pressure_dofs,
+            owners: None,
         })
     }
 
@@ -222,12 +225,22 @@ impl Domain for FemDomain {
         }
     }
 
+    /// One unit per Gauss point of every element.
+    fn block_costs(&self, costs: &mut Vec<f64>) {
+        costs.extend(std::iter::repeat_n(self.points_per_element as f64, self.mesh.num_cells()));
+    }
+
+    fn own_blocks(&mut self, owners: Option<crate::ranks::BlockOwners>) {
+        self.owners = owners.filter(|o| o.len() == self.mesh.num_cells());
+    }
+
     fn assemble(
         &mut self,
         input: &AssemblyInput<'_>,
         matrices: &mut [f64],
         vectors: &mut [f64],
     ) -> Result<(), DomainError> {
+        let owners = self.owners.as_ref();
         let nn = self.element.num_nodes();
         let dim = self.dim();
         let nd = self.block_len();
@@ -256,6 +269,9 @@ impl Domain for FemDomain {
             .zip(self.trial_out.par_chunks_mut(ngp))
             .enumerate()
             .try_for_each(|(e, (((km, fv), trial), out))| {
+                if owners.is_some_and(|o| !o.owns(e)) {
+                    return Ok(()); // another rank's element
+                }
                 let cell = mesh.cell(e);
                 let mut disp = [[0.0; 3]; MAX_NODES];
                 for (a, &local) in cell.iter().enumerate() {
@@ -352,6 +368,12 @@ impl Domain for FemDomain {
     }
 
     fn commit(&mut self, _input: &AssemblyInput<'_>) {
+        if let Some(o) = &self.owners {
+            // the Gauss points of other ranks' elements (docs/distributed.md)
+            let ngp = self.points_per_element;
+            let owner: Vec<usize> = (0..self.trial_out.len()).map(|p| o.owner(p / ngp)).collect();
+            o.ranks().replicate_points(&owner, &mut self.trial_out, &mut self.trial_state, self.state_stride / ngp);
+        }
         for (p, (new, old)) in self.trial_out.iter().zip(self.committed_out.iter()).enumerate() {
             let d_f = new.deformation_gradient - old.deformation_gradient;
             self.work[p] += 0.5 * (new.stress + old.stress).dot(&d_f) * self.geometry[p].weight;

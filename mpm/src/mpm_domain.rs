@@ -133,6 +133,8 @@ pub struct MpmDomain {
     widenings: Vec<String>,
     /// The nodes the soil's points reach at the current step.
     soil_nodes: SoilNodes,
+    /// In a distributed run, the rank that evaluates each block ([`Domain::own_blocks`]).
+    owners: Option<loam_fem::ranks::BlockOwners>,
 }
 
 impl MpmDomain {
@@ -158,6 +160,7 @@ impl MpmDomain {
             worst_cell_quality: 1.0,
             widenings: Vec::new(),
             soil_nodes: Arc::new(RwLock::new(vec![false; nodes])),
+            owners: None,
         }
     }
 
@@ -544,6 +547,7 @@ impl MpmDomain {
         let (formulation, thickness) = (self.formulation, self.thickness);
         let (grid, node_ids, name, blocks) = (&self.grid, &self.node_ids, &self.name, &self.blocks);
         let attachment = self.attachment.as_ref();
+        let owners = self.owners.as_ref();
         // the orphan nodes' equations `r = Δu` (`K = I`: they keep their place; at the soil
         // node of a slip pair only the tangential part, `r = (I − n⊗n) Δu`, its normal
         // component belongs to the structure's equation), added to block `b`
@@ -612,6 +616,9 @@ impl MpmDomain {
                 .with_min_len(16)
                 .try_for_each(|(b, ((km, fv), view))| {
                     let Some((trial, out)) = view else { return Ok(()) };
+                    if owners.is_some_and(|o| !o.owns(b)) {
+                        return Ok(()); // another rank's support
+                    }
                     let cell = blocks.pattern[b];
                     let nodes = grid.support(cell);
                     let mut disp = [[0.0; 3]; MAX_NODES];
@@ -695,6 +702,24 @@ impl MpmDomain {
             body.add_point_loads(input.time, (nn, dim, nd), block_of_support, vectors);
         }
         Ok(())
+    }
+
+    /// In a distributed run, before phase 3: the kernel output and law history of the points
+    /// of other ranks' supports reach this rank (docs/distributed.md), so that every rank
+    /// convects every point.
+    fn replicate_trials(&mut self) {
+        let Some(o) = &self.owners else { return };
+        for body in &mut self.bodies {
+            let start = body.support_start();
+            let mut owner = vec![0usize; body.points.len()];
+            for (b, &cell) in self.blocks.pattern.iter().enumerate() {
+                owner[start[cell]..start[cell + 1]].fill(o.owner(b));
+            }
+            let sl = body.law().state_len();
+            let mut trial = body.take_trial();
+            o.ranks().replicate_points(&owner, &mut trial.out, &mut trial.state, sl);
+            body.restore_trial(trial);
+        }
     }
 
     /// Phase 3: g2p for every body (the points move and commit their state).
@@ -853,6 +878,31 @@ impl Domain for MpmDomain {
         }
     }
 
+    /// One unit per material point of a support's block (of every body); the ghost
+    /// penalty's and walls' blocks, which every rank evaluates, 0.
+    fn block_costs(&self, costs: &mut Vec<f64>) {
+        costs.extend(
+            self.blocks
+                .pattern
+                .iter()
+                .map(|&c| self.bodies.iter().map(|b| b.points_in_support(c).len() as f64).sum::<f64>()),
+        );
+        let mut rest = BlockLayout::default();
+        if let Some(ghost) = &self.ghost {
+            ghost.blocks(&self.grid, &self.node_ids, &mut rest);
+        }
+        for wall in &self.walls {
+            wall.blocks(self.at(), &mut rest);
+        }
+        costs.extend(std::iter::repeat_n(0.0, rest.num_blocks()));
+    }
+
+    /// The material points' supports of other ranks are not evaluated here (their points'
+    /// state is exchanged at the commit); the ghost penalty's and walls' blocks are.
+    fn own_blocks(&mut self, owners: Option<loam_fem::ranks::BlockOwners>) {
+        self.owners = owners.filter(|o| o.len() >= self.blocks.pattern.len());
+    }
+
     /// Updated-Lagrangian phase: the bodies' cells, then the walls' blocks.
     fn assemble(
         &mut self,
@@ -888,6 +938,7 @@ impl Domain for MpmDomain {
 
     /// Convective phase: the bodies' points move and commit; the walls record their forces.
     fn commit(&mut self, input: &AssemblyInput<'_>) {
+        self.replicate_trials();
         self.interpolate_to_points(input);
         let at = GridNodes { grid: &self.grid, node_ids: &self.node_ids };
         for wall in &mut self.walls {

@@ -239,10 +239,22 @@ fn run_case(
         }
     }
     if ranks.rank() != 0 {
-        return run_without_output(&mut sim);
+        let code = run_without_output(&mut sim);
+        loam_fem::ranks::DistributedStats::of_every_rank(ranks);
+        return code;
     }
     match run(&mut sim, &out, &options) {
         Ok((end, wall)) => {
+            if ranks.is_distributed() && !matches!(end, RunEnd::Interrupted(_)) {
+                // every rank's measurements into summary.json (the others ended with rank 0)
+                let every = loam_fem::ranks::DistributedStats::of_every_rank(ranks);
+                if let Ok(mut summary) = crate::output::summary::RunSummary::read(&out) {
+                    summary.distributed = every;
+                    if let Err(e) = summary.write(&out) {
+                        eprintln!("warning: summary.json: {e}");
+                    }
+                }
+            }
             let t = &sim.stats.timings;
             let solver = sim.model.solver_timings();
             let gmres = if solver.krylov_iterations > 0 {

@@ -251,6 +251,11 @@ pub struct RunSummary {
     /// its cells over the run and how its mesh motion was widened.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub grid_motion: Vec<GridMotionReport>,
+    /// A distributed run: what each rank measured of its kernels, its matrix assembly, the
+    /// exchange of the points' state and its share of the blocks, in rank order
+    /// (docs/distributed.md); while the run goes on, rank 0's alone.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub distributed: Vec<loam_fem::ranks::DistributedStats>,
 }
 
 /// How an attached grid followed its structure (`grid_motion` of the summary).
@@ -399,6 +404,13 @@ impl RunSummary {
                     })
                 })
                 .collect(),
+            distributed: if sim.model.settings.ranks.is_distributed() {
+                let mut stats = loam_fem::ranks::DistributedStats::default();
+                loam_fem::ranks::with_stats(|s| stats = *s);
+                vec![stats]
+            } else {
+                Vec::new()
+            },
         }
     }
 
