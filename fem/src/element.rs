@@ -6,10 +6,15 @@
 
 use serde::Deserialize;
 
-/// Largest number of nodes of an element block: 8 for the elements here (hex8), 9 for the
-/// 3 × 3-node support of a point on a smooth MPM basis in 2D (GIMP, quadratic B-splines:
-/// `loam_mpm::basis`), whose blocks go through the same kernels.
-pub const MAX_NODES: usize = 9;
+/// Largest number of nodes of an element block: 8 for the elements here (hex8), 9 and 27 for
+/// the 3 × 3 and 3 × 3 × 3-node supports of a point on a smooth MPM basis in 2D and 3D (GIMP,
+/// quadratic B-splines: `loam_mpm::basis`), whose blocks go through the same kernels. The
+/// kernels size their scratch by the block they are given (`SMALL_BLOCK_DOFS`), so the
+/// capacity costs the elements and 2D supports nothing but the size of [`crate::kernel::PointGeometry`].
+pub const MAX_NODES: usize = 27;
+
+/// Most nodes of an element here (hex8).
+pub const MAX_ELEMENT_NODES: usize = 8;
 
 /// The element shapes Loam knows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize)]

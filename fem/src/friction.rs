@@ -38,9 +38,9 @@ use crate::assembly::BlockLayout;
 /// Changes between stick and slip that a node may make in one step before it holds.
 const MAX_SWITCHES: u32 = 4;
 
-/// Largest element block the friction rewrites (DOFs): hex8 u–p blocks have 32, the 3 × 3
-/// supports of the smooth MPM bases 27 in 2D u–p.
-const MAX_BLOCK_DOFS: usize = 96;
+/// Largest element block the friction rewrites (DOFs): hex8 u–p blocks have 32, the supports
+/// of the smooth MPM bases 27 in 2D u–p and 108 in 3D u–p.
+const MAX_BLOCK_DOFS: usize = crate::mixed_kernel::MAX_MIXED_DOFS;
 
 /// The stick/slip state of a friction node.
 #[derive(Debug, Clone, Copy, PartialEq)]

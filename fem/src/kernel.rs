@@ -28,12 +28,17 @@ use loam_laws::{
 };
 use nalgebra::Matrix3;
 
-use crate::element::{ElementType, MAX_NODES};
+use crate::element::{ElementType, MAX_ELEMENT_NODES, MAX_NODES};
 use crate::formulation::Formulation;
 
-/// Largest number of displacement DOFs of an element block (hex8 × 3; a smooth MPM basis's
-/// 3 × 3-node support in 2D has 18).
-pub const MAX_DOFS: usize = 24;
+/// Largest number of displacement DOFs of an element block (a smooth MPM basis's
+/// 3 × 3 × 3-node support in 3D: 81).
+pub const MAX_DOFS: usize = 3 * MAX_NODES;
+
+/// Displacement DOFs of the largest block of the elements (hex8 × 3) and of a 2D smooth
+/// support (18): the kernels' scratch for blocks up to this size is sized by it, so that
+/// their stack arrays do not grow with the 3D supports' [`MAX_DOFS`].
+pub const SMALL_BLOCK_DOFS: usize = 24;
 
 /// Geometry of one integration point in the step reference configuration.
 #[derive(Debug, Clone, Copy)]
@@ -109,12 +114,33 @@ pub fn point_geometry(
     gauss_weight: f64,
     map: Option<&CellMap>,
 ) -> Result<PointGeometry, KernelError> {
+    let mut g = PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
+    point_geometry_into(&mut g, element, formulation, thickness, coords, xi, gauss_weight, map)?;
+    Ok(g)
+}
+
+/// [`point_geometry`] written into `g`, of which only the entries of the element's nodes are
+/// set (`shape[..nn]`, `gradient[..nn]`, weight and radius; the rest keeps what it held): for
+/// storage reused per call, without building and copying a whole [`PointGeometry`] (sized
+/// for the largest block, 27 nodes).
+#[allow(clippy::too_many_arguments)]
+pub fn point_geometry_into(
+    g: &mut PointGeometry,
+    element: ElementType,
+    formulation: Formulation,
+    thickness: f64,
+    coords: &[[f64; 3]],
+    xi: &[f64; 3],
+    gauss_weight: f64,
+    map: Option<&CellMap>,
+) -> Result<(), KernelError> {
     let nn = element.num_nodes();
     let dim = element.dim();
-    let mut g = PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
-    let mut dn = [[0.0; 3]; MAX_NODES];
+    let mut dn = [[0.0; 3]; MAX_ELEMENT_NODES];
     element.shape_functions(xi, &mut g.shape);
     element.shape_gradients(xi, &mut dn);
+    g.gradient[..nn].fill([0.0; 3]);
+    g.radius = 0.0;
     let formed;
     let map = match map {
         Some(map) => map,
@@ -133,7 +159,7 @@ pub fn point_geometry(
         g.radius = (0..nn).map(|a| g.shape[a] * coords[a][0]).sum();
     }
     g.weight = gauss_weight * map.det_j * formulation.measure_factor(thickness, g.radius);
-    Ok(g)
+    Ok(())
 }
 
 /// Inputs shared by all points of one kernel call.
@@ -339,7 +365,7 @@ pub(crate) fn gradient_operator(
     nn: usize,
     dim: usize,
     geometry: &PointGeometry,
-    b: &mut [[f64; 9]; MAX_DOFS],
+    b: &mut [[f64; 9]],
 ) -> usize {
     let active = active_components(formulation);
     for a in 0..nn {
@@ -459,7 +485,7 @@ fn element_tensor<const D: usize, const NN: usize>(
 /// Internal force vector `f_int` (length `nn·dim`) and, if asked, the consistent tangent
 /// `stiffness` (row-major, `(nn·dim)²`) of one element over its integration points. The
 /// block has `nn = disp.len()` nodes: those of `ctx.element`, or the support of a smooth MPM
-/// basis (9 in 2D), whose functions `geometry` carries.
+/// basis (9 in 2D, 27 in 3D), whose functions `geometry` carries.
 ///
 /// `f0`, `f_prev`, `geometry`, `point_out` hold one entry per point; `committed` and `trial` hold the
 /// points' histories back to back with stride `law.state_len()`. Outputs are overwritten.
@@ -482,7 +508,9 @@ pub fn solid_element(
         (PlaneStrain | PlaneStress, 2, 9) => element_tensor::<2, 9>,
         (ThreeD, 3, 4) => element_tensor::<3, 4>,
         (ThreeD, 3, 8) => element_tensor::<3, 8>,
-        _ => element_general,
+        (ThreeD, 3, 27) => element_tensor::<3, 27>,
+        (_, dim, nn) if nn * dim <= SMALL_BLOCK_DOFS => element_general::<SMALL_BLOCK_DOFS>,
+        _ => element_general::<MAX_DOFS>,
     };
     run(ctx, disp, geometry, f0, f_prev, committed, trial, point_out, f_int, stiffness)
 }
@@ -490,7 +518,7 @@ pub fn solid_element(
 /// [`solid_element`] through the general operator `B` of [`gradient_operator`]:
 /// `f = Σ_p w Bᵀ P̃`, `K = Σ_p w Bᵀ Ã B` (axisymmetry, where the hoop row `N_a / R` breaks the
 /// tensor structure that [`element_tensor`] uses).
-fn element_general(
+fn element_general<const CAPACITY: usize>(
     ctx: &KernelContext<'_>,
     disp: &[[f64; 3]],
     geometry: &[PointGeometry],
@@ -509,8 +537,8 @@ fn element_general(
     if let Some(k) = stiffness.as_deref_mut() {
         k[..ndof * ndof].fill(0.0);
     }
-    let mut b = [[0.0; 9]; MAX_DOFS];
-    let mut bt_a = [[0.0; 9]; MAX_DOFS];
+    let mut b = [[0.0; 9]; CAPACITY];
+    let mut bt_a = [[0.0; 9]; CAPACITY];
     let active = active_components(ctx.formulation);
     let mut response = StressResponse::default();
     for (p, g) in geometry.iter().enumerate() {

@@ -69,10 +69,10 @@ use crate::element::MAX_NODES;
 use crate::formulation::Formulation;
 use crate::kernel::{
     active_components, cauchy_stress, delta_deformation_gradient, gradient_operator, pull_back_response, KernelContext,
-    KernelError, PointGeometry, PointOutput, MAX_DOFS,
+    KernelError, PointGeometry, PointOutput, MAX_DOFS, SMALL_BLOCK_DOFS,
 };
 
-/// Largest u–p element block (hex8: 8 × (3 + 1) DOFs).
+/// Largest u–p element block (a 3D smooth MPM support: 27 × (3 + 1) DOFs).
 pub const MAX_MIXED_DOFS: usize = MAX_DOFS + MAX_NODES;
 
 /// Number of DOFs of a u–p block of `ctx.element` (`nn · (dim + 1)`).
@@ -108,6 +108,31 @@ pub fn mixed_element(
     trial: &mut [f64],
     point_out: &mut [PointOutput],
     residual: &mut [f64],
+    stiffness: Option<&mut [f64]>,
+    projection_rule: Option<&[PointGeometry]>,
+) -> Result<(), KernelError> {
+    // scratch sized by the block: the elements and 2D supports, or a 3D smooth support
+    let run = if disp.len() * ctx.element.dim() <= SMALL_BLOCK_DOFS {
+        mixed_element_in::<SMALL_BLOCK_DOFS, { SMALL_BLOCK_DOFS / 2 }>
+    } else {
+        mixed_element_in::<MAX_DOFS, MAX_NODES>
+    };
+    run(ctx, disp, pressure, geometry, f0, f_prev, committed, trial, point_out, residual, stiffness, projection_rule)
+}
+
+/// [`mixed_element`] with scratch for `DOFS` displacement DOFs and `NODES` nodes.
+#[allow(clippy::too_many_arguments)]
+fn mixed_element_in<const DOFS: usize, const NODES: usize>(
+    ctx: &KernelContext<'_>,
+    disp: &[[f64; 3]],
+    pressure: &[f64],
+    geometry: &[PointGeometry],
+    f0: &[Matrix3<f64>],
+    f_prev: &[Matrix3<f64>],
+    committed: &[f64],
+    trial: &mut [f64],
+    point_out: &mut [PointOutput],
+    residual: &mut [f64],
     mut stiffness: Option<&mut [f64]>,
     projection_rule: Option<&[PointGeometry]>,
 ) -> Result<(), KernelError> {
@@ -125,12 +150,12 @@ pub fn mixed_element(
     }
     let active = active_components(ctx.formulation);
     let request = if stiffness.is_some() { TangentRequest::Components(active) } else { TangentRequest::None };
-    let mut b = [[0.0; 9]; MAX_DOFS];
-    let mut bt_a = [[0.0; 9]; MAX_DOFS];
+    let mut b = [[0.0; 9]; DOFS];
+    let mut bt_a = [[0.0; 9]; DOFS];
     let mut response = StressResponse::default();
     let mut dp_df = Matrix3::zeros();
     // the projection's moments: m_a = Σ w0 N_a, V = Σ w0, and Σ w0 N_a p (for Π₀p)
-    let mut moments = [0.0; MAX_NODES];
+    let mut moments = [0.0; NODES];
     let mut volume = 0.0;
     for (q, g) in geometry.iter().enumerate() {
         let delta_f = delta_deformation_gradient(ctx, g, disp);
@@ -210,7 +235,7 @@ pub fn mixed_element(
     }
     // the projection term −(1/μ) (M p − m Π₀p), Π₀p = mᵀp / V, on the points (FEM) or on the
     // cell's rule scaled by the fill fraction (MPM)
-    let mut mass = [[0.0; MAX_NODES]; MAX_NODES];
+    let mut mass = [[0.0; NODES]; NODES];
     let mut integrate = |w: f64, n: &[f64; MAX_NODES]| {
         for a in 0..nn {
             moments[a] += w * n[a];

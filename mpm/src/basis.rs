@@ -181,22 +181,28 @@ impl Basis {
     }
 }
 
-/// Folds the functions of a support's removed nodes (`mask`, bit `3 ky + kx`) into the nodes
-/// it keeps, by the extrapolation of a linear field from kept nodes (so the folded functions
-/// stay a partition of unity that reproduces linear fields, as at the lattice's edge):
-/// along the row or the column of the removed node, whichever leads from it towards the point
-/// at local lattice coordinates `t` (`t − k` larger along it; the other if that one lacks
-/// nodes), `u_k = Σ_j u_j Π (k − i)/(j − i)` over its two kept nodes; else by the rectangle
-/// rule `u_(k,l) = u_(k',l) + u_(k,l') − u_(k',l')`; else (a sliver of soil narrower than the
-/// support) onto the nearest kept node. The choice of direction changes only where
+/// Per node of a support: `[N, ∂N/∂s_x, ∂N/∂s_y, ∂N/∂s_z]` (derivatives per lattice cell;
+/// `∂/∂s_z` zero in 2D), in the support's local order (`(3 k_z + k_y) 3 + k_x`); the first
+/// `3^dim` entries are used.
+pub type SupportValues = [[f64; 4]; MAX_SUPPORT_NODES];
+
+/// Folds the functions of a support's removed nodes (`mask`, bit `3 ky + kx`; 2D) into the
+/// nodes it keeps, by the extrapolation of a linear field from kept nodes (so the folded
+/// functions stay a partition of unity that reproduces linear fields, as at the lattice's
+/// edge): along the row or the column of the removed node, whichever leads from it towards
+/// the point at local lattice coordinates `t` (`t − k` larger along it; the other if that one
+/// lacks nodes), `u_k = Σ_j u_j Π (k − i)/(j − i)` over its two kept nodes; else by the
+/// rectangle rule `u_(k,l) = u_(k',l) + u_(k,l') − u_(k',l')`; else (a sliver of soil narrower
+/// than the support) onto the nearest kept node. The choice of direction changes only where
 /// `|t_x − k_x| = |t_y − k_y|`, beside a hole's corner, where the removed function is at most
 /// `N(1)² = 1/64` (B-splines): the folded basis jumps by no more there.
-fn fold_missing(values: &mut [[f64; 3]; SUPPORT_NODES], mask: u16, t: [f64; 2]) {
+fn fold_missing(values: &mut SupportValues, mask: u32, t: [f64; 2]) {
+    const NODES_2D: usize = 9;
     let kept = |k: usize| mask & (1 << k) == 0;
-    for m in (0..SUPPORT_NODES).filter(|&m| !kept(m)) {
+    for m in (0..NODES_2D).filter(|&m| !kept(m)) {
         let f = values[m];
-        values[m] = [0.0; 3];
-        if f == [0.0; 3] {
+        values[m] = [0.0; 4];
+        if f == [0.0; 4] {
             continue;
         }
         let (mx, my) = (m % 3, m / 3);
@@ -220,69 +226,112 @@ fn fold_missing(values: &mut [[f64; 3]; SUPPORT_NODES], mask: u16, t: [f64; 2]) 
         {
             vec![(3 * my + kx, 1.0), (3 * ky + mx, 1.0), (3 * ky + kx, -1.0)]
         } else {
-            let nearest = (0..SUPPORT_NODES)
+            let nearest = (0..NODES_2D)
                 .filter(|&k| kept(k))
                 .min_by_key(|&k| (k % 3).abs_diff(mx) + (k / 3).abs_diff(my))
                 .expect("a support holding a point keeps a node");
             vec![(nearest, 1.0)]
         };
         for (k, c) in stencil {
-            for i in 0..3 {
+            for i in 0..4 {
                 values[k][i] += c * f[i];
             }
         }
     }
 }
 
-/// Nodes per support of a smooth basis in 2D (3 × 3).
-pub const SUPPORT_NODES: usize = 9;
+/// Most nodes of a support of a smooth basis (3 × 3 × 3 in 3D; 3 × 3 in 2D).
+pub const MAX_SUPPORT_NODES: usize = 27;
 
-/// A structured, unrotated 2D lattice of quad4 cells carrying a smooth basis: its supports
-/// (3 × 3-node windows) and the functions of a point (see the module doc).
+/// A structured, unrotated lattice of quad4 (2D) or hex8 (3D) cells carrying a smooth basis:
+/// its supports (3 × 3 or 3 × 3 × 3-node windows) and the functions of a point (see the
+/// module doc). In 3D the lattice is fixed and whole: the structures that move a grid or cut
+/// holes in it are 2D.
 #[derive(Debug, Clone)]
 pub struct SmoothLattice {
     basis: Basis,
-    origin: [f64; 2],
-    spacing: [f64; 2],
-    cells: [usize; 2],
-    /// The nine grid nodes of each support, support `wy (n_x − 1) + wx` at `9 s..9 s + 9`,
-    /// node `(wx + kx, wy + ky)` at local index `3 ky + kx` (a node removed with a hole: a
-    /// node of the same support, whose function the fold leaves 0 there).
+    dim: usize,
+    origin: [f64; 3],
+    spacing: [f64; 3],
+    /// Cells per direction (1 along z in 2D).
+    cells: [usize; 3],
+    /// The grid nodes of each support, support `(wz n_y + wy) n_x + wx` (`n_d`: windows per
+    /// direction, `cells_d − 1`) at `m s..m s + m` (`m = 3^dim`), node
+    /// `(wx + kx, wy + ky, wz + kz)` at local index `(3 kz + ky) 3 + kx` (a node removed with a
+    /// hole: a node of the same support, whose function the fold leaves 0 there).
     nodes: Vec<usize>,
-    /// Per support, the local nodes removed with a hole (bit `3 ky + kx`); empty while the
+    /// Per support, the local nodes removed with a hole (bit `3 ky + kx`, 2D); empty while the
     /// lattice is whole.
-    missing: Vec<u16>,
+    missing: Vec<u32>,
 }
 
 impl SmoothLattice {
-    /// The supports of `basis` (smooth) on the lattice `origin + [0, cells · spacing]`, whose
-    /// node `(i, j)` is grid node `j (n_x + 1) + i`. Needs two or more cells per direction.
-    pub fn new(basis: Basis, origin: [f64; 2], spacing: [f64; 2], cells: [usize; 2]) -> Self {
-        debug_assert!(basis.is_smooth() && cells[0] >= 2 && cells[1] >= 2);
-        let (wx, wy) = (cells[0] - 1, cells[1] - 1);
-        let mut nodes = Vec::with_capacity(wx * wy * SUPPORT_NODES);
-        for j in 0..wy {
-            for i in 0..wx {
-                for ky in 0..3 {
-                    for kx in 0..3 {
-                        nodes.push((j + ky) * (cells[0] + 1) + i + kx);
+    /// The supports of `basis` (smooth) on the lattice `origin + [0, cells · spacing]` in
+    /// `dim` dimensions (2D: the first two entries), whose node `(i, j, k)` is grid node
+    /// `(k (n_y + 1) + j)(n_x + 1) + i`. Needs two or more cells per direction.
+    pub fn new(basis: Basis, dim: usize, origin: [f64; 3], spacing: [f64; 3], cells: [usize; 3]) -> Self {
+        let cells = if dim == 2 { [cells[0], cells[1], 1] } else { cells };
+        debug_assert!(basis.is_smooth() && (0..dim).all(|d| cells[d] >= 2));
+        let mut lattice = Self { basis, dim, origin, spacing, cells, nodes: Vec::new(), missing: Vec::new() };
+        let [wx, wy, wz] = lattice.windows();
+        let m = lattice.support_len();
+        let layers = if dim == 3 { 3 } else { 1 };
+        let mut nodes = Vec::with_capacity(wx * wy * wz * m);
+        for k in 0..wz {
+            for j in 0..wy {
+                for i in 0..wx {
+                    for kz in 0..layers {
+                        for ky in 0..3 {
+                            for kx in 0..3 {
+                                nodes.push(((k + kz) * (cells[1] + 1) + j + ky) * (cells[0] + 1) + i + kx);
+                            }
+                        }
                     }
                 }
             }
         }
-        Self { basis, origin, spacing, cells, nodes, missing: Vec::new() }
+        lattice.nodes = nodes;
+        lattice
     }
 
-    /// The lattice without the nodes of a hole: `new_node[a]` is the new index of grid node
-    /// `a` (`usize::MAX` where it was removed with the cells inside a structure). A removed
-    /// node's function is folded into the nodes its support keeps
+    /// Supports per direction (one along z in 2D).
+    fn windows(&self) -> [usize; 3] {
+        std::array::from_fn(|d| if d < self.dim { self.cells[d] - 1 } else { 1 })
+    }
+
+    /// Nodes per support: 9 in 2D, 27 in 3D.
+    pub fn support_len(&self) -> usize {
+        if self.dim == 3 {
+            27
+        } else {
+            9
+        }
+    }
+
+    /// The window `[wx, wy, wz]` of support `s`.
+    fn window(&self, s: usize) -> [usize; 3] {
+        let [nx, ny, _] = self.windows();
+        [s % nx, (s / nx) % ny, s / (nx * ny)]
+    }
+
+    /// The support of window `w`.
+    fn support_of(&self, w: [usize; 3]) -> usize {
+        let [nx, ny, _] = self.windows();
+        (w[2] * ny + w[1]) * nx + w[0]
+    }
+
+    /// The lattice without the nodes of a hole (2D): `new_node[a]` is the new index of grid
+    /// node `a` (`usize::MAX` where it was removed with the cells inside a structure). A
+    /// removed node's function is folded into the nodes its support keeps
     /// ([`SmoothLattice::functions_at`]).
     pub fn holed(&self, new_node: &[usize]) -> Self {
+        debug_assert_eq!(self.dim, 2, "holes are cut by 2D structures");
+        let m = self.support_len();
         let mut nodes = Vec::with_capacity(self.nodes.len());
         let mut missing = Vec::with_capacity(self.num_supports());
-        for (support, window) in self.nodes.chunks(SUPPORT_NODES).enumerate() {
+        for (support, window) in self.nodes.chunks(m).enumerate() {
             let mut mask = self.missing.get(support).copied().unwrap_or(0);
-            let kept = (0..SUPPORT_NODES)
+            let kept = (0..m)
                 .filter(|&k| mask & (1 << k) == 0)
                 .map(|k| new_node[window[k]])
                 .find(|&a| a != usize::MAX)
@@ -302,8 +351,13 @@ impl SmoothLattice {
     }
 
     /// The lattice's cell size per direction (reference configuration).
-    pub fn spacing(&self) -> [f64; 2] {
+    pub fn spacing(&self) -> [f64; 3] {
         self.spacing
+    }
+
+    /// `half_size` in lattice cells per direction (GIMP's `l_p,d / h_d`).
+    pub fn in_cells(&self, half_size: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|d| if d < self.dim { half_size[d] / self.spacing[d] } else { 0.0 })
     }
 
     /// The basis.
@@ -313,18 +367,20 @@ impl SmoothLattice {
 
     /// Number of supports.
     pub fn num_supports(&self) -> usize {
-        (self.cells[0] - 1) * (self.cells[1] - 1)
+        self.windows().iter().product()
     }
 
     /// The grid nodes of support `s`.
     pub fn support(&self, s: usize) -> &[usize] {
-        &self.nodes[s * SUPPORT_NODES..(s + 1) * SUPPORT_NODES]
+        let m = self.support_len();
+        &self.nodes[s * m..(s + 1) * m]
     }
 
-    /// Lattice coordinates `(x − x_0)/h` of `x` on the fixed lattice, or `None` outside it.
-    pub fn lattice_coordinates(&self, x: &[f64; 3]) -> Option<[f64; 2]> {
-        let mut s = [0.0; 2];
-        for d in 0..2 {
+    /// Lattice coordinates `(x − x_0)/h` of `x` on the fixed lattice (0 along z in 2D), or
+    /// `None` outside it.
+    pub fn lattice_coordinates(&self, x: &[f64; 3]) -> Option<[f64; 3]> {
+        let mut s = [0.0; 3];
+        for d in 0..self.dim {
             s[d] = (x[d] - self.origin[d]) / self.spacing[d];
             let n = self.cells[d] as f64;
             if !(s[d] >= -1e-9 && s[d] <= n * (1.0 + 1e-12) + 1e-9) {
@@ -336,47 +392,58 @@ impl SmoothLattice {
     }
 
     /// Lattice coordinates of a position `x` of the reference (fixed) lattice, clamped to it.
-    pub fn clamped_coordinates(&self, x: [f64; 2]) -> [f64; 2] {
-        std::array::from_fn(|d| ((x[d] - self.origin[d]) / self.spacing[d]).clamp(0.0, self.cells[d] as f64))
+    pub fn clamped_coordinates(&self, x: [f64; 3]) -> [f64; 3] {
+        self.clamp(std::array::from_fn(|d| if d < self.dim { (x[d] - self.origin[d]) / self.spacing[d] } else { 0.0 }))
     }
 
     /// Lattice coordinates clamped to the lattice.
-    pub fn clamp(&self, s: [f64; 2]) -> [f64; 2] {
-        std::array::from_fn(|d| s[d].clamp(0.0, self.cells[d] as f64))
+    pub fn clamp(&self, s: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|d| if d < self.dim { s[d].clamp(0.0, self.cells[d] as f64) } else { 0.0 })
     }
 
-    /// The support holding lattice coordinates `s` and, per node of it, `(N, ∂N/∂s_x,
-    /// ∂N/∂s_y)` with the derivatives per lattice cell; `half_cells` is GIMP's `l_p,d / h_d`.
-    pub fn functions_at(&self, s: [f64; 2], half_cells: [f64; 2]) -> (usize, [[f64; 3]; SUPPORT_NODES]) {
+    /// The support holding lattice coordinates `s` and, per node of it, `(N, ∂N/∂s)` with the
+    /// derivatives per lattice cell; `half_cells` is GIMP's `l_p,d / h_d`.
+    pub fn functions_at(&self, s: [f64; 3], half_cells: [f64; 3]) -> (usize, SupportValues) {
         self.functions_without(s, half_cells, |_| false).expect("a support holding a point keeps a node")
+    }
+
+    /// The 1D windows of `s` per direction (the third a single node of function 1 in 2D).
+    fn windows_1d(&self, s: [f64; 3], half_cells: [f64; 3]) -> [(usize, [(f64, f64); 3]); 3] {
+        std::array::from_fn(|d| {
+            if d < self.dim {
+                self.basis.window_1d(s[d], self.cells[d], half_cells[d])
+            } else {
+                (0, [(1.0, 0.0), (0.0, 0.0), (0.0, 0.0)])
+            }
+        })
     }
 
     /// [`SmoothLattice::functions_at`] with the functions of the support's grid nodes for
     /// which `absent` holds folded into the others as those of a hole's removed nodes are
-    /// (`fold_missing`: a linear field extrapolated from the nodes kept): for a point beside
-    /// which the soil ends before those nodes. `None` if the support keeps no node.
+    /// (`fold_missing`, 2D: a linear field extrapolated from the nodes kept): for a point
+    /// beside which the soil ends before those nodes. `None` if the support keeps no node (or,
+    /// in 3D, lacks one).
     pub fn functions_without(
         &self,
-        s: [f64; 2],
-        half_cells: [f64; 2],
+        s: [f64; 3],
+        half_cells: [f64; 3],
         absent: impl Fn(usize) -> bool,
-    ) -> Option<(usize, [[f64; 3]; SUPPORT_NODES])> {
-        let (wx, fx) = self.basis.window_1d(s[0], self.cells[0], half_cells[0]);
-        let (wy, fy) = self.basis.window_1d(s[1], self.cells[1], half_cells[1]);
-        let mut values = [[0.0; 3]; SUPPORT_NODES];
-        for ky in 0..3 {
-            for kx in 0..3 {
-                values[3 * ky + kx] = [fx[kx].0 * fy[ky].0, fx[kx].1 * fy[ky].0, fx[kx].0 * fy[ky].1];
-            }
+    ) -> Option<(usize, SupportValues)> {
+        let [(wx, fx), (wy, fy), (wz, fz)] = self.windows_1d(s, half_cells);
+        let m = self.support_len();
+        let mut values = [[0.0; 4]; MAX_SUPPORT_NODES];
+        for (k, v) in values.iter_mut().enumerate().take(m) {
+            let (x, y, z) = (fx[k % 3], fy[(k / 3) % 3], fz[k / 9]);
+            *v = [x.0 * y.0 * z.0, x.1 * y.0 * z.0, x.0 * y.1 * z.0, x.0 * y.0 * z.1];
         }
-        let support = wy * (self.cells[0] - 1) + wx;
+        let support = self.support_of([wx, wy, wz]);
         let mut mask = self.missing.get(support).copied().unwrap_or(0);
         for (k, &a) in self.support(support).iter().enumerate() {
             if absent(a) {
                 mask |= 1 << k;
             }
         }
-        if mask == (1 << SUPPORT_NODES) - 1 {
+        if mask == (1 << m) - 1 || (self.dim == 3 && mask != 0) {
             return None;
         }
         if mask != 0 {
@@ -385,16 +452,12 @@ impl SmoothLattice {
         Some((support, values))
     }
 
-    /// The support holding lattice coordinates `s` of the whole lattice and, per node of it,
-    /// `[N, ∂N/∂s_x, ∂N/∂s_y, ∂²N/∂s_x², ∂²N/∂s_x∂s_y, ∂²N/∂s_y²]` (derivatives per lattice
+    /// The support holding lattice coordinates `s` of the whole 2D lattice and, per node of
+    /// it, `[N, ∂N/∂s_x, ∂N/∂s_y, ∂²N/∂s_x², ∂²N/∂s_x∂s_y, ∂²N/∂s_y²]` (derivatives per lattice
     /// cell); `None` on a lattice with holes, whose folded functions are not kept to second
-    /// order.
-    pub fn functions_with_hessian(
-        &self,
-        s: [f64; 2],
-        half_cells: [f64; 2],
-    ) -> Option<(usize, [[f64; 6]; SUPPORT_NODES])> {
-        if !self.missing.is_empty() {
+    /// order, and in 3D.
+    pub fn functions_with_hessian(&self, s: [f64; 3], half_cells: [f64; 3]) -> Option<(usize, [[f64; 6]; 9])> {
+        if !self.missing.is_empty() || self.dim != 2 {
             return None;
         }
         let (wx, fx) = self.basis.window_1d_derivatives(s[0], self.cells[0], half_cells[0]);
@@ -403,7 +466,7 @@ impl SmoothLattice {
             let (x, y) = (fx[k % 3], fy[k / 3]);
             [x[0] * y[0], x[1] * y[0], x[0] * y[1], x[2] * y[0], x[1] * y[1], x[0] * y[2]]
         });
-        Some((wy * (self.cells[0] - 1) + wx, values))
+        Some((self.support_of([wx, wy, 0]), values))
     }
 
     /// The support of a point at `x` of the fixed lattice whose domain has the half lengths
@@ -421,17 +484,17 @@ impl SmoothLattice {
     }
 
     /// [`SmoothLattice::evaluate`] at lattice coordinates `s` of the fixed lattice.
-    fn evaluate_at(&self, s: [f64; 2], half_size: [f64; 3], formulation: Formulation) -> (usize, PointGeometry) {
-        let half_cells = [half_size[0] / self.spacing[0], half_size[1] / self.spacing[1]];
-        let (support, values) = self.functions_at(s, half_cells);
+    fn evaluate_at(&self, s: [f64; 3], half_size: [f64; 3], formulation: Formulation) -> (usize, PointGeometry) {
+        let (support, values) = self.functions_at(s, self.in_cells(half_size));
         let mut g =
             PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
-        let wx = support % (self.cells[0] - 1);
-        for (a, v) in values.iter().enumerate() {
+        let wx = self.window(support)[0];
+        let h = self.spacing;
+        for (a, v) in values.iter().enumerate().take(self.support_len()) {
             g.shape[a] = v[0];
-            g.gradient[a] = [v[1] / self.spacing[0], v[2] / self.spacing[1], 0.0];
+            g.gradient[a] = [v[1] / h[0], v[2] / h[1], if self.dim == 3 { v[3] / h[2] } else { 0.0 }];
             if formulation == Formulation::Axisymmetric {
-                g.radius += v[0] * (self.origin[0] + (wx + a % 3) as f64 * self.spacing[0]);
+                g.radius += v[0] * (self.origin[0] + (wx + a % 3) as f64 * h[0]);
             }
         }
         (support, g)
@@ -439,10 +502,13 @@ impl SmoothLattice {
 
     /// The region of the lattice whose points fall into support `s`: per direction the
     /// lattice coordinates `[lo, hi]` (the nearest nodes' half cells; the edge windows reach
-    /// to the edge).
-    fn region(&self, s: usize) -> [[f64; 2]; 2] {
-        let w = [s % (self.cells[0] - 1), s / (self.cells[0] - 1)];
+    /// to the edge; `[0, 0]` along z in 2D).
+    fn region(&self, s: usize) -> [[f64; 2]; 3] {
+        let w = self.window(s);
         std::array::from_fn(|d| {
+            if d >= self.dim {
+                return [0.0, 0.0];
+            }
             let n = self.cells[d];
             let lo = if w[d] == 0 { 0.0 } else { w[d] as f64 + 0.5 };
             let hi = if w[d] == n - 2 { n as f64 } else { w[d] as f64 + 1.5 };
@@ -450,36 +516,41 @@ impl SmoothLattice {
         })
     }
 
-    /// A 3 × 3 Gauss rule over the region of support `s` in lattice coordinates: per point
-    /// its lattice coordinates and its weight in lattice cells (`Σ = ` the region's area in
-    /// cells).
-    pub fn projection_points(&self, s: usize) -> [([f64; 2], f64); SUPPORT_NODES] {
+    /// A 3-point-per-direction Gauss rule over the region of support `s` in lattice
+    /// coordinates (9 points in 2D, 27 in 3D: the first [`SmoothLattice::support_len`]
+    /// entries): per point its lattice coordinates and its weight in lattice cells (`Σ = ` the
+    /// region's area or volume in cells).
+    pub fn projection_points(&self, s: usize) -> [([f64; 3], f64); MAX_SUPPORT_NODES] {
         const XI: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
         const W: [f64; 3] = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
         let region = self.region(s);
         std::array::from_fn(|q| {
-            let (kx, ky) = (q % 3, q / 3);
-            let t = [XI[kx], XI[ky]];
-            let mut point = [0.0; 2];
-            let mut weight = W[kx] * W[ky];
-            for d in 0..2 {
+            let k = [q % 3, (q / 3) % 3, q / 9];
+            let mut point = [0.0; 3];
+            let mut weight = 1.0;
+            for d in 0..self.dim {
                 let [lo, hi] = region[d];
-                point[d] = 0.5 * (lo + hi) + 0.5 * (hi - lo) * t[d];
-                weight *= 0.5 * (hi - lo);
+                point[d] = 0.5 * (lo + hi) + 0.5 * (hi - lo) * XI[k[d]];
+                weight *= W[k[d]] * 0.5 * (hi - lo);
             }
             (point, weight)
         })
     }
 
-    /// A 3 × 3 Gauss rule over the region of support `s` of the fixed lattice (weights: the
-    /// region's volume with the formulation's thickness or `2πR`), with the basis's functions
-    /// at its points (GIMP with `l = 0`): the rule on which a u–p support integrates its
-    /// pressure projection ([`loam_fem::mixed_kernel`]). Writes 9 points into `rule`.
+    /// The cell volume (area in 2D) of the fixed lattice, `Π h_d`.
+    pub fn cell_measure(&self) -> f64 {
+        self.spacing[..self.dim].iter().product()
+    }
+
+    /// The Gauss rule of [`SmoothLattice::projection_points`] over the region of support `s`
+    /// of the fixed lattice (weights: the region's volume with the formulation's thickness or
+    /// `2πR`), with the basis's functions at its points (GIMP with `l = 0`): the rule on which
+    /// a u–p support integrates its pressure projection ([`loam_fem::mixed_kernel`]). Writes
+    /// [`SmoothLattice::support_len`] points into `rule`.
     pub fn projection_rule(&self, s: usize, formulation: Formulation, thickness: f64, rule: &mut [PointGeometry]) {
-        for (g, (point, weight)) in rule.iter_mut().zip(self.projection_points(s)) {
+        for (g, (point, weight)) in rule.iter_mut().zip(self.projection_points(s)).take(self.support_len()) {
             let (_, mut geometry) = self.evaluate_at(point, [0.0; 3], formulation);
-            geometry.weight =
-                weight * self.spacing[0] * self.spacing[1] * formulation.measure_factor(thickness, geometry.radius);
+            geometry.weight = weight * self.cell_measure() * formulation.measure_factor(thickness, geometry.radius);
             *g = geometry;
         }
     }
@@ -487,14 +558,16 @@ impl SmoothLattice {
     /// Supports sharing a node with any support of `supports` (ascending, included): the
     /// set grown by one ring.
     pub fn dilate(&self, supports: &[usize]) -> Vec<usize> {
-        let nx = self.cells[0] - 1;
+        let n = self.windows();
         let mut mark = vec![false; self.num_supports()];
-        let ny = self.cells[1] - 1;
+        let reach = |w: usize, d: usize| w.saturating_sub(2)..(w + 3).min(n[d]);
         for &s in supports {
-            let (i, j) = (s % nx, s / nx);
-            for jj in j.saturating_sub(2)..(j + 3).min(ny) {
-                for ii in i.saturating_sub(2)..(i + 3).min(nx) {
-                    mark[jj * nx + ii] = true;
+            let w = self.window(s);
+            for kk in reach(w[2], 2) {
+                for jj in reach(w[1], 1) {
+                    for ii in reach(w[0], 0) {
+                        mark[self.support_of([ii, jj, kk])] = true;
+                    }
                 }
             }
         }
@@ -573,27 +646,160 @@ mod tests {
         }
     }
 
-    /// The 2D functions: partition of unity, linear reproduction, and every point's support
-    /// holding the nodes its functions reach.
+    /// The 2D and 3D functions: partition of unity, reproduction of linear fields (values and
+    /// gradients), and every point's support holding the nodes its functions reach.
     #[test]
     fn supports_hold_every_node_a_point_reaches() {
         for basis in BASES {
-            let lattice = SmoothLattice::new(basis, [1.0, -2.0], [0.5, 0.25], [4, 3]);
-            let coords = |a: usize| [1.0 + 0.5 * (a % 5) as f64, -2.0 + 0.25 * (a / 5) as f64];
-            for k in 0..400 {
-                let x = [1.0 + 2.0 * ((k as f64 * 0.618).fract()), -2.0 + 0.75 * ((k as f64 * 0.382).fract()), 0.0];
-                let (s, g) = lattice.evaluate(&x, [0.1, 0.05, 0.0], Formulation::PlaneStrain).unwrap();
-                let nodes = lattice.support(s);
-                let sum: f64 = g.shape[..9].iter().sum();
-                let xs: f64 = (0..9).map(|a| g.shape[a] * coords(nodes[a])[0]).sum();
-                let ys: f64 = (0..9).map(|a| g.shape[a] * coords(nodes[a])[1]).sum();
-                let gx: f64 = (0..9).map(|a| g.gradient[a][0] * coords(nodes[a])[0]).sum();
-                let gy: f64 = (0..9).map(|a| g.gradient[a][1] * coords(nodes[a])[1]).sum();
-                assert!((sum - 1.0).abs() < 1e-12 && (xs - x[0]).abs() < 1e-12 && (ys - x[1]).abs() < 1e-12);
-                assert!((gx - 1.0).abs() < 1e-12 && (gy - 1.0).abs() < 1e-12, "{basis:?}: ∇x = ({gx}, {gy})");
+            for dim in [2, 3] {
+                let (origin, spacing, cells) = ([1.0, -2.0, 0.5], [0.5, 0.25, 0.4], [4, 3, 3]);
+                let lattice = SmoothLattice::new(basis, dim, origin, spacing, cells);
+                let m = lattice.support_len();
+                let coords = |a: usize| -> [f64; 3] {
+                    let (i, j, k) = (a % 5, (a / 5) % 4, a / 20);
+                    [origin[0] + 0.5 * i as f64, origin[1] + 0.25 * j as f64, origin[2] + 0.4 * k as f64]
+                };
+                let formulation = if dim == 3 { Formulation::ThreeD } else { Formulation::PlaneStrain };
+                for k in 0..400 {
+                    let t = [(k as f64 * 0.618).fract(), (k as f64 * 0.382).fract(), (k as f64 * 0.271).fract()];
+                    let x: [f64; 3] = std::array::from_fn(|d| {
+                        if d < dim {
+                            origin[d] + spacing[d] * cells[d] as f64 * t[d]
+                        } else {
+                            0.0
+                        }
+                    });
+                    let (s, g) = lattice.evaluate(&x, [0.1, 0.05, 0.08], formulation).unwrap();
+                    let nodes = lattice.support(s);
+                    assert_eq!(nodes.len(), m);
+                    let sum: f64 = g.shape[..m].iter().sum();
+                    assert!((sum - 1.0).abs() < 1e-12, "{basis:?} {dim}D: Σ N = {sum}");
+                    for d in 0..dim {
+                        let xd: f64 = (0..m).map(|a| g.shape[a] * coords(nodes[a])[d]).sum();
+                        assert!((xd - x[d]).abs() < 1e-12, "{basis:?} {dim}D: Σ N x_{d} = {xd} at {x:?}");
+                        for e in 0..dim {
+                            let grad: f64 = (0..m).map(|a| g.gradient[a][e] * coords(nodes[a])[d]).sum();
+                            let expected = if d == e { 1.0 } else { 0.0 };
+                            assert!((grad - expected).abs() < 1e-12, "{basis:?} {dim}D: ∂x_{d}/∂x_{e} = {grad}");
+                        }
+                    }
+                }
+                assert!(lattice.evaluate(&[0.9, -1.0, 0.6], [0.1; 3], formulation).is_none());
             }
-            assert!(lattice.evaluate(&[0.9, -1.0, 0.0], [0.1; 3], Formulation::PlaneStrain).is_none());
         }
+    }
+
+    /// Relative error (of the largest entry) of the consistent tangent of support 0's block
+    /// against central finite differences of its residual, for the points at `xs` (all in
+    /// support 0 of `grid`), `F0 ≠ I`, the displacement kernel or the u–p kernel with the
+    /// support's projection rule; asserts that a Mohr–Coulomb check reaches the yield surface.
+    fn support_tangent_error(
+        grid: &crate::grid::Grid,
+        xs: &[[f64; 3]],
+        formulation: Formulation,
+        law: &dyn loam_laws::ConstitutiveLaw,
+        mixed: bool,
+    ) -> f64 {
+        use loam_fem::element::ElementType;
+        use loam_fem::kernel::{solid_element, KernelContext, PointOutput};
+        use loam_fem::mixed_kernel::mixed_element;
+        use nalgebra::Matrix3;
+
+        let dim = grid.mesh.element.dim();
+        let nn = grid.support_len();
+        let nu = nn * dim;
+        let np = xs.len();
+        let geometry: Vec<PointGeometry> = xs
+            .iter()
+            .map(|x| {
+                let (s, mut g) = grid.point_functions(x, [0.125, 0.1, 0.08], formulation, 1.0).unwrap();
+                assert_eq!(s, 0, "the points share the corner support");
+                g.weight = 0.02 * formulation.measure_factor(1.0, g.radius);
+                g
+            })
+            .collect();
+        let mut rule = [geometry[0]; MAX_NODES];
+        grid.projection_rule(0, formulation, 1.0, &mut rule).unwrap();
+        // F0 ≠ I (in 3D with all nine components; in 2D without the out-of-plane coupling)
+        let off = if dim == 3 { 1.0 } else { 0.0 };
+        let f0 = vec![Matrix3::new(1.05, 0.03, 0.01 * off, -0.02, 0.97, 0.015 * off, 0.0, -0.01 * off, 1.02); np];
+        let element = if dim == 3 { ElementType::Hex8 } else { ElementType::Quad4 };
+        let ctx = KernelContext { element, formulation, law, time_step: 0.0 };
+        let stride = law.state_len();
+        let mut committed = vec![0.0; np * stride];
+        committed.chunks_mut(stride.max(1)).for_each(|c| law.initialise_state(c));
+        let nd = if mixed { nu + nn } else { nu };
+        let mut unknowns: Vec<f64> = (0..nd).map(|k| 0.004 * ((k * 7 + 3) as f64).sin()).collect();
+        if mixed {
+            for a in 0..nn {
+                unknowns[nu + a] = -2.0e3 + 500.0 * (a as f64).cos();
+            }
+        }
+        let disp_of = |v: &[f64]| -> Vec<[f64; 3]> {
+            (0..nn).map(|a| std::array::from_fn(|i| if i < dim { v[dim * a + i] } else { 0.0 })).collect()
+        };
+        let residual = |v: &[f64], k: Option<&mut [f64]>| {
+            let disp = disp_of(v);
+            let mut f = vec![0.0; nd];
+            let mut out = vec![PointOutput::default(); np];
+            let mut trial = committed.clone();
+            if mixed {
+                mixed_element(
+                    &ctx,
+                    &disp,
+                    &v[nu..],
+                    &geometry,
+                    &f0,
+                    &f0,
+                    &committed,
+                    &mut trial,
+                    &mut out,
+                    &mut f,
+                    k,
+                    Some(&rule[..nn]),
+                )
+                .unwrap();
+            } else {
+                solid_element(&ctx, &disp, &geometry, &f0, &f0, &committed, &mut trial, &mut out, &mut f, k).unwrap();
+            }
+            f
+        };
+        let mut k = vec![0.0; nd * nd];
+        residual(&unknowns, Some(&mut k));
+        if let Some(flag) = law.state_variables().iter().position(|v| *v == "yield_flag") {
+            let disp = disp_of(&unknowns);
+            let (mut f, mut out, mut trial) = (vec![0.0; nu], vec![PointOutput::default(); np], committed.clone());
+            solid_element(&ctx, &disp, &geometry, &f0, &f0, &committed, &mut trial, &mut out, &mut f, None).unwrap();
+            let mut values = vec![0.0; law.state_variables().len()];
+            let yielded = trial.chunks(stride).filter(|st| {
+                law.state_output(st, &mut values);
+                values[flag] > 0.0
+            });
+            assert!(yielded.count() > 0, "the check must reach the yield surface");
+        }
+        let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut err = 0.0f64;
+        for c in 0..nd {
+            let h = if c < nu { 1e-7 } else { 1e-2 };
+            let (mut p, mut m) = (unknowns.clone(), unknowns.clone());
+            p[c] += h;
+            m[c] -= h;
+            let (fp, fm) = (residual(&p, None), residual(&m, None));
+            for r in 0..nd {
+                err = err.max(((fp[r] - fm[r]) / (2.0 * h) - k[r * nd + c]).abs() / kmax);
+            }
+        }
+        err
+    }
+
+    /// The Neo-Hookean and the Mohr–Coulomb (on its yield surface) laws of the tangent checks.
+    fn tangent_laws() -> [Box<dyn loam_laws::ConstitutiveLaw>; 2] {
+        use loam_laws::mohr_coulomb::MohrCoulomb;
+        use loam_laws::neo_hookean::NeoHookean;
+        [
+            Box::new(NeoHookean::new(1000.0, 1.0e6, 0.3)),
+            Box::new(MohrCoulomb::new(1000.0, 1.0e6, 0.3, 25f64.to_radians(), 2.0e3, 0.0)),
+        ]
     }
 
     /// The consistent tangent of a smooth support's 9-node block against central finite
@@ -607,16 +813,6 @@ mod tests {
     #[test]
     fn smooth_support_tangents_match_finite_differences() {
         use loam_fem::element::ElementType;
-        use loam_fem::kernel::{solid_element, KernelContext, PointOutput};
-        use loam_fem::mixed_kernel::mixed_element;
-        use loam_laws::mohr_coulomb::MohrCoulomb;
-        use loam_laws::neo_hookean::NeoHookean;
-        use loam_laws::ConstitutiveLaw;
-        use nalgebra::Matrix3;
-
-        let nh = NeoHookean::new(1000.0, 1.0e6, 0.3);
-        let mc = MohrCoulomb::new(1000.0, 1.0e6, 0.3, 25f64.to_radians(), 2.0e3, 0.0);
-        let laws: [&dyn ConstitutiveLaw; 2] = [&nh, &mc];
         for (basis, moved) in BASES.iter().flat_map(|&b| [(b, false), (b, true)]) {
             // the lattice fixed, or moved as a structure on its edge x = 0.2 moves it (the
             // edge's nodes down and turned, the motion decaying into the grid): the points
@@ -635,93 +831,14 @@ mod tests {
                 grid.move_nodes(&motion).unwrap();
             }
             // lattice coordinates near (0.08, 0.3), (1.02, 0.9), (0.55, 1.45): all in support 0
-            let xs = [[0.24, 0.12, 0.0], [0.71, 0.36, 0.0], [0.475, 0.58, 0.0]];
+            let xs: Vec<[f64; 3]> = [[0.24, 0.12, 0.0], [0.71, 0.36, 0.0], [0.475, 0.58, 0.0]]
+                .iter()
+                .map(|x| if moved { [x[0] - 0.05 * (x[1] - 0.8), x[1] - 0.08, 0.0] } else { *x })
+                .collect();
             for formulation in [Formulation::PlaneStrain, Formulation::Axisymmetric] {
-                let geometry: Vec<PointGeometry> = xs
-                    .iter()
-                    .map(|x| {
-                        let x = if moved { [x[0] - 0.05 * (x[1] - 0.8), x[1] - 0.08, 0.0] } else { *x };
-                        let (s, mut g) = grid.point_functions(&x, [0.125, 0.1, 0.0], formulation, 1.0).unwrap();
-                        assert_eq!(s, 0, "the points share the corner support");
-                        g.weight = 0.02 * formulation.measure_factor(1.0, g.radius);
-                        g
-                    })
-                    .collect();
-                let mut rule = [geometry[0]; MAX_NODES];
-                grid.projection_rule(0, formulation, 1.0, &mut rule).unwrap();
-                let f0 = vec![Matrix3::new(1.05, 0.03, 0.0, -0.02, 0.97, 0.0, 0.0, 0.0, 1.02); 3];
-                for law in laws {
-                    let ctx = KernelContext { element: ElementType::Quad4, formulation, law, time_step: 0.0 };
-                    let stride = law.state_len();
-                    let mut committed = vec![0.0; 3 * stride];
-                    committed.chunks_mut(stride.max(1)).for_each(|c| law.initialise_state(c));
+                for law in tangent_laws() {
                     for mixed in [false, true] {
-                        let nd = if mixed { 27 } else { 18 };
-                        let mut unknowns: Vec<f64> = (0..nd).map(|k| 0.004 * ((k * 7 + 3) as f64).sin()).collect();
-                        if mixed {
-                            for a in 0..9 {
-                                unknowns[18 + a] = -2.0e3 + 500.0 * (a as f64).cos();
-                            }
-                        }
-                        let residual = |v: &[f64], k: Option<&mut [f64]>| {
-                            let disp: Vec<[f64; 3]> = (0..9).map(|a| [v[2 * a], v[2 * a + 1], 0.0]).collect();
-                            let mut f = vec![0.0; nd];
-                            let mut out = vec![PointOutput::default(); 3];
-                            let mut trial = committed.clone();
-                            if mixed {
-                                mixed_element(
-                                    &ctx,
-                                    &disp,
-                                    &v[18..],
-                                    &geometry,
-                                    &f0,
-                                    &f0,
-                                    &committed,
-                                    &mut trial,
-                                    &mut out,
-                                    &mut f,
-                                    k,
-                                    Some(&rule[..]),
-                                )
-                                .unwrap();
-                            } else {
-                                solid_element(
-                                    &ctx, &disp, &geometry, &f0, &f0, &committed, &mut trial, &mut out, &mut f, k,
-                                )
-                                .unwrap();
-                            }
-                            f
-                        };
-                        let mut k = vec![0.0; nd * nd];
-                        residual(&unknowns, Some(&mut k));
-                        if let Some(flag) = law.state_variables().iter().position(|v| *v == "yield_flag") {
-                            let disp: Vec<[f64; 3]> =
-                                (0..9).map(|a| [unknowns[2 * a], unknowns[2 * a + 1], 0.0]).collect();
-                            let (mut f, mut out, mut trial) =
-                                (vec![0.0; 18], vec![PointOutput::default(); 3], committed.clone());
-                            solid_element(
-                                &ctx, &disp, &geometry, &f0, &f0, &committed, &mut trial, &mut out, &mut f, None,
-                            )
-                            .unwrap();
-                            let mut values = vec![0.0; law.state_variables().len()];
-                            let yielded = trial.chunks(stride).filter(|st| {
-                                law.state_output(st, &mut values);
-                                values[flag] > 0.0
-                            });
-                            assert!(yielded.count() > 0, "the check must reach the yield surface");
-                        }
-                        let kmax = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                        let mut err = 0.0f64;
-                        for c in 0..nd {
-                            let h = if c < 18 { 1e-7 } else { 1e-2 };
-                            let (mut p, mut m) = (unknowns.clone(), unknowns.clone());
-                            p[c] += h;
-                            m[c] -= h;
-                            let (fp, fm) = (residual(&p, None), residual(&m, None));
-                            for r in 0..nd {
-                                err = err.max(((fp[r] - fm[r]) / (2.0 * h) - k[r * nd + c]).abs() / kmax);
-                            }
-                        }
+                        let err = support_tangent_error(&grid, &xs, formulation, law.as_ref(), mixed);
                         println!(
                             "{basis:?}{} {formulation:?} {}{}: 9-node support tangent vs central FD, relative error {err:.2e} (tolerance 1e-6)",
                             if moved { " (moved by a structure)" } else { "" },
@@ -730,6 +847,35 @@ mod tests {
                         );
                         assert!(err < 1e-6, "{basis:?} {formulation:?} {}: {err}", law.name());
                     }
+                }
+            }
+        }
+    }
+
+    /// The 27-node blocks of the 3D smooth supports: their consistent tangents against central
+    /// finite differences (relative error < 1e-6), displacement and u–p, Neo-Hookean and
+    /// Mohr–Coulomb on its yield surface, for the corner support of a hex8 lattice holding a
+    /// point next to the boundary nodes (folded functions), one straddling a cell edge (its
+    /// GIMP domain on both sides) and one near a half-cell breakpoint of the B-splines.
+    #[test]
+    fn smooth_support_tangents_match_finite_differences_in_3d() {
+        use loam_fem::element::ElementType;
+        for basis in BASES {
+            let mut grid =
+                crate::grid::Grid::new([0.2, 0.0, -0.3], [2.0, 1.6, 1.2], [4, 4, 3], ElementType::Hex8);
+            grid.set_basis(basis).unwrap();
+            assert_eq!(grid.support_len(), 27);
+            // lattice coordinates (0.08, 0.3, 0.2), (1.02, 0.9, 0.99), (0.55, 1.45, 1.3)
+            let xs = [[0.24, 0.12, -0.22], [0.71, 0.36, 0.096], [0.475, 0.58, 0.22]];
+            for law in tangent_laws() {
+                for mixed in [false, true] {
+                    let err = support_tangent_error(&grid, &xs, Formulation::ThreeD, law.as_ref(), mixed);
+                    println!(
+                        "{basis:?} 3D {}{}: 27-node support tangent vs central FD, relative error {err:.2e} (tolerance 1e-6)",
+                        law.name(),
+                        if mixed { " u–p" } else { "" }
+                    );
+                    assert!(err < 1e-6, "{basis:?} 3D {}: {err}", law.name());
                 }
             }
         }

@@ -52,7 +52,6 @@
 use std::collections::HashMap;
 
 use loam_fem::domain::{AssemblyInput, DomainError};
-use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
 use loam_fem::kernel::point_geometry;
 
@@ -62,8 +61,9 @@ use crate::grid::Grid;
 /// than this share of it: one or two of a 2 × 2 set of points.
 pub const CUT_FRACTION: f64 = 0.5;
 
-/// Most nodes of a face block (two hexahedra sharing a face).
-const MAX_FACE_NODES: usize = 2 * MAX_NODES;
+/// Most nodes of a face block: two hexahedra sharing a face (the faces are the grid cells',
+/// also on a smooth basis).
+const MAX_FACE_NODES: usize = 16;
 
 /// A face shared by two cells of the pattern.
 #[derive(Debug, Clone)]

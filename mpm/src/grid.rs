@@ -21,12 +21,12 @@
 //! from the same `J⁻¹`. Parallelogram quads and parallelepiped hexes (every cell of a
 //! structured grid, rotated or not, until it moves) are affine too and take the same path.
 
-use loam_fem::element::{ElementType, MAX_NODES};
+use loam_fem::element::{ElementType, GaussPoint, MAX_ELEMENT_NODES, MAX_NODES};
 use loam_fem::formulation::Formulation;
-use loam_fem::kernel::{point_geometry, CellMap, KernelError, PointGeometry};
+use loam_fem::kernel::{point_geometry, point_geometry_into, CellMap, KernelError, PointGeometry};
 use loam_fem::mesh::Mesh;
 
-use crate::basis::{Basis, SmoothLattice, SUPPORT_NODES};
+use crate::basis::{Basis, SmoothLattice, SupportValues};
 use nalgebra::Vector3;
 
 /// An empty integration point (storage for a cell's or support's Gauss rule).
@@ -174,13 +174,15 @@ pub struct Grid {
     moved_bins: Option<Bins>,
     /// The supports of a smooth basis (`None`: the cells' linear functions).
     smooth: Option<SmoothLattice>,
+    /// The cells' [`ElementType::gauss_points_mixed`].
+    mixed_rule: Vec<GaussPoint>,
 }
 
 /// Why a grid cannot carry a smooth basis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum BasisError {
-    /// The grid is not a structured lattice of quad4 cells in 2D.
-    #[error("a smooth basis needs a structured grid of quad4 cells in 2D (tri3 and unstructured grids keep \"linear\"; hex8 grids are not supported yet)")]
+    /// The grid is not a structured lattice of quad4 (2D) or hex8 (3D) cells.
+    #[error("a smooth basis needs a structured grid of quad4 (2D) or hex8 (3D) cells (tri3, tet4 and unstructured grids keep \"linear\")")]
     NotQuadLattice,
     /// The lattice is rotated.
     #[error("a smooth basis needs a grid whose cell edges follow x and y (not rotated)")]
@@ -240,12 +242,13 @@ impl Grid {
     fn with_locator(mesh: Mesh, locator: Locator) -> Self {
         let affine = (0..mesh.num_cells()).map(|c| affine_cell(&mesh, c)).collect();
         let moved = vec![false; mesh.num_cells()];
-        Self { reference: mesh.coords.clone(), mesh, locator, affine, moved, moved_bins: None, smooth: None }
+        let mixed_rule = mesh.element.gauss_points_mixed();
+        Self { reference: mesh.coords.clone(), mesh, locator, affine, moved, moved_bins: None, smooth: None, mixed_rule }
     }
 
     /// Gives the grid the shape functions `basis` ([`crate::basis`]): a smooth one needs a
-    /// structured, unrotated, fixed lattice of quad4 cells in 2D with two or more cells per
-    /// direction.
+    /// structured, unrotated, fixed lattice of quad4 (2D) or hex8 (3D) cells with two or more
+    /// cells per direction.
     pub fn set_basis(&mut self, basis: Basis) -> Result<(), BasisError> {
         if !basis.is_smooth() {
             self.smooth = None;
@@ -254,7 +257,7 @@ impl Grid {
         let Locator::Lattice { origin, spacing, cells, rotation, cell_index } = &self.locator else {
             return Err(BasisError::NotQuadLattice);
         };
-        if self.mesh.element != ElementType::Quad4 {
+        if !matches!(self.mesh.element, ElementType::Quad4 | ElementType::Hex8) {
             return Err(BasisError::NotQuadLattice);
         }
         if *rotation != (1.0, 0.0) {
@@ -263,10 +266,11 @@ impl Grid {
         if cell_index.is_some() {
             return Err(BasisError::Holes);
         }
-        if cells[0] < 2 || cells[1] < 2 {
+        let dim = self.mesh.element.dim();
+        if cells[..dim].iter().any(|&n| n < 2) {
             return Err(BasisError::TooFewCells);
         }
-        let lattice = SmoothLattice::new(basis, [origin[0], origin[1]], [spacing[0], spacing[1]], [cells[0], cells[1]]);
+        let lattice = SmoothLattice::new(basis, dim, *origin, *spacing, *cells);
         self.smooth = Some(lattice);
         Ok(())
     }
@@ -277,7 +281,8 @@ impl Grid {
     }
 
     /// Number of supports: the blocks that group the material points whose functions reach
-    /// the same nodes (the cells on the linear basis; 3 × 3-node windows on a smooth one).
+    /// the same nodes (the cells on the linear basis; 3 × 3 or 3 × 3 × 3-node windows on a
+    /// smooth one).
     pub fn num_supports(&self) -> usize {
         self.smooth.as_ref().map_or_else(|| self.mesh.num_cells(), SmoothLattice::num_supports)
     }
@@ -292,10 +297,9 @@ impl Grid {
 
     /// Nodes per support.
     pub fn support_len(&self) -> usize {
-        if self.smooth.is_some() {
-            SUPPORT_NODES
-        } else {
-            self.mesh.element.num_nodes()
+        match &self.smooth {
+            Some(lattice) => lattice.support_len(),
+            None => self.mesh.element.num_nodes(),
         }
     }
 
@@ -322,8 +326,8 @@ impl Grid {
                 return lattice.evaluate(x, half_size, formulation);
             }
             let s = self.moved_lattice_coordinates(lattice, x)?;
-            let half_cells = [half_size[0] / lattice.spacing()[0], half_size[1] / lattice.spacing()[1]];
-            let (support, geometry, _) = self.moved_lattice_functions(lattice, s, half_cells, formulation);
+            let (support, geometry, _) =
+                self.moved_lattice_functions(lattice, s, lattice.in_cells(half_size), formulation);
             return Some((support, geometry));
         }
         let (cell, xi) = self.locate(x)?;
@@ -368,7 +372,7 @@ impl Grid {
                 return None;
             }
             let s = lattice.lattice_coordinates(x)?;
-            let (support, values) = lattice.functions_with_hessian(s, [0.0; 2])?;
+            let (support, values) = lattice.functions_with_hessian(s, [0.0; 3])?;
             let h = lattice.spacing();
             let nodes = lattice.support(support);
             return Some(
@@ -437,7 +441,7 @@ impl Grid {
     pub fn functions_without(&self, x: &[f64; 3], absent: impl Fn(usize) -> bool) -> Option<Vec<(usize, f64)>> {
         let lattice = self.smooth.as_ref().filter(|_| !self.has_moved())?;
         let s = lattice.lattice_coordinates(x)?;
-        let (support, values) = lattice.functions_without(s, [0.0; 2], absent)?;
+        let (support, values) = lattice.functions_without(s, [0.0; 3], absent)?;
         Some(lattice.support(support).iter().zip(values).map(|(&a, v)| (a, v[0])).collect())
     }
 
@@ -453,7 +457,7 @@ impl Grid {
 
     /// The Gauss rule of support `s` in the step's configuration on which a u–p support
     /// integrates its pressure projection ([`loam_fem::mixed_kernel`]): the cell's
-    /// [`ElementType::gauss_points_mixed`], or a 3 × 3 rule over a smooth support's region.
+    /// [`ElementType::gauss_points_mixed`], or a 3 × 3 (× 3) rule over a smooth support's region.
     /// Writes its points into `rule` and returns how many.
     pub fn projection_rule(
         &self,
@@ -466,13 +470,13 @@ impl Grid {
             if !self.has_moved() {
                 lattice.projection_rule(s, formulation, thickness, rule);
             } else {
-                for (g, (point, weight)) in rule.iter_mut().zip(lattice.projection_points(s)) {
-                    let (_, mut geometry, det) = self.moved_lattice_functions(lattice, point, [0.0; 2], formulation);
+                for (g, (point, weight)) in rule.iter_mut().zip(lattice.projection_points(s)).take(lattice.support_len()) {
+                    let (_, mut geometry, det) = self.moved_lattice_functions(lattice, point, [0.0; 3], formulation);
                     geometry.weight = weight * det * formulation.measure_factor(thickness, geometry.radius);
                     *g = geometry;
                 }
             }
-            return Ok(SUPPORT_NODES);
+            return Ok(lattice.support_len());
         }
         self.cell_rule(s, formulation, thickness, rule)
     }
@@ -481,8 +485,8 @@ impl Grid {
     /// lattice coordinates `s`, with `∂x/∂s` (`[i][d] = ∂x_i/∂s_d`, per lattice cell): `M_I`
     /// are the basis's own functions (GIMP's with `l = 0`, the cells' bilinear map), so that
     /// a moved grid stays isoparametric (module doc of [`crate::basis`]).
-    fn lattice_map(&self, lattice: &SmoothLattice, s: [f64; 2]) -> ([f64; 2], [[f64; 2]; 2]) {
-        let (support, values) = lattice.functions_at(s, [0.0; 2]);
+    fn lattice_map(&self, lattice: &SmoothLattice, s: [f64; 3]) -> ([f64; 2], [[f64; 2]; 2]) {
+        let (support, values) = lattice.functions_at(s, [0.0; 3]);
         self.map_from(lattice, support, &values)
     }
 
@@ -491,7 +495,7 @@ impl Grid {
         &self,
         lattice: &SmoothLattice,
         support: usize,
-        values: &[[f64; 3]; SUPPORT_NODES],
+        values: &SupportValues,
     ) -> ([f64; 2], [[f64; 2]; 2]) {
         let mut x = [0.0; 2];
         let mut jacobian = [[0.0; 2]; 2];
@@ -509,12 +513,12 @@ impl Grid {
     /// Lattice coordinates of `x` on a smooth lattice that has moved: the inverse of
     /// [`Grid::lattice_map`] by Newton's method, started from the reference position of `x`'s
     /// local coordinates in the (bilinear) cell that holds it. `None` outside the grid.
-    fn moved_lattice_coordinates(&self, lattice: &SmoothLattice, x: &[f64; 3]) -> Option<[f64; 2]> {
+    fn moved_lattice_coordinates(&self, lattice: &SmoothLattice, x: &[f64; 3]) -> Option<[f64; 3]> {
         let (cell, xi) = self.locate(x)?;
         let element = self.mesh.element;
         let mut n = [0.0; MAX_NODES];
         element.shape_functions(&xi, &mut n);
-        let mut reference = [0.0; 2];
+        let mut reference = [0.0; 3];
         for (k, &a) in self.mesh.cell(cell).iter().enumerate() {
             for d in 0..2 {
                 reference[d] += n[k] * self.reference[a][d];
@@ -529,7 +533,7 @@ impl Grid {
                 break;
             }
             let ds = [(j[1][1] * r[0] - j[0][1] * r[1]) / det, (j[0][0] * r[1] - j[1][0] * r[0]) / det];
-            s = lattice.clamp([s[0] + ds[0], s[1] + ds[1]]);
+            s = lattice.clamp([s[0] + ds[0], s[1] + ds[1], 0.0]);
             if ds[0].abs().max(ds[1].abs()) < 1e-13 {
                 break;
             }
@@ -542,13 +546,13 @@ impl Grid {
     fn moved_lattice_functions(
         &self,
         lattice: &SmoothLattice,
-        s: [f64; 2],
-        half_cells: [f64; 2],
+        s: [f64; 3],
+        half_cells: [f64; 3],
         formulation: Formulation,
     ) -> (usize, PointGeometry, f64) {
         let (support, values) = lattice.functions_at(s, half_cells);
         // the map's functions are these unless they depend on the point's domain (GIMP)
-        let (_, j) = if lattice.basis() == Basis::Gimp && half_cells != [0.0; 2] {
+        let (_, j) = if lattice.basis() == Basis::Gimp && half_cells != [0.0; 3] {
             self.lattice_map(lattice, s)
         } else {
             self.map_from(lattice, support, &values)
@@ -582,9 +586,10 @@ impl Grid {
     ) -> Result<usize, KernelError> {
         let element = self.mesh.element;
         let coords = self.cell_coords(cell);
-        let gauss = element.gauss_points_mixed();
-        for (g, gp) in rule.iter_mut().zip(&gauss) {
-            *g = point_geometry(
+        let gauss = &self.mixed_rule;
+        for (g, gp) in rule.iter_mut().zip(gauss) {
+            point_geometry_into(
+                g,
                 element,
                 formulation,
                 thickness,
@@ -761,8 +766,8 @@ impl Grid {
 
     /// Node coordinates of `cell` in the current configuration (the first `num_nodes`
     /// entries), without allocating.
-    pub fn cell_coords(&self, cell: usize) -> [[f64; 3]; MAX_NODES] {
-        let mut coords = [[0.0; 3]; MAX_NODES];
+    pub fn cell_coords(&self, cell: usize) -> [[f64; 3]; MAX_ELEMENT_NODES] {
+        let mut coords = [[0.0; 3]; MAX_ELEMENT_NODES];
         for (c, &a) in coords.iter_mut().zip(self.mesh.cell(cell)) {
             *c = self.mesh.coords[a];
         }
@@ -1042,7 +1047,7 @@ mod tests {
             g.move_nodes(&motion).unwrap();
             let lattice = g.smooth.clone().unwrap();
             for k in 0..200 {
-                let s = [8.0 * ((k as f64 * 0.618_034).fract()), 4.0 * ((k as f64 * 0.381_966 + 0.1).fract())];
+                let s = [8.0 * ((k as f64 * 0.618_034).fract()), 4.0 * ((k as f64 * 0.381_966 + 0.1).fract()), 0.0];
                 let (x2, _) = g.lattice_map(&lattice, s);
                 let x = [x2[0], x2[1], 0.0];
                 let recovered = g.moved_lattice_coordinates(&lattice, &x).expect("inside the moved grid");
@@ -1067,7 +1072,7 @@ mod tests {
                     if sp != support || sm != support {
                         continue;
                     }
-                    for a in 0..SUPPORT_NODES {
+                    for a in 0..9 {
                         let fd = (fp.shape[a] - fm.shape[a]) / (2.0 * h);
                         assert!(
                             (fd - f.gradient[a][i]).abs() < 1e-5,
@@ -1104,7 +1109,7 @@ mod tests {
                     .unwrap();
                 assert_eq!(s_moved, s_fixed);
                 let det = stretch[0][0] * stretch[1][1] - stretch[0][1] * stretch[1][0];
-                for k in 0..SUPPORT_NODES {
+                for k in 0..9 {
                     assert!((f_moved.shape[k] - f_fixed.shape[k]).abs() < 1e-12);
                     // ∇_x N = F⁻ᵀ ∇_X N
                     let gx = [
@@ -1189,7 +1194,7 @@ mod tests {
                         if sp != support || sm != support {
                             continue;
                         }
-                        for a in 0..SUPPORT_NODES {
+                        for a in 0..9 {
                             let fd = (fp.shape[a] - fm.shape[a]) / (2.0 * h);
                             // off the fold's switch lines the functions are smooth
                             if (fd - f.gradient[a][i]).abs() > 1e-4 && (fp.shape[a] - fm.shape[a]).abs() > 1e-3 {

@@ -35,7 +35,7 @@ use loam_fem::domain::{
 };
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
-use loam_fem::kernel::KernelContext;
+use loam_fem::kernel::{KernelContext, PointGeometry};
 use loam_fem::newton::DEFAULT_MPM_PATTERN_RINGS;
 use nalgebra::Matrix3;
 use rayon::prelude::*;
@@ -51,7 +51,44 @@ use crate::quadrature::{cell_volume, normalise_filled_cells, PointQuadrature};
 const NONE: u8 = u8::MAX;
 
 /// Largest element block (hex8 in 3D, u–p): 32 DOFs.
-const MAX_BLOCK: usize = loam_fem::mixed_kernel::MAX_MIXED_DOFS;
+/// Per worker of the assembly, storage that a block needs only sometimes, made once per
+/// worker rather than zeroed per block (a 3D smooth support's rule and block are 24 kB and
+/// 93 kB): a u–p support's projection rule, and the block of a second body in a support.
+struct BlockScratch {
+    rule: [PointGeometry; MAX_NODES],
+    disp: [[f64; 3]; MAX_NODES],
+    inertia: [[f64; 3]; MAX_NODES],
+    pressure: [f64; MAX_NODES],
+    later: LaterBody,
+}
+
+impl Default for BlockScratch {
+    fn default() -> Self {
+        Self {
+            rule: [NO_GEOMETRY; MAX_NODES],
+            disp: [[0.0; 3]; MAX_NODES],
+            inertia: [[0.0; 3]; MAX_NODES],
+            pressure: [0.0; MAX_NODES],
+            later: LaterBody::default(),
+        }
+    }
+}
+
+/// Residual and tangent of a second body's points in a block, before they are added.
+#[derive(Default)]
+struct LaterBody {
+    residual: Vec<f64>,
+    tangent: Vec<f64>,
+}
+
+impl LaterBody {
+    /// Storage for a block of `nd` DOFs (contents unspecified: the kernels overwrite them).
+    fn block(&mut self, nd: usize) -> (&mut [f64], &mut [f64]) {
+        self.residual.resize(nd, 0.0);
+        self.tangent.resize(nd * nd, 0.0);
+        (&mut self.residual[..nd], &mut self.tangent[..nd * nd])
+    }
+}
 
 /// Young's modulus `E = μ (3λ + 2μ)/(λ + μ)` of small-strain constants `(λ, μ)` (`3μ` for
 /// an incompressible material, `λ = ∞`).
@@ -78,10 +115,10 @@ struct CellBlocks {
     first_body: Vec<u8>,
     /// For each block: bit `a` set if it carries the equation `Δu = 0` of its node `a`, which
     /// no active cell touches (residual `Δu`, unit diagonal).
-    orphans: Vec<u16>,
+    orphans: Vec<u32>,
     /// As `orphans` for the pressure DOFs (u–p grids): also at interface nodes, whose
     /// pressure only the soil has.
-    pressure_orphans: Vec<u16>,
+    pressure_orphans: Vec<u32>,
     /// Rings of cells around the active ones in the pattern (0: the pattern is the active
     /// set and is rebuilt whenever it changes).
     rings: usize,
@@ -388,7 +425,7 @@ impl MpmDomain {
             cb.first_body.push(first.map_or(NONE, |k| k as u8));
             // a node not live is owned by the first block that holds it (on the linear basis
             // always a block without points; on a smooth one possibly one with points)
-            let (mut mask, mut pressure_mask) = (0u16, 0u16);
+            let (mut mask, mut pressure_mask) = (0u32, 0u32);
             for (a, &node) in self.grid.support(c).iter().enumerate() {
                 let tied = self.attachment.as_ref().is_some_and(|att| att.kind[node] == GridNodeKind::Tied);
                 if !live[node] && !tied {
@@ -614,16 +651,15 @@ impl MpmDomain {
                 .zip(views.into_par_iter())
                 .enumerate()
                 .with_min_len(16)
-                .try_for_each(|(b, ((km, fv), view))| {
+                .try_for_each_init(BlockScratch::default, |scratch, (b, ((km, fv), view))| {
                     let Some((trial, out)) = view else { return Ok(()) };
                     if owners.is_some_and(|o| !o.owns(b)) {
                         return Ok(()); // another rank's support
                     }
                     let cell = blocks.pattern[b];
                     let nodes = grid.support(cell);
-                    let mut disp = [[0.0; 3]; MAX_NODES];
-                    let mut inertia = [[0.0; 3]; MAX_NODES];
-                    let mut pressure = [0.0; MAX_NODES];
+                    // every entry read below is written here (the z components stay 0 in 2D)
+                    let BlockScratch { rule, disp, inertia, pressure, later } = scratch;
                     for (a, &local) in nodes.iter().enumerate() {
                         let dof = node_ids[local] * dim;
                         for i in 0..dim {
@@ -637,16 +673,13 @@ impl MpmDomain {
                         }
                     }
                     // the support's Gauss rule in the step's configuration, for the projection
-                    let mut cell_rule = [NO_GEOMETRY; MAX_NODES];
                     let rule_len = match pressure_dofs {
-                        Some(_) => {
-                            grid.projection_rule(cell, formulation, thickness, &mut cell_rule).map_err(|err| {
-                                DomainError { domain: name.clone(), element: cell, message: err.to_string() }
-                            })?
-                        }
+                        Some(_) => grid.projection_rule(cell, formulation, thickness, rule).map_err(
+                            |err| DomainError { domain: name.clone(), element: cell, message: err.to_string() },
+                        )?,
                         None => 0,
                     };
-                    let cell_rule = &cell_rule[..rule_len];
+                    let cell_rule = &rule[..rule_len];
                     let pressure = pressure_dofs.map(|_| (&pressure[..nn], cell_rule));
                     let fail = |err: loam_fem::kernel::KernelError| DomainError {
                         domain: name.clone(),
@@ -673,14 +706,13 @@ impl MpmDomain {
                         return contribute(fv, input.with_tangent.then_some(&mut *km));
                     }
                     // a later body of the block: into scratch, then added
-                    let mut f_scratch = [0.0; MAX_BLOCK];
-                    let mut k_scratch = [0.0; MAX_BLOCK * MAX_BLOCK];
-                    contribute(&mut f_scratch[..nd], input.with_tangent.then_some(&mut k_scratch[..nd * nd]))?;
-                    for (f, s) in fv.iter_mut().zip(&f_scratch) {
+                    let (f_scratch, k_scratch) = later.block(nd);
+                    contribute(f_scratch, input.with_tangent.then_some(&mut *k_scratch))?;
+                    for (f, s) in fv.iter_mut().zip(&*f_scratch) {
                         *f += s;
                     }
                     if input.with_tangent {
-                        for (m, s) in km.iter_mut().zip(&k_scratch) {
+                        for (m, s) in km.iter_mut().zip(&*k_scratch) {
                             *m += s;
                         }
                     }

@@ -776,6 +776,16 @@ fn couple_grids(
         let Some(&g) = group_of.get(&soil) else {
             return Err(CaseError::new(format!("{loc}.soil"), format!("'{}' is not an mpm domain", spec.soil)));
         };
+        if dim == 3 && groups[g].grid.basis().is_smooth() {
+            return Err(CaseError::new(
+                format!("{loc}.soil"),
+                format!(
+                    "'{}' has a 3D grid on the smooth basis \"{}\": the smooth supports follow a structure (folded around it, moved with it) in 2D only; couple a 3D grid on grid.basis \"linear\"",
+                    spec.soil,
+                    groups[g].grid.basis().name()
+                ),
+            ));
+        }
         let structure = domain_index(format!("{loc}.structure"), &spec.structure)?;
         let Some(mesh) = fem_meshes.get(&structure) else {
             return Err(CaseError::new(
