@@ -55,14 +55,34 @@ struct Column {
 }
 
 /// The compaction column (cases/compaction_column_mpm.json) on `basis` with `ny` cells up
-/// (2 across), `ppc` points per cell and `steps` load steps.
-fn column(basis: &str, ny: usize, ppc: usize, steps: usize) -> Column {
+/// (2 across), `ppc` points per cell and `steps` load steps; `dim = 3`: the same column as a
+/// hex8 lattice 2 × ny × 2 cells, rollers on its four sides.
+fn column_in(dim: usize, basis: &str, ny: usize, ppc: usize, steps: usize) -> Column {
     let mut c = case_json("compaction_column_mpm.json");
     let h = H / ny as f64;
-    c["domains"][0]["grid"] = json!({ "origin": [0.0, 0.0], "size": [2.0 * h, H], "cells": [2, ny],
-                                      "element": "quad4", "basis": basis });
-    c["domains"][0]["material_points"]["cells"]["mesh"]["rectangle"] =
-        json!({ "origin": [0.0, 0.0], "size": [2.0 * h, H], "cells": [2, ny], "element": "quad4" });
+    if dim == 2 {
+        c["domains"][0]["grid"] = json!({ "origin": [0.0, 0.0], "size": [2.0 * h, H], "cells": [2, ny],
+                                          "element": "quad4", "basis": basis });
+        c["domains"][0]["material_points"]["cells"]["mesh"]["rectangle"] =
+            json!({ "origin": [0.0, 0.0], "size": [2.0 * h, H], "cells": [2, ny], "element": "quad4" });
+    } else {
+        c["formulation"] = json!("3d");
+        let (size, cells) = (json!([2.0 * h, H, 2.0 * h]), json!([2, ny, 2]));
+        c["domains"][0]["grid"] =
+            json!({ "origin": [0.0, 0.0, 0.0], "size": size, "cells": cells, "element": "hex8", "basis": basis });
+        c["domains"][0]["material_points"]["cells"]["mesh"] =
+            json!({ "box": { "origin": [0.0, 0.0, 0.0], "size": size, "cells": cells, "element": "hex8" } });
+        c["regions"]["front"] = json!({ "z": 0.0 });
+        c["regions"]["back"] = json!({ "z": 2.0 * h });
+        c["boundary_conditions"] = json!([
+            { "region": "left", "displacement": [0.0, null, null] },
+            { "region": "right", "displacement": [0.0, null, null] },
+            { "region": "front", "displacement": [null, null, 0.0] },
+            { "region": "back", "displacement": [null, null, 0.0] },
+            { "region": "base", "displacement": [null, 0.0, null] }
+        ]);
+        c["gravity"]["acceleration"] = json!([0.0, -G, 0.0]);
+    }
     c["domains"][0]["material_points"]["cells"]["points_per_cell"] = json!(ppc);
     c["regions"]["right"] = json!({ "x": 2.0 * h });
     c["analysis"]["time_step"] = json!(1.0 / steps as f64);
@@ -72,8 +92,8 @@ fn column(basis: &str, ny: usize, ppc: usize, steps: usize) -> Column {
     let mut max_over_steps = 0.0f64;
     let errors = |sim: &loam::simulation::Simulation, factor: f64| {
         let d = &sim.model.domains[0];
-        let ids = d.points_in_box(&[-1.0, -1.0], &[1.0, 2.0]);
-        assert_eq!(ids.len(), 2 * ny * ppc, "every material point is still in the grid");
+        let ids = d.points_in_box(&[-1.0, -1.0, -1.0][..dim], &[1.0, 2.0, 1.0][..dim]);
+        assert_eq!(ids.len(), (dim - 1) * 2 * ny * ppc, "every material point is still in the grid");
         let (mut sum, mut max, mut top) = (0.0, 0.0f64, 0.0f64);
         for &id in &ids {
             let x = d.point_quantity(id, PointQuantity::Position).expect("position");
@@ -94,6 +114,11 @@ fn column(basis: &str, ny: usize, ppc: usize, steps: usize) -> Column {
     }
     let (l2, _, top) = errors(&sim, 1.0);
     Column { l2, max_over_steps, top }
+}
+
+/// [`column_in`] in 2D.
+fn column(basis: &str, ny: usize, ppc: usize, steps: usize) -> Column {
+    column_in(2, basis, ny, ppc, steps)
 }
 
 /// Observed order between two grids refined by 2.
@@ -310,5 +335,38 @@ fn vibrating_bar_keeps_its_energy_on_smooth_bases() {
             assert!(p > 1.0, "{basis}: order {p}");
         }
         assert!(e[2] < 2e-4, "{basis}: finest period error {}", e[2]);
+    }
+}
+
+/// The compaction column in 3D (hex8 lattice, 2 × ny × 2 cells, 2 × 2 × 2 points per cell,
+/// rollers on the four sides: the same uniaxial compaction), 10 / 20 cells up, on every
+/// basis: the 3 × 3 × 3-node supports of the smooth bases remove the cell-crossing error as
+/// the 2D ones do. Asserted as in 2D: linear's settlement error above 5 %, the smooth bases'
+/// below 0.6 %, their L2 stress error below a fifth of linear's, and their largest stress
+/// deviation over the steps at least 5× below linear's.
+#[test]
+fn compaction_column_in_3d_on_smooth_bases() {
+    let exact = top_settlement();
+    for ny in [10, 20] {
+        let linear = column_in(3, "linear", ny, 8, 20);
+        for basis in ["linear", "gimp", "bspline2"] {
+            let r = if basis == "linear" { linear } else { column_in(3, basis, ny, 8, 20) };
+            let settlement = (r.top - exact) / exact;
+            println!(
+                "3D {basis:9} {ny:3} cells up: top settlement {:.6} m (exact {exact:.6}, {:+.3} %), L2 stress error \
+                 {:.3e}, largest deviation over the steps {:.4}",
+                r.top,
+                100.0 * settlement,
+                r.l2,
+                r.max_over_steps
+            );
+            if basis == "linear" {
+                assert!(settlement.abs() > 0.05, "linear MPM stalls above 5 % in 3D");
+            } else {
+                assert!(settlement.abs() < 0.006, "{basis}: settlement {settlement}");
+                assert!(r.l2 < 0.2 * linear.l2, "{basis}: L2 {} vs linear {}", r.l2, linear.l2);
+                assert!(5.0 * r.max_over_steps <= linear.max_over_steps, "{basis}: noise");
+            }
+        }
     }
 }
