@@ -20,7 +20,10 @@
 //! Run: `cargo bench --bench mpm_cantilever` (448, 1 792, 7 168 points), or choose sizes
 //! (material points or `nN`) with `LOAM_BENCH_MPM_SIZES=448,28672,n64`; threads with
 //! `LOAM_BENCH_THREADS=1,2`; the grid's shape functions with
-//! `LOAM_BENCH_BASES=linear,gimp,bspline2` (default linear). Nothing is asserted about times.
+//! `LOAM_BENCH_BASES=linear,gimp,bspline2` (default linear). `LOAM_BENCH_DIM=3` runs the beam
+//! in 3D instead (`7 × 1 × 1 m`, hex8 grid `[0, 8] × [−1.5, 1.5] × [0, 1]`, `n` cells through
+//! the depth and the width, 8 points per cell: `56 n³` points; sizes as `nN`). Nothing is
+//! asserted about times.
 
 mod common;
 
@@ -29,9 +32,34 @@ use loam::case::Case;
 use loam::simulation::Simulation;
 
 /// The case JSON for `n` cells through the thickness, `steps` steps of 0.01 s, on the grid
-/// basis `basis`.
-pub fn case_json(n: usize, steps: usize, basis: &str) -> String {
+/// basis `basis`, in 2D or (`dim = 3`) 3D.
+pub fn case_json(dim: usize, n: usize, steps: usize, basis: &str) -> String {
     let h = 1.0 / n as f64;
+    if dim == 3 {
+        return format!(
+            r#"{{
+  "description": "mpm_cantilever benchmark: benchmark 1 with MPM in 3D, dynamic, n = {n}",
+  "formulation": "3d",
+  "materials": {{ "beam": {{ "law": "neo_hookean", "density": 1000.0, "young_modulus": 9.0e7, "poisson_ratio": 0.0 }} }},
+  "domains": [ {{ "name": "beam", "type": "mpm", "material": "beam",
+     "grid": {{ "origin": [0.0, -1.5, 0.0], "size": [8.0, 3.0, 1.0], "cells": [{gx}, {gy}, {n}], "element": "hex8", "basis": "{basis}" }},
+     "material_points": {{ "cells": {{ "mesh": {{ "box": {{ "origin": [0.0, 0.0, 0.0], "size": [7.0, 1.0, 1.0], "cells": [{bx}, {n}, {n}], "element": "hex8" }} }},
+                           "points_per_cell": 8 }} }} }} ],
+  "regions": {{ "clamp": {{ "x": 0.0 }} }},
+  "boundary_conditions": [ {{ "region": "clamp", "displacement": [0.0, 0.0, 0.0] }} ],
+  "gravity": {{ "acceleration": [0.0, -9.81, 0.0] }},
+  "analysis": {{ "type": "dynamic", "time_step": 0.01, "end_time": {end},
+     "scheme": {{ "newmark": {{ "beta": 0.25, "gamma": 0.5 }} }} }},
+  "solver": {{ "residual_relative_tolerance": 1e-8, "residual_absolute_tolerance": 1e-6 }},
+  "monitors": [ {{ "name": "tip_uy", "type": "material_point_displacement", "point": [{tx}, 0.5, 0.5], "component": "y" }} ]
+}}"#,
+            gx = 8 * n,
+            gy = 3 * n,
+            bx = 7 * n,
+            end = 0.01 * (steps + 1) as f64,
+            tx = 7.0 - 0.25 * h,
+        );
+    }
     format!(
         r#"{{
   "description": "mpm_cantilever benchmark: benchmark 1 with MPM, dynamic, n = {n}",
@@ -67,11 +95,16 @@ fn parse_size(s: &str) -> Option<usize> {
     Some(((points / 28.0).sqrt()).round() as usize)
 }
 
-fn run(n: usize, threads: usize, steps: usize, basis: &str) -> StepTiming {
-    let case = Case::parse(&case_json(n, steps, basis)).expect("benchmark case parses");
+fn run(dim: usize, n: usize, threads: usize, steps: usize, basis: &str) -> StepTiming {
+    let case = Case::parse(&case_json(dim, n, steps, basis)).expect("benchmark case parses");
     let mut sim = Simulation::new(case).expect("benchmark case builds");
-    let label = if basis == "linear" { format!("n = {n}") } else { format!("n = {n} {basis}") };
-    let mut row = time_steps(&mut sim, &label, 28 * n * n, threads, 1, steps);
+    let label = format!(
+        "{}n = {n}{}",
+        if dim == 3 { "3D " } else { "" },
+        if basis == "linear" { String::new() } else { format!(" {basis}") }
+    );
+    let points = if dim == 3 { 56 * n * n * n } else { 28 * n * n };
+    let mut row = time_steps(&mut sim, &label, points, threads, 1, steps);
     row.extra.push(format!("{:.5}", sim.monitor_values()[0]));
     row
 }
@@ -91,12 +124,14 @@ fn main() {
         .ok()
         .map(|v| v.split(',').map(|s| s.trim().to_string()).collect())
         .unwrap_or_else(|| vec!["linear".into()]);
+    let dim: usize = std::env::var("LOAM_BENCH_DIM").ok().and_then(|v| v.parse().ok()).unwrap_or(2);
     let mut rows = Vec::new();
     for &n in &sizes {
-        eprintln!("n = {n} (h = {:.5} m), {} material points", 1.0 / n as f64, 28 * n * n);
+        let points = if dim == 3 { 56 * n * n * n } else { 28 * n * n };
+        eprintln!("n = {n} (h = {:.5} m), {points} material points", 1.0 / n as f64);
         for basis in &bases {
             for &th in &threads {
-                rows.push(run(n, th, steps, basis));
+                rows.push(run(dim, n, th, steps, basis));
             }
         }
     }

@@ -21,10 +21,10 @@
 //!   "Analysis and reduction of quadrature errors in the material point method (MPM)",
 //!   IJNME 76:922–948).
 //!
-//! Both smooth bases are tensor products over a structured lattice of quad4 cells. A point
-//! whose nearest node is `i_c` has non-zero functions on the nodes `i_c − 1, i_c, i_c + 1`
-//! in each direction (for GIMP because `l ≤ ½`): the point's **support**, a window of 3 × 3
-//! nodes whose block the point's stiffness fills. Windows start at `w = clamp(i_c − 1, 0,
+//! Both smooth bases are tensor products over a structured lattice of quad4 (2D) or hex8 (3D)
+//! cells. A point whose nearest node is `i_c` has non-zero functions on the nodes
+//! `i_c − 1, i_c, i_c + 1` in each direction (for GIMP because `l ≤ ½`): the point's
+//! **support**, a window of 3 × 3 (3 × 3 × 3) nodes whose block the point's stiffness fills. Windows start at `w = clamp(i_c − 1, 0,
 //! n − 2)`, so every support holds grid nodes only.
 //!
 //! **Boundaries.** At the lattice's edge the function of the missing node `−1` (or `n + 1`)
@@ -861,8 +861,7 @@ mod tests {
     fn smooth_support_tangents_match_finite_differences_in_3d() {
         use loam_fem::element::ElementType;
         for basis in BASES {
-            let mut grid =
-                crate::grid::Grid::new([0.2, 0.0, -0.3], [2.0, 1.6, 1.2], [4, 4, 3], ElementType::Hex8);
+            let mut grid = crate::grid::Grid::new([0.2, 0.0, -0.3], [2.0, 1.6, 1.2], [4, 4, 3], ElementType::Hex8);
             grid.set_basis(basis).unwrap();
             assert_eq!(grid.support_len(), 27);
             // lattice coordinates (0.08, 0.3, 0.2), (1.02, 0.9, 0.99), (0.55, 1.45, 1.3)

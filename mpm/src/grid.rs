@@ -243,7 +243,16 @@ impl Grid {
         let affine = (0..mesh.num_cells()).map(|c| affine_cell(&mesh, c)).collect();
         let moved = vec![false; mesh.num_cells()];
         let mixed_rule = mesh.element.gauss_points_mixed();
-        Self { reference: mesh.coords.clone(), mesh, locator, affine, moved, moved_bins: None, smooth: None, mixed_rule }
+        Self {
+            reference: mesh.coords.clone(),
+            mesh,
+            locator,
+            affine,
+            moved,
+            moved_bins: None,
+            smooth: None,
+            mixed_rule,
+        }
     }
 
     /// Gives the grid the shape functions `basis` ([`crate::basis`]): a smooth one needs a
@@ -470,7 +479,9 @@ impl Grid {
             if !self.has_moved() {
                 lattice.projection_rule(s, formulation, thickness, rule);
             } else {
-                for (g, (point, weight)) in rule.iter_mut().zip(lattice.projection_points(s)).take(lattice.support_len()) {
+                for (g, (point, weight)) in
+                    rule.iter_mut().zip(lattice.projection_points(s)).take(lattice.support_len())
+                {
                     let (_, mut geometry, det) = self.moved_lattice_functions(lattice, point, [0.0; 3], formulation);
                     geometry.weight = weight * det * formulation.measure_factor(thickness, geometry.radius);
                     *g = geometry;
@@ -491,12 +502,7 @@ impl Grid {
     }
 
     /// [`Grid::lattice_map`] from the map's functions `values` on `support`, already evaluated.
-    fn map_from(
-        &self,
-        lattice: &SmoothLattice,
-        support: usize,
-        values: &SupportValues,
-    ) -> ([f64; 2], [[f64; 2]; 2]) {
+    fn map_from(&self, lattice: &SmoothLattice, support: usize, values: &SupportValues) -> ([f64; 2], [[f64; 2]; 2]) {
         let mut x = [0.0; 2];
         let mut jacobian = [[0.0; 2]; 2];
         for (v, &a) in values.iter().zip(lattice.support(support)) {

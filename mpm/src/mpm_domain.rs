@@ -674,9 +674,9 @@ impl MpmDomain {
                     }
                     // the support's Gauss rule in the step's configuration, for the projection
                     let rule_len = match pressure_dofs {
-                        Some(_) => grid.projection_rule(cell, formulation, thickness, rule).map_err(
-                            |err| DomainError { domain: name.clone(), element: cell, message: err.to_string() },
-                        )?,
+                        Some(_) => grid.projection_rule(cell, formulation, thickness, rule).map_err(|err| {
+                            DomainError { domain: name.clone(), element: cell, message: err.to_string() }
+                        })?,
                         None => 0,
                     };
                     let cell_rule = &rule[..rule_len];
