@@ -467,6 +467,34 @@ fn smooth_basis_where_it_cannot_act_is_refused_naming_the_key() {
         });
         assert_eq!(code, 0, "{case} on {basis}: {msg}");
     }
+    // 3D: a hex8 grid takes the smooth bases; coupled to a structure it is refused (the
+    // supports follow structures in 2D only)
+    let (code, msg) =
+        check("basis-3d", "cantilever_mpm_3d.json", &|j| j["domains"][0]["grid"]["basis"] = json!("gimp"));
+    assert_eq!(code, 0, "3D cantilever on gimp: {msg}");
+    let coupled_3d = json!({
+        "description": "a 3D smooth grid tied to a wall (refused)",
+        "formulation": "3d",
+        "materials": { "m": { "law": "linear_elastic", "density": 1000.0, "young_modulus": 1.0e6, "poisson_ratio": 0.3 } },
+        "domains": [
+            { "name": "soil", "type": "mpm", "material": "m",
+              "grid": { "origin": [0.0, 0.0, 0.0], "size": [1.0, 1.0, 1.0], "cells": [4, 4, 4], "element": "hex8",
+                        "basis": "bspline2" },
+              "material_points": { "cells": { "mesh": { "box": { "origin": [0.0, 0.0, 0.0], "size": [1.0, 0.5, 1.0],
+                                                                "cells": [4, 2, 4], "element": "hex8" } },
+                                             "points_per_cell": 8 } } },
+            { "name": "wall", "material": "m",
+              "mesh": { "box": { "origin": [1.0, 0.0, 0.0], "size": [0.25, 1.0, 1.0], "cells": [1, 4, 4], "element": "hex8" } } }
+        ],
+        "interfaces": [ { "name": "face", "soil": "soil", "structure": "wall", "region": "face" } ],
+        "regions": { "face": { "x": 1.0 } },
+        "analysis": { "type": "static", "time_step": 1.0, "end_time": 1.0 }
+    });
+    expect_bad(
+        "3D smooth grid coupled to a structure",
+        check_file(&write_case("basis-3d-coupled", &coupled_3d)),
+        &["interfaces[0].soil", "3D grid on the smooth basis", "linear"],
+    );
     expect_bad(
         "filled_cells on a smooth grid",
         check("basis-filled", "cantilever_mpm.json", &|j| {

@@ -757,8 +757,19 @@ mod tests {
             let (mut f1, mut k1) = (vec![0.0; nd], vec![0.0; nd * nd]);
             let (mut f2, mut k2) = (vec![0.0; nd], vec![0.0; nd * nd]);
             solid_element(&ctx, &disp, &geometry, &f0s, &f0s, &[], &mut [], &mut out, &mut f1, Some(&mut k1)).unwrap();
-            element_general::<MAX_DOFS>(&ctx, &disp, &geometry, &f0s, &f0s, &[], &mut [], &mut out, &mut f2, Some(&mut k2))
-                .unwrap();
+            element_general::<MAX_DOFS>(
+                &ctx,
+                &disp,
+                &geometry,
+                &f0s,
+                &f0s,
+                &[],
+                &mut [],
+                &mut out,
+                &mut f2,
+                Some(&mut k2),
+            )
+            .unwrap();
             assert_eq!(f1, f2, "{element:?} {formulation:?}: internal force");
             assert_eq!(k1, k2, "{element:?} {formulation:?}: tangent");
         }
