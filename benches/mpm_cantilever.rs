@@ -34,32 +34,30 @@ use loam::simulation::Simulation;
 /// The case JSON for `n` cells through the thickness, `steps` steps of 0.01 s, on the grid
 /// basis `basis`, in 2D or (`dim = 3`) 3D.
 pub fn case_json(dim: usize, n: usize, steps: usize, basis: &str) -> String {
-    let h = 1.0 / n as f64;
-    if dim == 3 {
-        return format!(
-            r#"{{
-  "description": "mpm_cantilever benchmark: benchmark 1 with MPM in 3D, dynamic, n = {n}",
-  "formulation": "3d",
-  "materials": {{ "beam": {{ "law": "neo_hookean", "density": 1000.0, "young_modulus": 9.0e7, "poisson_ratio": 0.0 }} }},
-  "domains": [ {{ "name": "beam", "type": "mpm", "material": "beam",
-     "grid": {{ "origin": [0.0, -1.5, 0.0], "size": [8.0, 3.0, 1.0], "cells": [{gx}, {gy}, {n}], "element": "hex8", "basis": "{basis}" }},
-     "material_points": {{ "cells": {{ "mesh": {{ "box": {{ "origin": [0.0, 0.0, 0.0], "size": [7.0, 1.0, 1.0], "cells": [{bx}, {n}, {n}], "element": "hex8" }} }},
-                           "points_per_cell": 8 }} }} }} ],
-  "regions": {{ "clamp": {{ "x": 0.0 }} }},
-  "boundary_conditions": [ {{ "region": "clamp", "displacement": [0.0, 0.0, 0.0] }} ],
-  "gravity": {{ "acceleration": [0.0, -9.81, 0.0] }},
-  "analysis": {{ "type": "dynamic", "time_step": 0.01, "end_time": {end},
-     "scheme": {{ "newmark": {{ "beta": 0.25, "gamma": 0.5 }} }} }},
-  "solver": {{ "residual_relative_tolerance": 1e-8, "residual_absolute_tolerance": 1e-6 }},
-  "monitors": [ {{ "name": "tip_uy", "type": "material_point_displacement", "point": [{tx}, 0.5, 0.5], "component": "y" }} ]
-}}"#,
-            gx = 8 * n,
-            gy = 3 * n,
-            bx = 7 * n,
-            end = 0.01 * (steps + 1) as f64,
-            tx = 7.0 - 0.25 * h,
-        );
+    let case = case_json_2d(n, steps, basis);
+    if dim != 3 {
+        return case;
     }
+    // the same beam 1 m wide along z, n cells across, 8 points per cell
+    use serde_json::json;
+    let mut v: serde_json::Value = serde_json::from_str(&case).expect("the 2D case is JSON");
+    v["formulation"] = json!("3d");
+    v.as_object_mut().expect("an object").remove("thickness");
+    let domain = &mut v["domains"][0];
+    domain["grid"] = json!({ "origin": [0.0, -1.5, 0.0], "size": [8.0, 3.0, 1.0], "cells": [8 * n, 3 * n, n],
+                             "element": "hex8", "basis": basis });
+    domain["material_points"]["cells"] = json!({ "mesh": { "box": { "origin": [0.0, 0.0, 0.0], "size": [7.0, 1.0, 1.0],
+                                                                   "cells": [7 * n, n, n], "element": "hex8" } },
+                                                 "points_per_cell": 8 });
+    v["boundary_conditions"][0]["displacement"] = json!([0.0, 0.0, 0.0]);
+    v["gravity"]["acceleration"] = json!([0.0, -9.81, 0.0]);
+    v["monitors"][0]["point"] = json!([7.0 - 0.25 / n as f64, 0.5, 0.5]);
+    v.to_string()
+}
+
+/// [`case_json`] in 2D (plane strain).
+fn case_json_2d(n: usize, steps: usize, basis: &str) -> String {
+    let h = 1.0 / n as f64;
     format!(
         r#"{{
   "description": "mpm_cantilever benchmark: benchmark 1 with MPM, dynamic, n = {n}",

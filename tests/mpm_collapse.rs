@@ -289,8 +289,7 @@ fn bui2008_runout_at_weak_damping_does_not_depend_on_it() {
         let v: Vec<f64> = runs.iter().map(|(_, c)| f(c)).collect();
         v.iter().copied().fold(f64::MIN, f64::max) - v.iter().copied().fold(f64::MAX, f64::min)
     };
-    let (runout, surface, height) =
-        (spread(&|c| c.runout), spread(&|c| c.surface_rms), spread(&|c| c.height_at_wall));
+    let (runout, surface, height) = (spread(&|c| c.runout), spread(&|c| c.surface_rms), spread(&|c| c.height_at_wall));
     let mean_runout = runs.iter().map(|(_, c)| c.runout).sum::<f64>() / runs.len() as f64;
     println!(
         "spread over τ: runout {:.2} % (printed), surface {:.2} mm (tolerance 1 mm), height at the wall {:.3} % (0.1 %)",
