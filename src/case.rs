@@ -1062,6 +1062,18 @@ pub enum MonitorSpec {
         #[serde(default)]
         domain: Option<String>,
     },
+    /// Linear momentum `∫ ρ v dV` (kg m/s; per unit thickness in plane problems), of every
+    /// domain or of the domain (FEM domain or MPM body) named `domain`: with an
+    /// `interface_force` monitor, the impulse balance of a structure or a body.
+    Momentum {
+        /// Column name.
+        name: String,
+        /// Domain or body (default: all).
+        #[serde(default)]
+        domain: Option<String>,
+        /// Component.
+        component: Component,
+    },
     /// Total stored work of internal forces (J): the strain energy for elastic laws; of
     /// every domain or of the domain (FEM domain or MPM body) named `domain`.
     StrainEnergy {
@@ -1103,6 +1115,7 @@ impl MonitorSpec {
             | MonitorSpec::MaterialMass { name, .. }
             | MonitorSpec::InterfaceForce { name, .. }
             | MonitorSpec::KineticEnergy { name, .. }
+            | MonitorSpec::Momentum { name, .. }
             | MonitorSpec::StrainEnergy { name, .. } => name,
         }
     }

@@ -108,6 +108,13 @@ pub enum MonitorKind {
         /// `None`: every domain.
         domain: Option<(usize, String)>,
     },
+    /// Linear momentum, total or of one domain or body (index, name).
+    Momentum {
+        /// `None`: every domain.
+        domain: Option<(usize, String)>,
+        /// Component index (`None`: magnitude).
+        component: Option<usize>,
+    },
     /// Stored work of internal forces, total or of one domain.
     StrainEnergy {
         /// `None`: every domain.
@@ -206,6 +213,18 @@ impl Monitor {
             MonitorKind::StrainEnergy { domain: None } => model.strain_energy(),
             MonitorKind::KineticEnergy { domain: Some((k, name)) } => {
                 model.domains[*k].energies(name, &model.committed.v).map_or(f64::NAN, |e| e.0)
+            }
+            MonitorKind::Momentum { domain, component } => {
+                let v = &model.committed.v;
+                let p = match domain {
+                    Some((k, name)) => model.domains[*k].momentum(Some(name), v).unwrap_or([f64::NAN; 3]),
+                    None => model
+                        .domains
+                        .iter()
+                        .filter_map(|d| d.momentum(None, v))
+                        .fold([0.0; 3], |a, q| std::array::from_fn(|i| a[i] + q[i])),
+                };
+                pick(&p, dim, 0, *component)
             }
             MonitorKind::StrainEnergy { domain: Some((k, name)) } => {
                 model.domains[*k].energies(name, &model.committed.v).map_or(f64::NAN, |e| e.1)

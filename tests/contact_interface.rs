@@ -300,6 +300,61 @@ fn disk_dropped_on_soil_transfers_the_contact_impulse() {
     assert_no_soil_inside_disk(&sim, "disk on soil", 0.3, 0.28);
 }
 
+/// Issue 25, item 5 (an MPM body on an FEM structure): an elastic MPM disk (R = 0.05 m,
+/// points on a 5 mm lattice, E = 1 MPa) dropped from 3 cm onto an elastic FEM slab (E = 50 MPa,
+/// base fixed) through frictionless contact on the slab's top facets
+/// (`cases/mpm_disk_on_fem_slab.json`, 0.3 s; the interface points ride on the FEM facets and
+/// take the disk's grid functions). Checked:
+/// - the impulse of the contact force on the disk, `−∫ F dt` (F: the force of the disk on
+///   the slab), equals the change of the disk's momentum plus its weight's impulse,
+///   `Δp + m g T` (the `momentum` monitor `Σ m_p v_p`, `m = Σ m_p`), within 1 %;
+/// - the energy does not grow: kinetic (disk and slab) + stored + the disk's potential
+///   `m g Δy_c` (its centre of mass from `∫ p/m dt`) never exceeds its initial value by more
+///   than 1 % of the drop's `m g h`;
+/// - the disk bounces (at least two impacts) and its lowest point never goes more than 1 mm
+///   below the slab's top.
+///
+/// About 3 s.
+#[test]
+fn mpm_disk_dropped_on_fem_slab_transfers_the_contact_impulse() {
+    let (sim, h) = run(case("mpm_disk_on_fem_slab.json"));
+    let col = |name: &str| monitor(&sim, name);
+    let (f, p, m) = (col("contact_fy"), col("disk_py"), col("disk_mass"));
+    let (ke_disk, ke_slab, stored, bottom) =
+        (col("disk_kinetic_energy"), col("slab_kinetic_energy"), col("strain_energy"), col("disk_bottom_uy"));
+    let mass = h[0].1[m];
+    let g = 9.81;
+    let trapezoid = |k: usize| -> f64 { h.windows(2).map(|w| 0.5 * (w[0].1[k] + w[1].1[k]) * (w[1].0 - w[0].0)).sum() };
+    let t_end = h.last().unwrap().0;
+    let impacts = h.windows(2).filter(|w| w[0].1[f] == 0.0 && w[1].1[f] < 0.0).count();
+    println!("MPM disk on FEM slab: mass {mass:.4} kg/m, {impacts} impacts in {t_end:.2} s");
+    report(
+        "MPM disk on FEM slab: impulse of the contact force on the disk vs its momentum change plus the weight's impulse [N s/m]",
+        -trapezoid(f),
+        h.last().unwrap().1[p] - h[0].1[p] + mass * g * t_end,
+        0.01,
+    );
+    // the energy with the disk's potential: its centre of mass moves by ∫ p/m dt
+    let drop = mass * g * 0.03;
+    let mut y_c = 0.0;
+    let mut largest = f64::MIN;
+    for (k, row) in h.iter().enumerate() {
+        if k > 0 {
+            y_c += 0.5 * (h[k - 1].1[p] + row.1[p]) / mass * (row.0 - h[k - 1].0);
+        }
+        largest = largest.max(row.1[ke_disk] + row.1[ke_slab] + row.1[stored] + mass * g * y_c);
+    }
+    println!(
+        "MPM disk on FEM slab: largest energy above the initial {largest:.5} J (tolerance {:.5} J: 1 % of m g h)",
+        0.01 * drop
+    );
+    assert!(largest <= 0.01 * drop, "the energy grows by {largest} J");
+    assert!(impacts >= 2, "the disk bounces: {impacts} impacts");
+    let lowest = h.iter().map(|r| 0.13 + r.1[bottom]).fold(f64::MAX, f64::min);
+    println!("MPM disk on FEM slab: lowest point of the disk's bottom at y = {lowest:.5} m (slab top 0.1 m)");
+    assert!(lowest > 0.1 - 1e-3, "the disk entered the slab: {lowest}");
+}
+
 /// Issue 25, item 3 (several structures with interfaces at once): two such disks, each with
 /// its own interface on the same soil (`cases/disk_drop_two_on_mpm_soil.json`: frictionless
 /// and Coulomb μ = 0.3), dropped from 3 and 5 cm: each disk's impulse balance within 1 %, no

@@ -326,6 +326,13 @@ pub trait Domain: Send + Sync {
     /// Stored work of the internal forces (strain energy for elastic laws), committed.
     fn strain_energy(&self) -> f64;
 
+    /// Linear momentum `∫ ρ v dV` (kg m/s, per unit thickness in plane problems) of the part
+    /// of this domain named `name` (the domain itself, or one of its bodies; `None`: the whole
+    /// domain) at the nodal velocities `v`; `None` if it has no such part or carries no mass.
+    fn momentum(&self, _name: Option<&str>, _v: &[f64]) -> Option<[f64; 3]> {
+        None
+    }
+
     /// Kinetic and stored energy of the part of this domain named `name` (the domain
     /// itself, or one of its bodies), if it has one.
     fn energies(&self, name: &str, v: &[f64]) -> Option<(f64, f64)> {

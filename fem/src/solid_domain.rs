@@ -410,6 +410,30 @@ impl Domain for FemDomain {
         self.work.iter().sum()
     }
 
+    /// `Σ_e Σ_ab M_ab v_b`: the element mass matrices (consistent or lumped) applied to the
+    /// nodal velocities and summed, `∫ ρ v dV`.
+    fn momentum(&self, name: Option<&str>, v: &[f64]) -> Option<[f64; 3]> {
+        if name.is_some_and(|n| n != self.name) {
+            return None;
+        }
+        let nn = self.element.num_nodes();
+        let dim = self.dim();
+        let mut p = [0.0; 3];
+        for e in 0..self.mesh.num_cells() {
+            let cell = self.mesh.cell(e);
+            let me = &self.mass[e * nn * nn..(e + 1) * nn * nn];
+            for a in 0..nn {
+                for b in 0..nn {
+                    let gb = self.node_ids[cell[b]] * dim;
+                    for (i, pi) in p.iter_mut().enumerate().take(dim) {
+                        *pi += me[a * nn + b] * v[gb + i];
+                    }
+                }
+            }
+        }
+        Some(p)
+    }
+
     fn boundary_facets(&self) -> Vec<Vec<usize>> {
         self.mesh.boundary_facets().into_iter().map(|f| f.into_iter().map(|a| self.node_ids[a]).collect()).collect()
     }

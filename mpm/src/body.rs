@@ -582,6 +582,15 @@ impl Body {
         }
     }
 
+    /// Linear momentum `Σ_p m_p v_p` (kg m/s).
+    pub fn momentum(&self) -> [f64; 3] {
+        let mut p = [0.0; 3];
+        for (m, v) in self.points.mass.iter().zip(&self.points.velocity) {
+            (0..3).for_each(|i| p[i] += m * v[i]);
+        }
+        p
+    }
+
     /// Kinetic energy `Σ_p ½ m_p |v_p|²`.
     pub fn kinetic_energy(&self) -> f64 {
         (0..self.points.len())

@@ -992,6 +992,21 @@ impl Domain for MpmDomain {
         self.bodies.iter().map(|b| b.points.work.iter().sum::<f64>()).sum()
     }
 
+    fn momentum(&self, name: Option<&str>, _v: &[f64]) -> Option<[f64; 3]> {
+        let bodies: Vec<&Body> = match name {
+            None => self.bodies.iter().collect(),
+            Some(n) => self.bodies.iter().filter(|b| b.name == n).collect(),
+        };
+        (!bodies.is_empty()).then(|| {
+            let mut p = [0.0; 3];
+            for b in bodies {
+                let q = b.momentum();
+                (0..3).for_each(|i| p[i] += q[i]);
+            }
+            p
+        })
+    }
+
     fn energies(&self, name: &str, _v: &[f64]) -> Option<(f64, f64)> {
         let b = self.bodies.iter().find(|b| b.name == name)?;
         Some((b.kinetic_energy(), b.points.work.iter().sum()))

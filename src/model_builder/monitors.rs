@@ -138,6 +138,24 @@ pub(super) fn build(
             MonitorSpec::KineticEnergy { domain, .. } => {
                 MonitorKind::KineticEnergy { domain: energy_domain(model, &loc, domain.as_deref())? }
             }
+            MonitorSpec::Momentum { domain, component, .. } => MonitorKind::Momentum {
+                domain: match domain {
+                    None => None,
+                    Some(name) => {
+                        let v = &model.committed.v;
+                        let k = model.domains.iter().position(|d| d.momentum(Some(name), v).is_some()).ok_or_else(
+                            || {
+                                CaseError::new(
+                                    format!("{loc}.domain"),
+                                    format!("no domain or body named '{name}' with mass"),
+                                )
+                            },
+                        )?;
+                        Some((k, name.clone()))
+                    }
+                },
+                component: component_index(&format!("{loc}.component"), *component, dim)?,
+            },
             MonitorSpec::StrainEnergy { domain, .. } => {
                 MonitorKind::StrainEnergy { domain: energy_domain(model, &loc, domain.as_deref())? }
             }
@@ -191,5 +209,6 @@ pub fn monitor_unit(kind: &MonitorKind) -> &'static str {
         MonitorKind::MaterialVolume { .. } => "m3",
         MonitorKind::MaterialMass { .. } => "kg",
         MonitorKind::KineticEnergy { .. } | MonitorKind::StrainEnergy { .. } => "J",
+        MonitorKind::Momentum { .. } => "kg m/s",
     }
 }
