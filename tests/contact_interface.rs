@@ -291,11 +291,18 @@ fn assert_no_soil_inside_disk(sim: &Simulation, label: &str, cx: f64, cy: f64) {
 /// of the mesh and `v` the centre node's velocity (the disk is 500 times stiffer than the
 /// soil: it moves as a rigid body), within 1 % (measured 1.1e-4); it bounces (separates and
 /// comes back: at least two impacts, measured four); no material point lies inside the disk
-/// (the square inscribed in its rim, more than 1 mm inside it) at the end. About 6 s.
+/// (the square inscribed in its rim, more than 1 mm inside it) at the end. Before the
+/// impact its `momentum` monitor is `−m g t` (to 1e-9). About 6 s.
 #[test]
 fn disk_dropped_on_soil_transfers_the_contact_impulse() {
     let (sim, h) = run(case("disk_drop_on_mpm_soil.json"));
-    let impacts = check_disk_impulse(&sim, &h, "disk on soil", disk_mass("disk_r0.05.msh"), "contact_fy", "disk_vy");
+    let mass = disk_mass("disk_r0.05.msh");
+    // the `momentum` monitor of the FEM disk (its mass matrix on the nodal velocities) in
+    // free fall, before the contact force appears: −m g t
+    let (p, f) = (monitor(&sim, "disk_py"), monitor(&sim, "contact_fy"));
+    let falling = h.iter().take_while(|r| r.1[f] == 0.0).last().expect("a free-fall row");
+    report("FEM disk in free fall: momentum [N s/m]", falling.1[p], -mass * 9.81 * falling.0, 1e-9);
+    let impacts = check_disk_impulse(&sim, &h, "disk on soil", mass, "contact_fy", "disk_vy");
     assert!(impacts >= 2, "the disk bounces: {impacts} impacts");
     assert_no_soil_inside_disk(&sim, "disk on soil", 0.3, 0.28);
 }
