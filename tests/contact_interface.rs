@@ -290,7 +290,7 @@ fn assert_no_soil_inside_disk(sim: &Simulation, label: &str, cx: f64, cy: f64) {
 /// force equals the change of the disk's momentum, `∫ F dt = m (Δv + g T)` with `m = ρ A`
 /// of the mesh and `v` the centre node's velocity (the disk is 500 times stiffer than the
 /// soil: it moves as a rigid body), within 1 % (measured 1.1e-4); it bounces (separates and
-/// comes back: at least two impacts, measured four); no material point lies inside the disk
+/// comes back: at least two impacts, measured three); no material point lies inside the disk
 /// (the square inscribed in its rim, more than 1 mm inside it) at the end. Before the
 /// impact its `momentum` monitor is `−m g t` (to 1e-9). About 6 s.
 #[test]
@@ -318,8 +318,8 @@ fn disk_dropped_on_soil_transfers_the_contact_impulse() {
 /// - the energy does not grow: kinetic (disk and slab) + stored + the disk's potential
 ///   `m g Δy_c` (its centre of mass from `∫ p/m dt`) never exceeds its initial value by more
 ///   than 1 % of the drop's `m g h`;
-/// - the disk bounces (at least two impacts) and its lowest point never goes more than 1 mm
-///   below the slab's top.
+/// - the disk bounces (at least two impacts) and its bottom point's centre stays above the
+///   slab's top.
 ///
 /// About 3 s.
 #[test]
@@ -357,9 +357,74 @@ fn mpm_disk_dropped_on_fem_slab_transfers_the_contact_impulse() {
     );
     assert!(largest <= 0.01 * drop, "the energy grows by {largest} J");
     assert!(impacts >= 2, "the disk bounces: {impacts} impacts");
-    let lowest = h.iter().map(|r| 0.13 + r.1[bottom]).fold(f64::MAX, f64::min);
-    println!("MPM disk on FEM slab: lowest point of the disk's bottom at y = {lowest:.5} m (slab top 0.1 m)");
-    assert!(lowest > 0.1 - 1e-3, "the disk entered the slab: {lowest}");
+    // the bottom point's centre (its initial height from its final position and displacement)
+    let (x0, _) = common::nearest_point(&sim, &[0.3, 0.13]);
+    let lowest = h.iter().map(|r| x0[1] + r.1[bottom]).fold(f64::MAX, f64::min);
+    println!(
+        "MPM disk on FEM slab: the bottom point (centre at y = {:.4} m at the start) comes down to y = {lowest:.5} m \
+         (slab top 0.1 m)",
+        x0[1]
+    );
+    assert!(lowest > 0.1, "the disk's bottom point entered the slab: {lowest}");
+}
+
+/// The Hertz case (`cases/hertz_cylinder_on_mpm.json`) on a grid of `n` cells across (h =
+/// 1/n m): the contact half-width from the interface points' pressure at the last step,
+/// `a = 2 √(∫ p x² dx / ∫ p dx)` (the second moment of Hertz's `p₀ √(1 − x²/a²)` is `a²/4`;
+/// the points' `x` spacing as weights), the load per unit length `P` (twice the half model's
+/// `contact_fy`) and Hertz's `a_H = √(4 P R/(π E*))`, `1/E* = 2 (1 − ν²)/E`.
+fn hertz_half_width(n: usize) -> (f64, f64, f64) {
+    let mut json = case_json("hertz_cylinder_on_mpm.json");
+    json["domains"][0]["grid"]["cells"] = serde_json::json!([n, (1.06 * n as f64).round() as usize]);
+    json["domains"][0]["material_points"]["cells"]["mesh"]["rectangle"]["cells"] = serde_json::json!([n, n]);
+    let mesh = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/meshes/hertz_indenter.msh");
+    json["domains"][1]["mesh"]["gmsh"] = serde_json::json!(mesh);
+    let (sim, h) = run(parse(json));
+    let load = 2.0 * h.last().unwrap().1[monitor(&sim, "contact_fy")];
+    let interface = sim.model.domains.iter().find(|d| d.name() == "arc_contact").expect("the contact");
+    let out = interface.outputs(&sim.model.committed, false).remove(0).output;
+    let pressure = &out.point_fields.iter().find(|f| f.name == "normal_traction").expect("pressure").values;
+    let mut points: Vec<(f64, f64)> = out.points.iter().zip(pressure).map(|(x, &p)| (x[0], p.max(0.0))).collect();
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (mut force, mut moment) = (0.0, 0.0);
+    for k in 0..points.len() {
+        let (lo, hi) = (points[k.saturating_sub(1)].0, points[(k + 1).min(points.len() - 1)].0);
+        let w = 0.5 * (hi - lo) * if k == 0 || k + 1 == points.len() { 2.0 } else { 1.0 };
+        force += w * points[k].1;
+        moment += w * points[k].1 * points[k].0.powi(2);
+    }
+    let (e, nu, radius) = (1.0e6, 0.3, 1.0);
+    let e_star = e / (2.0 * (1.0 - nu * nu));
+    let hertz = (4.0 * load * radius / (std::f64::consts::PI * e_star)).sqrt();
+    println!(
+        "Hertz, h = {:.4} m: P = {load:.1} N/m (from the points' pressure {:.1}), a = {:.5} m, Hertz {hertz:.5} m ({:+.2} %)",
+        1.0 / n as f64,
+        2.0 * force,
+        2.0 * (moment / force).sqrt(),
+        100.0 * (2.0 * (moment / force).sqrt() / hertz - 1.0)
+    );
+    (2.0 * (moment / force).sqrt(), hertz, load)
+}
+
+/// Issue 25, item 5 (the Hertz contact half-width of an elastic body on an elastic MPM
+/// half-space at small load): an elastic cylinder (R = 1 m) pressed on an elastic MPM block
+/// of the same material by frictionless contact (`cases/hertz_cylinder_on_mpm.json`, a/R =
+/// 0.11–0.13 at the last step) on grids of h = 2 / 1 / 0.5 cm: the half-width from the
+/// points' pressure against Hertz's for the measured load. Measured +8.7 / +2.6 / +0.07 %
+/// (observed orders 1.7 and 5). Asserted: within 5 % at h ≤ 1 cm (the issue's tolerance), the
+/// error falling with h. The contact starts where the cylinder meets the points' material
+/// (the gap of a point the soil first reaches is its distance to the points' squares): with the
+/// gap measured from the grid the contact began a cell early and the half-width came out 65 %
+/// too wide at h = 1 cm. About 11 s.
+#[test]
+fn hertz_half_width_of_a_cylinder_on_mpm_soil() {
+    let runs: Vec<(f64, f64, f64)> = [50, 100, 200].into_iter().map(hertz_half_width).collect();
+    let errors: Vec<f64> = runs.iter().map(|(a, hertz, _)| (a / hertz - 1.0).abs()).collect();
+    for (k, (a, hertz, _)) in runs.iter().enumerate().skip(1) {
+        report(&format!("Hertz half-width at h = {} cm [m]", [2.0, 1.0, 0.5][k]), *a, *hertz, 0.05);
+    }
+    println!("Hertz half-width errors at h = 2 / 1 / 0.5 cm: {errors:?}");
+    assert!(errors[1] < errors[0] && errors[2] < errors[1], "the error falls with h: {errors:?}");
 }
 
 /// Issue 25, item 3 (several structures with interfaces at once): two such disks, each with

@@ -51,9 +51,24 @@
 //! linear fields and keep the partition of unity. Otherwise (no such cell; a support
 //! without soil) the point is skipped for the step and its carried gap reset to zero: there
 //! is no soil there to tie to. A contact point whose soil does not press (`g_N ≥ 0`) is open
-//! and carries no gap either: separation is measured within the step, not remembered. The
-//! set of active points and their nodes is the domain's sparsity pattern: `begin_step`
-//! reports a change.
+//! and carries no gap either: separation is measured within the step, not remembered (a tie;
+//! a contact with the soil's points tracks it, below). The set of active points and their
+//! nodes is the domain's sparsity pattern: `begin_step` reports a change.
+//!
+//! **Open points** (contact). The grid's field reaches a cell beyond the soil's material, so
+//! a contact point whose gap started at zero when the soil's nodes first reached it closed up
+//! to a cell before the structure met the soil (measured: a disk dropped on soil met it 9.3 mm,
+//! 0.93 of a cell, early; a cylinder pressed on a half-space had a contact 65 % wider than
+//! Hertz's). A contact therefore holds the soil's material points at the start of each step
+//! ([`loam_mpm::mpm_domain::SoilPoints`]: their positions and the squares of their sizes, as
+//! the surface monitors see them) and gives an open point the normal gap
+//! `g_n = d n`, `d` its distance along its facet's outward normal to the nearest square the
+//! normal crosses ([`soil_distance`]; 0 inside the soil's squares, two cells if none is
+//! crossed): when the soil's nodes first reach the point, and at every later step the smaller
+//! of `d` and the separation it carried (an open point keeps its normal gap `max(g_N, 0) n`
+//! at the end of a step), so that material arriving beside it is seen and a point that has
+//! just opened does not need to travel back. A closed point carries its penetration as
+//! before. The tie starts at zero (its soil is bonded where it is).
 //!
 //! **Penalty.** `β` (Pa/m, β_N of contact) is the case's `interfaces[].penalty`, by default
 //! `DEFAULT_TIE_PENALTY_FACTOR · E_soil / h` (the stiffest body's Young's modulus over the
@@ -78,10 +93,11 @@
 //! `soil_forces`, and the `interface_force` monitor over the facet nodes, include it.
 
 use loam_fem::assembly::BlockLayout;
+use loam_fem::domain::PointExtent;
 use loam_fem::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NamedOutput, NodalState};
 use loam_fem::formulation::Formulation;
 use loam_mpm::grid::Grid;
-use loam_mpm::mpm_domain::SoilNodes;
+use loam_mpm::mpm_domain::{SoilNodes, SoilPoints};
 
 use crate::interface::{InterfaceError, Structure};
 use crate::interface_law::{InterfaceLaw, LawResponse, PointState};
@@ -141,6 +157,10 @@ struct TieState {
     states: Vec<PointState>,
     force: [f64; 2],
     energy: f64,
+    /// Per point, whether its gap is tracked from the soil's surface (contact with the soil's
+    /// points; absent in older checkpoints).
+    #[serde(default)]
+    tracked: Vec<bool>,
 }
 
 /// A penalty tie or contact between a structure's facets and a fixed grid (see the module
@@ -176,6 +196,12 @@ pub struct InterfacePoints {
     force: [f64; 2],
     /// Penalty energy `Σ_p w_p ψ_p` at the last converged step ([`LawResponse::energy`]).
     energy: f64,
+    /// The soil's material points at the start of the step (contact): a point's gap starts
+    /// at its distance to them when the soil first reaches it ([`soil_distance`]).
+    soil_points: Option<SoilPoints>,
+    /// Per point, whether its gap is tracked: set from the soil's surface when the soil's
+    /// nodes first reached it, carried since (open or closed) while they reach it.
+    tracked: Vec<bool>,
 }
 
 impl InterfacePoints {
@@ -224,7 +250,18 @@ impl InterfacePoints {
             active: Vec::new(),
             force: [0.0; 2],
             energy: 0.0,
+            soil_points: None,
+            tracked: vec![false; n],
         }
+    }
+
+    /// The same contact with the soil's material points (module doc, "Open points"): a point
+    /// that the soil's nodes reach for the first time starts at its distance from the soil's
+    /// surface, and its gap is tracked from there while they reach it, so that it closes where
+    /// the structure meets the points' material, not where it enters the cells next to them.
+    pub fn with_soil_points(mut self, soil_points: SoilPoints) -> Self {
+        self.soil_points = Some(soil_points);
+        self
     }
 
     /// The same interface with the augmented Lagrangian: a converged step whose largest
@@ -276,16 +313,8 @@ impl InterfacePoints {
     /// [`InterfacePoints::block_dofs`].
     fn point_block(&self, p: &ActivePoint, input: &AssemblyInput<'_>) -> (Vec<f64>, Vec<f64>, LawResponse) {
         let point = &self.points[p.point];
-        let du = self.increments(p, input);
-        let (grid_du, facet_du) = du.split_at(p.nodes.len());
-        // ∂g/∂u per node (the same factor for both components)
-        let dg: Vec<f64> = p.values.iter().copied().chain(point.phi.iter().map(|phi| -phi)).collect();
-        let mut gap = self.gaps[p.point];
-        for (d, u) in dg.iter().zip(grid_du.iter().chain(facet_du)) {
-            for k in 0..2 {
-                gap[k] += d * u[k];
-            }
-        }
+        let dg = self.gap_derivatives(p);
+        let gap = self.point_gap(p, input);
         let response = self.law.response(gap, p.normal, self.trial_multipliers[p.point]);
         let nd = 2 * dg.len();
         let w = point.weight;
@@ -301,6 +330,25 @@ impl InterfacePoints {
             }
         }
         (residual, tangent, response)
+    }
+
+    /// `∂g/∂u` per node of an active point's block (the same factor for both components):
+    /// `N_I` on its grid nodes, `−φ_a` on its facet's nodes.
+    fn gap_derivatives(&self, p: &ActivePoint) -> Vec<f64> {
+        let point = &self.points[p.point];
+        p.values.iter().copied().chain(point.phi.iter().map(|phi| -phi)).collect()
+    }
+
+    /// The gap `g = g_n + Σ_I N_I Δu_I − Σ_a φ_a Δu_a` of an active point at the iterate.
+    fn point_gap(&self, p: &ActivePoint, input: &AssemblyInput<'_>) -> [f64; 2] {
+        let du = self.increments(p, input);
+        let mut gap = self.gaps[p.point];
+        for (d, u) in self.gap_derivatives(p).iter().zip(&du) {
+            for k in 0..2 {
+                gap[k] += d * u[k];
+            }
+        }
+        gap
     }
 
     /// Outward unit normal of point `p`'s facet at the committed state (the facet's nodes run
@@ -342,6 +390,18 @@ impl InterfacePoints {
         self.grid.cell_functions_at(nearest, x).map(significant)
     }
 
+    /// The grid's cell size (the largest side of its first cell).
+    fn cell_size(&self) -> f64 {
+        let coords = self.grid.cell_coords(0);
+        let n = self.grid.mesh.element.num_nodes();
+        (0..2)
+            .map(|d| {
+                let (lo, hi) = coords[..n].iter().fold((f64::MAX, f64::MIN), |(l, h), x| (l.min(x[d]), h.max(x[d])));
+                hi - lo
+            })
+            .fold(0.0, f64::max)
+    }
+
     /// Position of point `p` at the committed state `x_p^n = Σ_a φ_a (X_a + u_a^n)`.
     fn committed_position(&self, p: usize, committed: &NodalState) -> [f64; 3] {
         let point = &self.points[p];
@@ -354,6 +414,44 @@ impl InterfacePoints {
         }
         x
     }
+}
+
+/// The soil points within `reach` of any of `positions` (a box test), as `(x, y, half size)`
+/// with the half size `min(s, s₀)/2` of the surface monitors ([`PointExtent::half_height`]).
+fn points_near(soil: &[PointExtent], positions: impl Iterator<Item = [f64; 3]>, reach: f64) -> Vec<[f64; 3]> {
+    let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+    for x in positions {
+        for d in 0..2 {
+            lo[d] = lo[d].min(x[d] - reach);
+            hi[d] = hi[d].max(x[d] + reach);
+        }
+    }
+    soil.iter()
+        .filter(|p| (0..2).all(|d| p.position[d] >= lo[d] && p.position[d] <= hi[d]))
+        .map(|p| [p.position[0], p.position[1], p.half_height()])
+        .collect()
+}
+
+/// Distance (m, ≥ 0) from an interface point at `x` along its facet's outward normal `n` to
+/// the soil's material: each soil point `(x_p, y_p, e_p)` stands for the square of half side
+/// `e_p` around it (as the surface monitors see it, [`loam_mpm::surface`]); the squares that
+/// the ray `x + s n` crosses within `reach` give `s = (x_p − x)·n − e_p (|n_x| + |n_y|)` (their
+/// near side along `n`), and the nearest is the gap; `reach` if none is crossed, 0 where the
+/// point already lies in the soil's squares. The gap of an open contact point starts a step
+/// here (module doc, "Open points").
+fn soil_distance(near: &[[f64; 3]], x: [f64; 2], n: [f64; 2], reach: f64) -> f64 {
+    let t = [-n[1], n[0]];
+    let mut d = reach;
+    for p in near {
+        let r = [p[0] - x[0], p[1] - x[1]];
+        let (along, across) = (r[0] * n[0] + r[1] * n[1], r[0] * t[0] + r[1] * t[1]);
+        let e = p[2];
+        if across.abs() > e * (t[0].abs() + t[1].abs()) || along + e * (n[0].abs() + n[1].abs()) < 0.0 {
+            continue; // beside the ray, or behind the point
+        }
+        d = d.min(along - e * (n[0].abs() + n[1].abs()));
+    }
+    d.clamp(0.0, reach)
 }
 
 /// The facets of a tie: the boundary edges of the structure's mesh whose nodes all lie in
@@ -427,6 +525,7 @@ impl Domain for InterfacePoints {
             let Some(functions) = functions.filter(|f| soil(f)) else {
                 self.gaps[p] = [0.0; 2];
                 self.multipliers[p] = 0.0;
+                self.tracked[p] = false;
                 continue;
             };
             let (nodes, values) = functions.into_iter().unzip();
@@ -435,6 +534,26 @@ impl Domain for InterfacePoints {
         }
         let changed = active.len() != self.active.len()
             || active.iter().zip(&self.active).any(|(a, b)| a.point != b.point || a.nodes != b.nodes);
+        if let Some(soil_points) = self.soil_points.as_ref().filter(|_| self.law.is_contact()) {
+            let soil = soil_points.read().expect("no writer panicked");
+            let reach = 2.0 * self.cell_size();
+            let near = points_near(&soil, active.iter().map(|a| self.committed_position(a.point, committed)), reach);
+            for a in &active {
+                let carried = self.gaps[a.point];
+                let carried_normal = carried[0] * a.normal[0] + carried[1] * a.normal[1];
+                if self.tracked[a.point] && carried_normal < 0.0 {
+                    continue; // closed: it carries its penetration
+                }
+                // open: its distance to the soil's points, or less if it has closed in on it
+                let x = self.committed_position(a.point, committed);
+                let mut d = soil_distance(&near, [x[0], x[1]], a.normal, reach);
+                if self.tracked[a.point] {
+                    d = d.min(carried_normal);
+                }
+                self.gaps[a.point] = [d * a.normal[0], d * a.normal[1]];
+                self.tracked[a.point] = true;
+            }
+        }
         self.active = active;
         self.trial_multipliers.clone_from(&self.multipliers);
         Ok(changed)
@@ -489,6 +608,12 @@ impl Domain for InterfacePoints {
             }
             energy += w * response.energy;
             gaps[p.point] = response.carried;
+            if response.state == PointState::Open && self.tracked[p.point] {
+                // an open tracked point keeps its separation (normal part), to close it later
+                let g = self.point_gap(p, input);
+                let gn = (g[0] * p.normal[0] + g[1] * p.normal[1]).max(0.0);
+                gaps[p.point] = [gn * p.normal[0], gn * p.normal[1]];
+            }
             tractions[p.point] = response.traction;
             states[p.point] = response.state;
         }
@@ -551,6 +676,7 @@ impl Domain for InterfacePoints {
             states: self.states.clone(),
             force: self.force,
             energy: self.energy,
+            tracked: self.tracked.clone(),
         };
         bincode::serialize(&state).expect("a tie's state encodes")
     }
@@ -576,6 +702,7 @@ impl Domain for InterfacePoints {
         self.states = state.states;
         self.force = state.force;
         self.energy = state.energy;
+        self.tracked = if state.tracked.len() == n { state.tracked } else { vec![false; n] };
         Ok(())
     }
 

@@ -132,6 +132,12 @@ struct CellBlocks {
 /// after this domain's.
 pub type SoilNodes = Arc<RwLock<Vec<bool>>>;
 
+/// The material points of an MPM domain at the start of the step as the soil's surface
+/// (positions and sizes, [`PointExtent`]), shared with the non-conforming contacts on its grid
+/// (`loam_coupling::interface_points`), which measure an open point's distance to the soil
+/// from them; refreshed at every step only while a contact holds a handle.
+pub type SoilPoints = Arc<RwLock<Vec<PointExtent>>>;
+
 /// What an MPM domain carries from step to step beside the nodal unknowns.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct MpmState {
@@ -170,6 +176,8 @@ pub struct MpmDomain {
     widenings: Vec<String>,
     /// The nodes the soil's points reach at the current step.
     soil_nodes: SoilNodes,
+    /// The soil's points at the start of the step, for the contacts on the grid.
+    soil_points: SoilPoints,
     /// In a distributed run, the rank that evaluates each block ([`Domain::own_blocks`]).
     owners: Option<loam_fem::ranks::BlockOwners>,
 }
@@ -197,6 +205,7 @@ impl MpmDomain {
             worst_cell_quality: 1.0,
             widenings: Vec::new(),
             soil_nodes: Arc::new(RwLock::new(vec![false; nodes])),
+            soil_points: Arc::new(RwLock::new(Vec::new())),
             owners: None,
         }
     }
@@ -204,6 +213,11 @@ impl MpmDomain {
     /// The grid nodes the soil's points reach at the current step (see [`SoilNodes`]).
     pub fn soil_nodes(&self) -> SoilNodes {
         Arc::clone(&self.soil_nodes)
+    }
+
+    /// The soil's material points at the start of the step (see [`SoilPoints`]).
+    pub fn soil_points(&self) -> SoilPoints {
+        Arc::clone(&self.soil_points)
     }
 
     /// Worst quality (smallest corner `det J` over its reference value) of the grid's cells
@@ -416,6 +430,11 @@ impl MpmDomain {
         }
         let reached = live.clone();
         self.soil_nodes.write().expect("no writer panicked").clone_from(&reached);
+        if Arc::strong_count(&self.soil_points) > 1 {
+            let (formulation, thickness) = (self.formulation, self.thickness);
+            *self.soil_points.write().expect("no writer panicked") =
+                self.bodies.iter().flat_map(|b| b.point_extents(formulation, thickness)).collect();
+        }
         let mut live_pressure = live.clone();
         cb.first_body.clear();
         cb.orphans.clear();

@@ -1047,6 +1047,8 @@ fn number(
                     facets,
                     law,
                 );
+                let interface =
+                    if law.is_contact() { interface.with_soil_points(domain.soil_points()) } else { interface };
                 ties.push(match spec.gap_tolerance {
                     Some(tolerance) => interface.with_gap_tolerance(tolerance),
                     None => interface,
