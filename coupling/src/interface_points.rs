@@ -202,6 +202,8 @@ pub struct InterfacePoints {
     /// Per point, whether its gap is tracked: set from the soil's surface when the soil's
     /// nodes first reached it, carried since (open or closed) while they reach it.
     tracked: Vec<bool>,
+    /// The grid's largest cell extent ([`InterfacePoints::largest_cell`]).
+    largest_cell: f64,
 }
 
 impl InterfacePoints {
@@ -231,6 +233,7 @@ impl InterfacePoints {
             }
         }
         let n = points.len();
+        let largest_cell = Self::largest_cell(&grid);
         Self {
             name: name.to_string(),
             formulation,
@@ -252,6 +255,7 @@ impl InterfacePoints {
             energy: 0.0,
             soil_points: None,
             tracked: vec![false; n],
+            largest_cell,
         }
     }
 
@@ -390,14 +394,18 @@ impl InterfacePoints {
         self.grid.cell_functions_at(nearest, x).map(significant)
     }
 
-    /// The grid's cell size (the largest side of its first cell).
-    fn cell_size(&self) -> f64 {
-        let coords = self.grid.cell_coords(0);
-        let n = self.grid.mesh.element.num_nodes();
-        (0..2)
-            .map(|d| {
-                let (lo, hi) = coords[..n].iter().fold((f64::MAX, f64::MIN), |(l, h), x| (l.min(x[d]), h.max(x[d])));
-                hi - lo
+    /// The grid's largest cell extent along x or y (the reach of an open point's search for
+    /// the soil's points: two of them).
+    fn largest_cell(grid: &Grid) -> f64 {
+        let n = grid.mesh.element.num_nodes();
+        (0..grid.mesh.num_cells())
+            .flat_map(|c| {
+                let coords = grid.cell_coords(c);
+                (0..2).map(move |d| {
+                    let (lo, hi) =
+                        coords[..n].iter().fold((f64::MAX, f64::MIN), |(l, h), x| (l.min(x[d]), h.max(x[d])));
+                    hi - lo
+                })
             })
             .fold(0.0, f64::max)
     }
@@ -536,7 +544,7 @@ impl Domain for InterfacePoints {
             || active.iter().zip(&self.active).any(|(a, b)| a.point != b.point || a.nodes != b.nodes);
         if let Some(soil_points) = self.soil_points.as_ref().filter(|_| self.law.is_contact()) {
             let soil = soil_points.read().expect("no writer panicked");
-            let reach = 2.0 * self.cell_size();
+            let reach = 2.0 * self.largest_cell;
             let near = points_near(&soil, active.iter().map(|a| self.committed_position(a.point, committed)), reach);
             for a in &active {
                 let carried = self.gaps[a.point];
