@@ -157,15 +157,7 @@ impl PositionIndex {
 /// A typical cell size of a grid: the mean edge of its first cell's bounding box.
 fn cell_size(grid: &Grid) -> f64 {
     let dim = grid.mesh.element.dim();
-    let coords = grid.cell_coords(0);
-    let nn = grid.mesh.element.num_nodes();
-    (0..dim)
-        .map(|d| {
-            let (lo, hi) = coords[..nn].iter().fold((f64::MAX, f64::MIN), |(l, h), x| (l.min(x[d]), h.max(x[d])));
-            hi - lo
-        })
-        .sum::<f64>()
-        / dim as f64
+    grid.cell_extent(0)[..dim].iter().sum::<f64>() / dim as f64
 }
 
 /// Attaches `grid` (the soil domain `soil`) to `structures` by the `interfaces` (see the

@@ -51,8 +51,8 @@
 //! linear fields and keep the partition of unity. Otherwise (no such cell; a support
 //! without soil) the point is skipped for the step and its carried gap reset to zero: there
 //! is no soil there to tie to. A contact point whose soil does not press (`g_N ≥ 0`) is open
-//! and carries no gap either: separation is measured within the step, not remembered (a tie;
-//! a contact with the soil's points tracks it, below). The set of active points and their
+//! and carries no gap either: separation is measured within the step, not remembered (unless
+//! the contact holds the soil's points, which track it: below). The set of active points and their
 //! nodes is the domain's sparsity pattern: `begin_step` reports a change.
 //!
 //! **Open points** (contact). The grid's field reaches a cell beyond the soil's material, so
@@ -93,8 +93,7 @@
 //! `soil_forces`, and the `interface_force` monitor over the facet nodes, include it.
 
 use loam_fem::assembly::BlockLayout;
-use loam_fem::domain::PointExtent;
-use loam_fem::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NamedOutput, NodalState};
+use loam_fem::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NamedOutput, NodalState, PointExtent};
 use loam_fem::formulation::Formulation;
 use loam_mpm::grid::Grid;
 use loam_mpm::mpm_domain::{SoilNodes, SoilPoints};
@@ -397,17 +396,7 @@ impl InterfacePoints {
     /// The grid's largest cell extent along x or y (the reach of an open point's search for
     /// the soil's points: two of them).
     fn largest_cell(grid: &Grid) -> f64 {
-        let n = grid.mesh.element.num_nodes();
-        (0..grid.mesh.num_cells())
-            .flat_map(|c| {
-                let coords = grid.cell_coords(c);
-                (0..2).map(move |d| {
-                    let (lo, hi) =
-                        coords[..n].iter().fold((f64::MAX, f64::MIN), |(l, h), x| (l.min(x[d]), h.max(x[d])));
-                    hi - lo
-                })
-            })
-            .fold(0.0, f64::max)
+        (0..grid.mesh.num_cells()).flat_map(|c| grid.cell_extent(c)).fold(0.0, f64::max)
     }
 
     /// Position of point `p` at the committed state `x_p^n = Σ_a φ_a (X_a + u_a^n)`.

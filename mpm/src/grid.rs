@@ -735,6 +735,17 @@ impl Grid {
         Ok(quality)
     }
 
+    /// Sides of the axis-aligned bounding box of `cell` in the step's configuration (0 beyond
+    /// the grid's dimension).
+    pub fn cell_extent(&self, cell: usize) -> [f64; 3] {
+        let coords = self.cell_coords(cell);
+        let nodes = &coords[..self.mesh.element.num_nodes()];
+        std::array::from_fn(|d| {
+            let (lo, hi) = nodes.iter().fold((f64::MAX, f64::MIN), |(l, h), x| (l.min(x[d]), h.max(x[d])));
+            hi - lo
+        })
+    }
+
     /// Centre of `cell` in the reference configuration (mean of its nodes).
     pub fn reference_centre(&self, cell: usize) -> [f64; 3] {
         let nodes = self.mesh.cell(cell);

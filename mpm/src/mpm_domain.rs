@@ -1012,18 +1012,9 @@ impl Domain for MpmDomain {
     }
 
     fn momentum(&self, name: Option<&str>, _v: &[f64]) -> Option<[f64; 3]> {
-        let bodies: Vec<&Body> = match name {
-            None => self.bodies.iter().collect(),
-            Some(n) => self.bodies.iter().filter(|b| b.name == n).collect(),
-        };
-        (!bodies.is_empty()).then(|| {
-            let mut p = [0.0; 3];
-            for b in bodies {
-                let q = b.momentum();
-                (0..3).for_each(|i| p[i] += q[i]);
-            }
-            p
-        })
+        let mut bodies = self.bodies.iter().filter(|b| name.is_none_or(|n| b.name == n)).peekable();
+        bodies.peek()?;
+        Some(bodies.map(Body::momentum).fold([0.0; 3], |p, q| std::array::from_fn(|i| p[i] + q[i])))
     }
 
     fn energies(&self, name: &str, _v: &[f64]) -> Option<(f64, f64)> {

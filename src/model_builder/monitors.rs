@@ -136,28 +136,14 @@ pub(super) fn build(
                 }
             }
             MonitorSpec::KineticEnergy { domain, .. } => {
-                MonitorKind::KineticEnergy { domain: energy_domain(model, &loc, domain.as_deref())? }
+                MonitorKind::KineticEnergy { domain: named_domain(model, &loc, domain.as_deref())? }
             }
             MonitorSpec::Momentum { domain, component, .. } => MonitorKind::Momentum {
-                domain: match domain {
-                    None => None,
-                    Some(name) => {
-                        let v = &model.committed.v;
-                        let k = model.domains.iter().position(|d| d.momentum(Some(name), v).is_some()).ok_or_else(
-                            || {
-                                CaseError::new(
-                                    format!("{loc}.domain"),
-                                    format!("no domain or body named '{name}' with mass"),
-                                )
-                            },
-                        )?;
-                        Some((k, name.clone()))
-                    }
-                },
+                domain: named_domain(model, &loc, domain.as_deref())?,
                 component: component_index(&format!("{loc}.component"), *component, dim)?,
             },
             MonitorSpec::StrainEnergy { domain, .. } => {
-                MonitorKind::StrainEnergy { domain: energy_domain(model, &loc, domain.as_deref())? }
+                MonitorKind::StrainEnergy { domain: named_domain(model, &loc, domain.as_deref())? }
             }
         };
         if !m.scale().is_finite() {
@@ -168,9 +154,9 @@ pub(super) fn build(
     Ok(monitors)
 }
 
-/// The `(domain index, name)` of the domain or body named `name` for an energy monitor at
+/// The `(domain index, name)` of the domain or body named `name` for an energy or momentum monitor at
 /// `loc` (`None`: every domain).
-fn energy_domain(model: &Model, loc: &str, name: Option<&str>) -> Result<Option<(usize, String)>, CaseError> {
+fn named_domain(model: &Model, loc: &str, name: Option<&str>) -> Result<Option<(usize, String)>, CaseError> {
     let Some(name) = name else { return Ok(None) };
     model
         .domains
