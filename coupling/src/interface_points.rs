@@ -95,6 +95,7 @@
 use loam_fem::assembly::BlockLayout;
 use loam_fem::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NamedOutput, NodalState, PointExtent};
 use loam_fem::formulation::Formulation;
+use loam_fem::rigid_body::RigidFrame;
 use loam_mpm::grid::Grid;
 use loam_mpm::mpm_domain::{SoilNodes, SoilPoints};
 
@@ -119,10 +120,22 @@ fn significant(functions: Vec<(usize, f64)>) -> Vec<(usize, f64)> {
     functions.into_iter().filter(|(_, v)| v.abs() > NEGLIGIBLE_FUNCTION).collect()
 }
 
+/// How the structure's facets move.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FacetMotion {
+    /// Every facet node has its own displacement DOFs (an FEM structure); the facets' `nodes`
+    /// are global node ids.
+    Nodal,
+    /// The facets belong to a rigid body ([`loam_fem::rigid_body`]): a facet point at `X` is at
+    /// `X_c + u_c + R(θ)(X − X_c)`, its block's structure DOFs are the body's `[u_cx, u_cy, θ]`
+    /// (the facets' `nodes` are the body mesh's own, unused).
+    Rigid(RigidFrame),
+}
+
 /// A 2-node interface facet of the structure.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct InterfaceFacet {
-    /// Global node ids.
+    /// Global node ids (the body mesh's own for a rigid body, [`FacetMotion::Rigid`]).
     pub nodes: [usize; 2],
     /// Reference coordinates of the nodes.
     pub reference: [[f64; 2]; 2],
@@ -172,6 +185,8 @@ pub struct InterfacePoints {
     grid_ids: Vec<usize>,
     soil_nodes: SoilNodes,
     facets: Vec<InterfaceFacet>,
+    /// How the facets move (an FEM structure's nodes, or a rigid body).
+    motion: FacetMotion,
     points: Vec<TiePoint>,
     law: InterfaceLaw,
     /// Per point, the gap `g_n` committed at the end of the last step.
@@ -241,6 +256,7 @@ impl InterfacePoints {
             grid_ids,
             soil_nodes,
             facets,
+            motion: FacetMotion::Nodal,
             points,
             law,
             gaps: vec![[0.0; 2]; n],
@@ -277,6 +293,13 @@ impl InterfacePoints {
         self
     }
 
+    /// The same interface on the facets of a rigid body whose unknowns are at `frame`
+    /// ([`FacetMotion::Rigid`]; module doc, "Rigid structures").
+    pub fn on_rigid_body(mut self, frame: RigidFrame) -> Self {
+        self.motion = FacetMotion::Rigid(frame);
+        self
+    }
+
     /// The penalty `β` (Pa/m; β_N of contact).
     pub fn penalty(&self) -> f64 {
         self.law.penalty()
@@ -298,60 +321,115 @@ impl InterfacePoints {
         self.force
     }
 
-    /// The global DOFs of an active point's block: its grid nodes, then its facet's nodes.
-    fn block_dofs<'a>(&'a self, p: &'a ActivePoint) -> impl Iterator<Item = usize> + 'a {
-        let facet = &self.facets[self.points[p.point].facet];
-        p.nodes.iter().map(|&a| self.grid_ids[a]).chain(facet.nodes).flat_map(|g| [2 * g, 2 * g + 1])
-    }
-
-    /// `Δu = u − u_n` at the DOFs of an active point's block, as `[x, y]` per node.
-    fn increments(&self, p: &ActivePoint, input: &AssemblyInput<'_>) -> Vec<[f64; 2]> {
-        let dofs: Vec<usize> = self.block_dofs(p).collect();
-        dofs.chunks(2).map(|d| std::array::from_fn(|k| input.state.u[d[k]] - input.committed.u[d[k]])).collect()
+    /// The global DOFs of an active point's block: its grid nodes, then its facet's nodes
+    /// (a rigid body's `[u_cx, u_cy, θ]`).
+    fn block_dofs(&self, p: &ActivePoint) -> Vec<usize> {
+        let grid = p.nodes.iter().map(|&a| self.grid_ids[a]).flat_map(|g| [2 * g, 2 * g + 1]);
+        match self.motion {
+            FacetMotion::Nodal => {
+                let facet = &self.facets[self.points[p.point].facet];
+                grid.chain(facet.nodes.iter().flat_map(|&g| [2 * g, 2 * g + 1])).collect()
+            }
+            FacetMotion::Rigid(frame) => grid.chain(frame.dofs()).collect(),
+        }
     }
 
     /// Residual, tangent and law response of an active point at the iterate of `input`:
-    /// `r = w (∂g/∂u)ᵀ T`, `K = w (∂g/∂u)ᵀ C (∂g/∂u)` with `∂g/∂u_I = N_I I` (grid nodes) and
-    /// `∂g/∂u_a = −φ_a I` (facet nodes), block DOFs `[x, y]` per node as in
-    /// [`InterfacePoints::block_dofs`].
+    /// `r_j = w (∂g/∂q_j) · T`, `K_ij = w (∂g/∂q_i)ᵀ C (∂g/∂q_j) + w (∂²g/∂q_i∂q_j) · T`, block
+    /// DOFs as in [`InterfacePoints::block_dofs`] ([`InterfacePoints::gap_columns`]; the second
+    /// derivative is that of a rigid body's rotation, `∂²g/∂θ² = R(θ) r_p`).
     fn point_block(&self, p: &ActivePoint, input: &AssemblyInput<'_>) -> (Vec<f64>, Vec<f64>, LawResponse) {
         let point = &self.points[p.point];
-        let dg = self.gap_derivatives(p);
+        let columns = self.gap_columns(p, &input.state.u);
         let gap = self.point_gap(p, input);
         let response = self.law.response(gap, p.normal, self.trial_multipliers[p.point]);
-        let nd = 2 * dg.len();
+        let nd = columns.len();
         let w = point.weight;
-        let residual: Vec<f64> = dg.iter().flat_map(|d| response.traction.map(|t| w * d * t)).collect();
+        let t = response.traction;
+        let residual: Vec<f64> = columns.iter().map(|c| w * (c[0] * t[0] + c[1] * t[1])).collect();
         let mut tangent = vec![0.0; nd * nd];
-        for (a, da) in dg.iter().enumerate() {
-            for (b, db) in dg.iter().enumerate() {
-                for i in 0..2 {
-                    for j in 0..2 {
-                        tangent[(2 * a + i) * nd + 2 * b + j] = w * da * db * response.tangent[i][j];
-                    }
-                }
+        let c = &response.tangent;
+        for (i, ci) in columns.iter().enumerate() {
+            let cci = [ci[0] * c[0][0] + ci[1] * c[1][0], ci[0] * c[0][1] + ci[1] * c[1][1]];
+            for (j, cj) in columns.iter().enumerate() {
+                tangent[i * nd + j] = w * (cci[0] * cj[0] + cci[1] * cj[1]);
             }
+        }
+        if let FacetMotion::Rigid(frame) = self.motion {
+            let (_, theta) = frame.unknowns(&input.state.u);
+            let r = RigidFrame::rotate(theta, self.rigid_arm(p.point, frame));
+            tangent[nd * nd - 1] += w * (r[0] * t[0] + r[1] * t[1]);
         }
         (residual, tangent, response)
     }
 
-    /// `∂g/∂u` per node of an active point's block (the same factor for both components):
-    /// `N_I` on its grid nodes, `−φ_a` on its facet's nodes.
-    fn gap_derivatives(&self, p: &ActivePoint) -> Vec<f64> {
+    /// The columns `∂g/∂q_j` of an active point's block at displacements `u` (one per block
+    /// DOF): `N_I e_k` on its grid nodes; `−φ_a e_k` on its facet's nodes, or for a rigid body
+    /// `−e_x`, `−e_y` and `−R′(θ) r_p` (module doc).
+    fn gap_columns(&self, p: &ActivePoint, u: &[f64]) -> Vec<[f64; 2]> {
         let point = &self.points[p.point];
-        p.values.iter().copied().chain(point.phi.iter().map(|phi| -phi)).collect()
+        let grid = p.values.iter().flat_map(|&n| [[n, 0.0], [0.0, n]]);
+        match self.motion {
+            FacetMotion::Nodal => grid.chain(point.phi.iter().flat_map(|&phi| [[-phi, 0.0], [0.0, -phi]])).collect(),
+            FacetMotion::Rigid(frame) => {
+                let (_, theta) = frame.unknowns(u);
+                let r = self.rigid_arm(p.point, frame);
+                let (s, c) = theta.sin_cos();
+                grid.chain([[-1.0, 0.0], [0.0, -1.0], [s * r[0] + c * r[1], s * r[1] - c * r[0]]]).collect()
+            }
+        }
     }
 
-    /// The gap `g = g_n + Σ_I N_I Δu_I − Σ_a φ_a Δu_a` of an active point at the iterate.
+    /// The arm `r_p = Σ_a φ_a (X_a − X_c)` of point `p` on a rigid body.
+    fn rigid_arm(&self, p: usize, frame: RigidFrame) -> [f64; 2] {
+        let point = &self.points[p];
+        let facet = &self.facets[point.facet];
+        let x = |k: usize| point.phi[0] * facet.reference[0][k] + point.phi[1] * facet.reference[1][k];
+        frame.arm([x(0), x(1)])
+    }
+
+    /// The gap `g = g_n + Σ_I N_I Δu_I − Δx_p` of an active point at the iterate, `Δx_p` the
+    /// structure point's motion in the step (`Σ_a φ_a Δu_a`, or a rigid body's).
     fn point_gap(&self, p: &ActivePoint, input: &AssemblyInput<'_>) -> [f64; 2] {
-        let du = self.increments(p, input);
+        let (u, un) = (&input.state.u, &input.committed.u);
         let mut gap = self.gaps[p.point];
-        for (d, u) in self.gap_derivatives(p).iter().zip(&du) {
+        for (&a, &n) in p.nodes.iter().zip(&p.values) {
+            let g = self.grid_ids[a];
             for k in 0..2 {
-                gap[k] += d * u[k];
+                gap[k] += n * (u[2 * g + k] - un[2 * g + k]);
+            }
+        }
+        match self.motion {
+            FacetMotion::Nodal => {
+                let point = &self.points[p.point];
+                for (&g, phi) in self.facets[point.facet].nodes.iter().zip(point.phi) {
+                    for k in 0..2 {
+                        gap[k] -= phi * (u[2 * g + k] - un[2 * g + k]);
+                    }
+                }
+            }
+            FacetMotion::Rigid(frame) => {
+                let r = self.rigid_arm(p.point, frame);
+                let ((uc, theta), (uc_n, theta_n)) = (frame.unknowns(u), frame.unknowns(un));
+                let (x, x_n) = (RigidFrame::rotate(theta, r), RigidFrame::rotate(theta_n, r));
+                for k in 0..2 {
+                    gap[k] -= uc[k] - uc_n[k] + x[k] - x_n[k];
+                }
             }
         }
         gap
+    }
+
+    /// Current position of node `a` (0 or 1) of `facet` at displacements `u`.
+    fn facet_node_position(&self, facet: &InterfaceFacet, a: usize, u: &[f64]) -> [f64; 2] {
+        let reference = facet.reference[a];
+        match self.motion {
+            FacetMotion::Nodal => {
+                let g = facet.nodes[a];
+                [reference[0] + u[2 * g], reference[1] + u[2 * g + 1]]
+            }
+            FacetMotion::Rigid(frame) => frame.position(reference, u),
+        }
     }
 
     /// Outward unit normal of point `p`'s facet at the committed state (the facet's nodes run
@@ -359,12 +437,7 @@ impl InterfacePoints {
     /// gives them).
     fn committed_normal(&self, p: usize, committed: &NodalState) -> [f64; 2] {
         let facet = &self.facets[self.points[p].facet];
-        let x: Vec<[f64; 2]> = facet
-            .nodes
-            .iter()
-            .zip(&facet.reference)
-            .map(|(&g, r)| [r[0] + committed.u[2 * g], r[1] + committed.u[2 * g + 1]])
-            .collect();
+        let x = [0, 1].map(|a| self.facet_node_position(facet, a, &committed.u));
         let (dx, dy) = (x[1][0] - x[0][0], x[1][1] - x[0][1]);
         let length = dx.hypot(dy);
         [dy / length, -dx / length]
@@ -404,9 +477,10 @@ impl InterfacePoints {
         let point = &self.points[p];
         let facet = &self.facets[point.facet];
         let mut x = [0.0; 3];
-        for (a, (&g, reference)) in facet.nodes.iter().zip(&facet.reference).enumerate() {
+        for a in 0..2 {
+            let xa = self.facet_node_position(facet, a, &committed.u);
             for k in 0..2 {
-                x[k] += point.phi[a] * (reference[k] + committed.u[2 * g + k]);
+                x[k] += point.phi[a] * xa[k];
             }
         }
         x
@@ -780,7 +854,9 @@ mod tests {
     /// a carried gap from a first step: the assembled tangent of the whole domain against
     /// central differences of its residual (the largest relative error returned); the force
     /// on the structure equal and opposite to the grid's; the points' states at the iterate.
-    fn check_domain_tangent(law: InterfaceLaw, amplitude: f64) -> (f64, Vec<PointState>) {
+    /// With `rigid`, the facets belong to a rigid body whose unknowns `[u_c, θ]` are the
+    /// first DOFs of the two nodes after the grid's, turned by a few milliradians.
+    fn check_domain_tangent(law: InterfaceLaw, amplitude: f64, rigid: bool) -> (f64, Vec<PointState>) {
         let grid = Grid::new([0.0; 3], [0.4, 0.2, 0.0], [4, 2, 1], ElementType::Quad4);
         let grid_nodes = grid.mesh.coords.len();
         let ids: Vec<usize> = (0..grid_nodes).collect();
@@ -790,8 +866,10 @@ mod tests {
         let facets = (0..3)
             .map(|f| InterfaceFacet { nodes: [s + f, s + f + 1], reference: [reference[f], reference[f + 1]] })
             .collect();
-        let mut tie = InterfacePoints::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil, facets, law);
-        let n = 2 * (grid_nodes + 4);
+        let tie = InterfacePoints::new("cut", Formulation::PlaneStrain, 1.0, grid, ids, soil, facets, law);
+        let frame = RigidFrame { centre: [0.23, 0.06], centre_node: s, rotation_node: s + 1 };
+        let mut tie = if rigid { tie.on_rigid_body(frame) } else { tie };
+        let n = if rigid { 2 * (grid_nodes + 2) } else { 2 * (grid_nodes + 4) };
         let wave = |k: usize, a: f64| a * ((k * 7 + 3) as f64).sin();
         // step 1 from rest, committed: a gap to carry
         let mut committed = NodalState::zeros(n);
@@ -830,7 +908,10 @@ mod tests {
         // the soil's and the structure's forces balance
         for c in 0..2 {
             let grid_sum: f64 = (0..grid_nodes).map(|a| r[2 * a + c]).sum();
-            let structure_sum: f64 = (grid_nodes..grid_nodes + 4).map(|a| r[2 * a + c]).sum();
+            let structure_sum: f64 = match rigid {
+                true => r[2 * s + c],
+                false => (grid_nodes..grid_nodes + 4).map(|a| r[2 * a + c]).sum(),
+            };
             assert!((grid_sum + structure_sum).abs() < 1e-9 * grid_sum.abs().max(1.0), "{grid_sum} vs {structure_sum}");
         }
         (worst, states)
@@ -838,21 +919,26 @@ mod tests {
 
     #[test]
     fn assembled_tangent_matches_central_differences() {
-        let (worst, _) = check_domain_tangent(InterfaceLaw::Tie { penalty: 3.0e9 }, 1e-3);
-        println!("tie domain: assembled tangent vs central differences, relative error {worst:.2e}");
-        assert!(worst < 1e-7, "{worst:.2e}");
+        for rigid in [false, true] {
+            let (worst, _) = check_domain_tangent(InterfaceLaw::Tie { penalty: 3.0e9 }, 1e-3, rigid);
+            println!(
+                "tie domain (rigid {rigid}): assembled tangent vs central differences, relative error {worst:.2e}"
+            );
+            assert!(worst < 1e-7, "{worst:.2e}");
+        }
     }
 
-    /// Frictionless and Coulomb contact on the same blocks: the assembled (for friction,
-    /// unsymmetric) tangent against central differences, relative error < 1e-6, with points
-    /// open, sticking and sliding at the iterate.
+    /// Frictionless and Coulomb contact on the same blocks, on an elastic structure's facets
+    /// and on a rigid body's: the assembled (for friction, unsymmetric) tangent against
+    /// central differences, relative error < 1e-6, with points open, sticking and sliding at
+    /// the iterate.
     #[test]
     fn contact_tangent_matches_central_differences() {
-        for friction in [0.0, 0.3] {
+        for (friction, rigid) in [(0.0, false), (0.3, false), (0.0, true), (0.3, true)] {
             let law = InterfaceLaw::Contact { normal_penalty: 3.0e9, tangential_penalty: 1.0e9, friction };
-            let (worst, states) = check_domain_tangent(law, 1e-3);
+            let (worst, states) = check_domain_tangent(law, 1e-3, rigid);
             println!(
-                "contact μ = {friction}: tangent vs central differences, relative error {worst:.2e}, states {states:?}"
+                "contact μ = {friction} (rigid {rigid}): tangent vs central differences, relative error {worst:.2e}, states {states:?}"
             );
             assert!(worst < 1e-6, "{worst:.2e}");
             let has = |s: PointState| states.contains(&s);

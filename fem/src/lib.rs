@@ -34,6 +34,7 @@ pub mod permuted_lower;
 #[cfg(feature = "petsc")]
 mod petsc_solver;
 pub mod ranks;
+pub mod rigid_body;
 pub mod rigid_modes;
 pub mod scheme;
 pub mod simd_state;
