@@ -154,12 +154,22 @@ fn one() -> f64 {
 pub struct DomainSpec {
     /// Name (used for output files `<name>_<step>.vtu`).
     pub name: String,
-    /// Discretisation: `fem` (Lagrangian FEM, default) or `mpm` (material points).
+    /// Discretisation: `fem` (Lagrangian FEM, default), `mpm` (material points) or `rigid`
+    /// (a plane rigid body: its mesh gives its shape, mass and inertia from the material's
+    /// density; it meets soil by a tie or contact interface).
     #[serde(rename = "type", default = "fem")]
     pub kind: DomainKind,
-    /// Mesh (FEM domains).
+    /// Mesh (FEM and rigid domains).
     #[serde(default)]
     pub mesh: Option<MeshSpec>,
+    /// Prescribed motion of a `rigid` domain (default: free, moved by its weight, inertia and
+    /// contacts; a static analysis needs every one of its three unknowns prescribed).
+    #[serde(default)]
+    pub motion: Option<RigidMotionSpec>,
+    /// Initial angular velocity (rad/s, counter-clockwise) of a `rigid` domain about its
+    /// centroid (default 0; its translation's is `initial_velocity`, `uniform` only).
+    #[serde(default)]
+    pub initial_angular_velocity: Option<f64>,
     /// Structured background grid (MPM domains).
     #[serde(default)]
     pub grid: Option<GridSpec>,
@@ -273,6 +283,83 @@ pub enum DomainKind {
     Fem,
     /// Implicit material point method on a background grid.
     Mpm,
+    /// A plane rigid body (`loam_fem::rigid_body`).
+    Rigid,
+}
+
+impl DomainKind {
+    /// The name in the case file.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            DomainKind::Fem => "fem",
+            DomainKind::Mpm => "mpm",
+            DomainKind::Rigid => "rigid",
+        }
+    }
+}
+
+/// What a `rigid_body` monitor measures: the centroid's `displacement` (m), `velocity`,
+/// `acceleration` and the `reaction` (N) of its prescribed motion (the force that drives or
+/// holds it), by component; the `rotation` (rad, counter-clockwise), `angular_velocity`,
+/// `angular_acceleration` and the `reaction_moment` (N m) about the centroid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RigidQuantity {
+    /// Centroid displacement.
+    Displacement,
+    /// Centroid velocity.
+    Velocity,
+    /// Centroid acceleration.
+    Acceleration,
+    /// Reaction force of the prescribed motion.
+    Reaction,
+    /// Rotation about the centroid.
+    Rotation,
+    /// Angular velocity.
+    AngularVelocity,
+    /// Angular acceleration.
+    AngularAcceleration,
+    /// Reaction moment of the prescribed rotation about the centroid.
+    ReactionMoment,
+}
+
+impl RigidQuantity {
+    /// Whether it is a vector of the centroid (with a component), not of the rotation.
+    pub fn is_vector(self) -> bool {
+        matches!(self, Self::Displacement | Self::Velocity | Self::Acceleration | Self::Reaction)
+    }
+
+    /// Unit in monitors.csv and the FMU's variables.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Self::Displacement => "m",
+            Self::Velocity => "m/s",
+            Self::Acceleration => "m/s2",
+            Self::Reaction => "N",
+            Self::Rotation => "rad",
+            Self::AngularVelocity => "rad/s",
+            Self::AngularAcceleration => "rad/s2",
+            Self::ReactionMoment => "N m",
+        }
+    }
+}
+
+/// The prescribed motion of a rigid domain (`domains[k].motion`): its centroid's
+/// displacement and its rotation about the centroid, each entry a number (prescribed,
+/// scaled by `amplitude`) or `null` / absent (free).
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RigidMotionSpec {
+    /// Displacement of the centroid (m), one entry per component, `null` for a free one
+    /// (default: both free).
+    #[serde(default)]
+    pub displacement: Vec<Option<f64>>,
+    /// Rotation about the centroid (rad, counter-clockwise); absent or `null`: free.
+    #[serde(default)]
+    pub rotation: Option<f64>,
+    /// Time function scaling the prescribed values (default constant 1).
+    #[serde(default)]
+    pub amplitude: Amplitude,
 }
 
 /// An initial velocity field.
@@ -1053,6 +1140,23 @@ pub enum MonitorSpec {
         #[serde(default = "one")]
         scale: f64,
     },
+    /// The motion of a rigid domain (`type` `rigid`) or the reaction of its prescribed
+    /// motion: `quantity` of its centroid (with `component`) or of its rotation about it.
+    RigidBody {
+        /// Column name.
+        name: String,
+        /// The rigid domain's name.
+        domain: String,
+        /// What to measure.
+        quantity: RigidQuantity,
+        /// Component of `displacement`, `velocity`, `acceleration` and `reaction` (not of
+        /// the rotational quantities).
+        #[serde(default)]
+        component: Option<Component>,
+        /// Factor applied to the value (default 1).
+        #[serde(default = "one")]
+        scale: f64,
+    },
     /// Total kinetic energy (J), of every domain or of the domain (FEM domain or MPM body)
     /// named `domain`.
     KineticEnergy {
@@ -1093,7 +1197,8 @@ impl MonitorSpec {
             | MonitorSpec::Reaction { scale, .. }
             | MonitorSpec::MaterialPointDisplacement { scale, .. }
             | MonitorSpec::WallForce { scale, .. }
-            | MonitorSpec::InterfaceForce { scale, .. } => *scale,
+            | MonitorSpec::InterfaceForce { scale, .. }
+            | MonitorSpec::RigidBody { scale, .. } => *scale,
             _ => 1.0,
         }
     }
@@ -1114,6 +1219,7 @@ impl MonitorSpec {
             | MonitorSpec::MaterialVolume { name, .. }
             | MonitorSpec::MaterialMass { name, .. }
             | MonitorSpec::InterfaceForce { name, .. }
+            | MonitorSpec::RigidBody { name, .. }
             | MonitorSpec::KineticEnergy { name, .. }
             | MonitorSpec::Momentum { name, .. }
             | MonitorSpec::StrainEnergy { name, .. } => name,

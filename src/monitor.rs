@@ -4,6 +4,8 @@ use loam_fem::domain::{PointExtent, PointQuantity, PointTensor};
 use loam_fem::model::Model;
 use loam_mpm::surface::SurfaceProfile;
 
+use crate::case::RigidQuantity;
+
 /// What a monitor measures.
 #[derive(Debug, Clone, PartialEq)]
 pub enum MonitorKind {
@@ -113,6 +115,15 @@ pub enum MonitorKind {
         /// `None`: every domain.
         domain: Option<(usize, String)>,
         /// Component index (`None`: magnitude).
+        component: Option<usize>,
+    },
+    /// A rigid body's motion or reaction ([`RigidQuantity`]).
+    RigidBody {
+        /// Its DOFs `[u_cx, u_cy, θ]`.
+        dofs: [usize; 3],
+        /// What to measure.
+        quantity: RigidQuantity,
+        /// Component of a vector quantity (`None`: magnitude).
         component: Option<usize>,
     },
     /// Stored work of internal forces, total or of one domain.
@@ -225,6 +236,19 @@ impl Monitor {
                         .fold([0.0; 3], |a, q| std::array::from_fn(|i| a[i] + q[i])),
                 };
                 pick(&p, dim, 0, *component)
+            }
+            MonitorKind::RigidBody { dofs, quantity, component } => {
+                let field: &[f64] = match quantity {
+                    RigidQuantity::Displacement | RigidQuantity::Rotation => &s.u,
+                    RigidQuantity::Velocity | RigidQuantity::AngularVelocity => &s.v,
+                    RigidQuantity::Acceleration | RigidQuantity::AngularAcceleration => &s.a,
+                    RigidQuantity::Reaction | RigidQuantity::ReactionMoment => &model.reactions,
+                };
+                if quantity.is_vector() {
+                    pick(&[field[dofs[0]], field[dofs[1]], 0.0], dim, 0, *component)
+                } else {
+                    field[dofs[2]]
+                }
             }
             MonitorKind::StrainEnergy { domain: Some((k, name)) } => {
                 model.domains[*k].energies(name, &model.committed.v).map_or(f64::NAN, |e| e.1)

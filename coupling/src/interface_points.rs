@@ -505,22 +505,34 @@ fn points_near(soil: &[PointExtent], positions: impl Iterator<Item = [f64; 3]>, 
 
 /// Distance (m, ≥ 0) from an interface point at `x` along its facet's outward normal `n` to
 /// the soil's material: each soil point `(x_p, y_p, e_p)` stands for the square of half side
-/// `e_p` around it (as the surface monitors see it, [`loam_mpm::surface`]); the squares that
-/// the ray `x + s n` crosses within `reach` give `s = (x_p − x)·n − e_p (|n_x| + |n_y|)` (their
-/// near side along `n`), and the nearest is the gap; `reach` if none is crossed, 0 where the
-/// point already lies in the soil's squares. The gap of an open contact point starts a step
-/// here (module doc, "Open points").
+/// `e_p` around it (as the surface monitors see it, [`loam_mpm::surface`]); the ray `x + s n`
+/// enters a square at `s = max_k min((x_p,k ∓ e_p − x_k)/n_k)` and leaves it at
+/// `max_k`-`min` the other way (the slab test), and the nearest entry of the squares it crosses
+/// within `reach` is the gap; `reach` if none is crossed, 0 where the point already lies in
+/// the soil's squares. The gap of an open contact point starts a step here (module doc, "Open
+/// points"). (The plane through a square's corner nearest along `n`, used before, lies up to
+/// `2 e_p sin φ` nearer than the face the ray meets on a surface inclined by `φ` to the facet:
+/// the leading side of a disk sliding over soil then closed early and ploughed.)
 fn soil_distance(near: &[[f64; 3]], x: [f64; 2], n: [f64; 2], reach: f64) -> f64 {
-    let t = [-n[1], n[0]];
     let mut d = reach;
     for p in near {
-        let r = [p[0] - x[0], p[1] - x[1]];
-        let (along, across) = (r[0] * n[0] + r[1] * n[1], r[0] * t[0] + r[1] * t[1]);
         let e = p[2];
-        if across.abs() > e * (t[0].abs() + t[1].abs()) || along + e * (n[0].abs() + n[1].abs()) < 0.0 {
-            continue; // beside the ray, or behind the point
+        let (mut entry, mut exit) = (f64::NEG_INFINITY, f64::INFINITY);
+        for k in 0..2 {
+            let (lo, hi) = (p[k] - e - x[k], p[k] + e - x[k]);
+            if n[k].abs() < 1e-300 {
+                if lo > 0.0 || hi < 0.0 {
+                    (entry, exit) = (f64::INFINITY, f64::NEG_INFINITY); // beside the ray
+                }
+                continue;
+            }
+            let (a, b) = (lo / n[k], hi / n[k]);
+            entry = entry.max(a.min(b));
+            exit = exit.min(a.max(b));
         }
-        d = d.min(along - e * (n[0].abs() + n[1].abs()));
+        if entry <= exit && exit >= 0.0 {
+            d = d.min(entry);
+        }
     }
     d.clamp(0.0, reach)
 }

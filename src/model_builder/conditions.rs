@@ -29,7 +29,7 @@ pub(super) fn boundary_conditions(
             let (part, wall) = build_penalty_wall(case, k, spec, parts)?;
             match &mut parts[part] {
                 Part::Grid(grid) => grid.domain.add_wall(wall),
-                Part::Fem(..) => unreachable!("walls are on grids"),
+                Part::Fem(..) | Part::Rigid(..) => unreachable!("walls are on grids"),
             }
             constraint_of_bc.push(model.constraints.len());
             model.constraints.push(Constraint::without_dofs(bc.amplitude.clone()));
@@ -106,6 +106,7 @@ pub(super) fn check_supported(case: &Case, model: &Model) -> Result<(), CaseErro
         || !model.slips.is_empty()
         || !model.ties.is_empty()
         || case.boundary_conditions.iter().any(|bc| bc.penalty.is_some())
+        || case.domains.iter().any(|d| d.motion.is_some())
         || !case.interfaces.is_empty();
     if model.scheme.is_dynamic() || holds {
         return Ok(());
@@ -249,7 +250,7 @@ fn build_penalty_wall(
         .enumerate()
         .filter_map(|(i, p)| match p {
             Part::Grid(g) => Some((i, &**g)),
-            Part::Fem(..) => None,
+            Part::Fem(..) | Part::Rigid(..) => None,
         })
         .collect();
     let (part, grid_part, domain) = match &spec.domain {
@@ -411,6 +412,7 @@ fn boundary_facets(part: &Part) -> Vec<Vec<usize>> {
     match part {
         Part::Fem(_, d) => d.boundary_facets(),
         Part::Grid(g) => g.domain.boundary_facets(),
+        Part::Rigid(..) => Vec::new(),
     }
 }
 

@@ -23,6 +23,7 @@ use loam_fem::formulation::Formulation;
 use loam_fem::gmsh::{GmshError, GmshLimits};
 use loam_fem::mesh::Mesh;
 use loam_fem::model::Model;
+use loam_fem::rigid_body::{self, RigidBody, RigidFrame};
 use loam_fem::solid_domain::FemDomain;
 use loam_laws::{ConstitutiveLaw, Kinematics, TangentRequest};
 use loam_mpm::body::{Body, VelocityBlend};
@@ -45,6 +46,8 @@ pub(super) enum Part {
     Fem(usize, Box<FemDomain>),
     /// A background grid.
     Grid(Box<GridPart>),
+    /// A rigid body (case index, domain).
+    Rigid(usize, Box<RigidBody>),
 }
 
 /// A background grid with its bodies, as an MPM domain.
@@ -86,6 +89,8 @@ pub(super) struct Discretisation {
     /// The non-conforming ties, placed after every part (their initialisation phase reads
     /// what their grid's soil reaches).
     pub ties: Vec<InterfacePoints>,
+    /// Where each rigid domain's unknowns are, by domain name.
+    pub rigid_frames: BTreeMap<String, RigidFrame>,
 }
 
 /// A non-conforming tie of a grid, before numbering.
@@ -249,19 +254,18 @@ fn check_cells(grid: &Grid, loc: &str) -> Result<(), CaseError> {
 fn check_keys(case: &Case, k: usize) -> Result<(), CaseError> {
     let d = &case.domains[k];
     let loc = format!("domains[{k}]");
-    let misplaced = |key: &str| {
-        CaseError::new(
-            format!("{loc}.{key}"),
-            format!(
-                "does not apply to an {} domain",
-                match d.kind {
-                    DomainKind::Fem => "fem",
-                    DomainKind::Mpm => "mpm",
-                }
-            ),
-        )
-    };
+    let misplaced =
+        |key: &str| CaseError::new(format!("{loc}.{key}"), format!("does not apply to an {} domain", d.kind.as_str()));
+    if d.kind != DomainKind::Rigid {
+        if d.motion.is_some() {
+            return Err(misplaced("motion"));
+        }
+        if d.initial_angular_velocity.is_some() {
+            return Err(misplaced("initial_angular_velocity"));
+        }
+    }
     match d.kind {
+        DomainKind::Rigid => check_rigid_keys(case, k)?,
         DomainKind::Fem => {
             if d.grid.is_some() {
                 return Err(misplaced("grid"));
@@ -325,6 +329,90 @@ fn check_keys(case: &Case, k: usize) -> Result<(), CaseError> {
                 check_len(&format!("{loc}.sine.wavenumber"), wavenumber, dim)?;
             }
         }
+    }
+    Ok(())
+}
+
+/// The keys of a rigid domain (`domains[k]`, [`DomainKind::Rigid`]): a mesh, none of the
+/// keys of deformable bodies, a plane formulation, a motion with one entry per component and
+/// finite values, every unknown prescribed in a static analysis, and a uniform initial
+/// velocity.
+fn check_rigid_keys(case: &Case, k: usize) -> Result<(), CaseError> {
+    let d = &case.domains[k];
+    let loc = format!("domains[{k}]");
+    let misplaced = |key: &str| {
+        Err(CaseError::new(
+            format!("{loc}.{key}"),
+            "does not apply to a rigid domain (it has no material points, elements or strains)",
+        ))
+    };
+    if d.grid.is_some() {
+        return misplaced("grid");
+    }
+    if d.grid_mesh.is_some() {
+        return misplaced("grid_mesh");
+    }
+    if d.material_points.is_some() {
+        return misplaced("material_points");
+    }
+    if d.initial_stress.is_some() {
+        return misplaced("initial_stress");
+    }
+    if d.pic_fraction != 0.0 || d.pic_relaxation_time.is_some() {
+        return misplaced(if d.pic_fraction != 0.0 { "pic_fraction" } else { "pic_relaxation_time" });
+    }
+    if d.quadrature != Quadrature::MaterialPoints {
+        return misplaced("quadrature");
+    }
+    if d.ghost_penalty.is_some() {
+        return misplaced("ghost_penalty");
+    }
+    if d.mass_matrix.is_some() {
+        return misplaced("mass_matrix");
+    }
+    if d.element_formulation != ElementFormulation::Displacement {
+        return misplaced("element_formulation");
+    }
+    if d.mesh.is_none() {
+        return Err(CaseError::new(format!("{loc}.mesh"), "a rigid domain needs a mesh (its shape)"));
+    }
+    if !matches!(case.formulation, Formulation::PlaneStrain | Formulation::PlaneStress) {
+        return Err(CaseError::new(
+            format!("{loc}.type"),
+            "a rigid domain is plane (plane_strain or plane_stress) so far: its rotation is one angle",
+        ));
+    }
+    if let Some(InitialVelocity::Sine { .. }) = d.initial_velocity {
+        return Err(CaseError::new(
+            format!("{loc}.initial_velocity"),
+            "a rigid body moves as a whole: give \"uniform\" (and initial_angular_velocity for its spin)",
+        ));
+    }
+    if let Some(w) = d.initial_angular_velocity {
+        if !w.is_finite() {
+            return Err(CaseError::new(format!("{loc}.initial_angular_velocity"), format!("must be finite, got {w}")));
+        }
+    }
+    let motion = d.motion.clone().unwrap_or_default();
+    let mloc = format!("{loc}.motion");
+    if !motion.displacement.is_empty() {
+        check_len(&format!("{mloc}.displacement"), &motion.displacement, 2)?;
+    }
+    for (i, v) in motion.displacement.iter().enumerate() {
+        if let Some(v) = v.filter(|v| !v.is_finite()) {
+            return Err(CaseError::new(format!("{mloc}.displacement[{i}]"), format!("must be finite, got {v}")));
+        }
+    }
+    if let Some(r) = motion.rotation.filter(|r| !r.is_finite()) {
+        return Err(CaseError::new(format!("{mloc}.rotation"), format!("must be finite, got {r}")));
+    }
+    motion.amplitude.check().map_err(|m| CaseError::new(format!("{mloc}.amplitude"), m))?;
+    let held = motion.displacement.iter().filter(|v| v.is_some()).count() + usize::from(motion.rotation.is_some());
+    if case.analysis.kind != AnalysisType::Dynamic && held < 3 {
+        return Err(CaseError::new(
+            mloc,
+            "a static or quasi-static analysis needs the rigid body's displacement and rotation prescribed (all three: \"displacement\": [x, y], \"rotation\": θ); a free rigid body needs a dynamic analysis",
+        ));
     }
     Ok(())
 }
@@ -657,7 +745,9 @@ pub(super) fn discretise(
             ));
         }
         check_keys(case, k)?;
-        check_element_formulation(case, k, laws[d.material.as_str()].as_ref())?;
+        if d.kind != DomainKind::Rigid {
+            check_element_formulation(case, k, laws[d.material.as_str()].as_ref())?;
+        }
     }
     // FEM meshes, and grids with their bodies (identical specs: one grid)
     let mut fem_meshes: BTreeMap<usize, Mesh> = BTreeMap::new();
@@ -667,7 +757,7 @@ pub(super) fn discretise(
     for (k, d) in case.domains.iter().enumerate() {
         let loc = format!("domains[{k}]");
         match d.kind {
-            DomainKind::Fem => {
+            DomainKind::Fem | DomainKind::Rigid => {
                 let mesh = build_mesh(case, &format!("{loc}.mesh"), d.mesh.as_ref().expect("checked"))?;
                 fem_meshes.insert(k, mesh);
             }
@@ -863,6 +953,15 @@ fn couple_grids(
             groups[g].ties.push(TieRequest { interface: k, structure, facets, length });
             continue;
         }
+        if case.domains[structure].kind == DomainKind::Rigid {
+            return Err(CaseError::new(
+                format!("{loc}.coupling"),
+                format!(
+                    "'{}' is rigid: it meets the soil by \"tie\" or \"contact\" (shared nodes would move the grid with a body that has no nodes of its own)",
+                    spec.structure
+                ),
+            ));
+        }
         if spec.penalty.is_some() {
             return Err(CaseError::new(
                 format!("{loc}.penalty"),
@@ -942,10 +1041,21 @@ fn number(
     fem_meshes: BTreeMap<usize, Mesh>,
     groups: Vec<GridGroup<'_>>,
 ) -> Result<Discretisation, CaseError> {
-    let fem_list: Vec<(usize, Mesh)> = fem_meshes.into_iter().collect();
+    let (rigid_list, fem_list): (Vec<(usize, Mesh)>, Vec<(usize, Mesh)>) =
+        fem_meshes.into_iter().partition(|(k, _)| case.domains[*k].kind == DomainKind::Rigid);
     let meshes: Vec<Mesh> = fem_list.iter().map(|(_, m)| m.clone()).collect();
     let (mut coords, fem_ids) = merge_nodes(&meshes);
     let mut roles = vec![NodeRole::Structure; coords.len()];
+    // a rigid body's unknowns: a centre node at its centroid and a rotation node (module doc
+    // of loam_fem::rigid_body), structure nodes of their own
+    let mut rigid_frames: HashMap<usize, RigidFrame> = HashMap::new();
+    for (k, mesh) in &rigid_list {
+        let (_, centre, _) = rigid_body::area_properties(mesh);
+        let frame = RigidFrame { centre, centre_node: coords.len(), rotation_node: coords.len() + 1 };
+        coords.extend([[centre[0], centre[1], 0.0]; 2]);
+        roles.extend([NodeRole::Structure; 2]);
+        rigid_frames.insert(*k, frame);
+    }
     let ids_of_structure: HashMap<usize, &Vec<usize>> = fem_list.iter().map(|(k, _)| *k).zip(&fem_ids).collect();
     let mut node_groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
     for (m, id) in meshes.iter().zip(&fem_ids) {
@@ -1016,22 +1126,35 @@ fn number(
                     },
                     _ => InterfaceLaw::Tie { penalty },
                 };
-                let ids = ids_of_structure[&t.structure];
-                let mesh = &meshes[fem_list.iter().position(|(k, _)| *k == t.structure).expect("an fem domain")];
+                let rigid = rigid_frames.get(&t.structure).copied();
+                let (mesh, ids) = match rigid {
+                    Some(_) => (&rigid_list.iter().find(|(k, _)| *k == t.structure).expect("a rigid domain").1, None),
+                    None => (
+                        &meshes[fem_list.iter().position(|(k, _)| *k == t.structure).expect("an fem domain")],
+                        Some(ids_of_structure[&t.structure]),
+                    ),
+                };
                 let facets: Vec<InterfaceFacet> = t
                     .facets
                     .iter()
                     .map(|f| InterfaceFacet {
-                        nodes: f.map(|a| ids[a]),
+                        nodes: f.map(|a| ids.map_or(a, |ids| ids[a])),
                         reference: f.map(|a| [mesh.coords[a][0], mesh.coords[a][1]]),
                     })
                     .collect();
-                let mut nodes: Vec<usize> = facets.iter().flat_map(|f| f.nodes).collect();
+                // where the soil's force acts: the facet nodes, or a rigid body's centre
+                let mut nodes: Vec<usize> = match rigid {
+                    Some(frame) => vec![frame.centre_node],
+                    None => facets.iter().flat_map(|f| f.nodes).collect(),
+                };
                 nodes.sort_unstable();
                 nodes.dedup();
+                let mut facet_nodes: Vec<usize> = facets.iter().flat_map(|f| f.nodes).collect();
+                facet_nodes.sort_unstable();
+                facet_nodes.dedup();
                 let summary = InterfaceSummary {
                     name: spec.name.clone(),
-                    nodes: nodes.len(),
+                    nodes: facet_nodes.len(),
                     measure: t.length,
                     slip: false,
                     law: Some(law),
@@ -1049,6 +1172,10 @@ fn number(
                 );
                 let interface =
                     if law.is_contact() { interface.with_soil_points(domain.soil_points()) } else { interface };
+                let interface = match rigid {
+                    Some(frame) => interface.on_rigid_body(frame),
+                    None => interface,
+                };
                 ties.push(match spec.gap_tolerance {
                     Some(tolerance) => interface.with_gap_tolerance(tolerance),
                     None => interface,
@@ -1075,6 +1202,12 @@ fn number(
         .map_err(|e| CaseError::new(format!("domains[{k}].mesh"), format!("element {}: {}", e.element, e.message)))?;
         parts.push((k, Part::Fem(k, Box::new(domain))));
     }
+    for (k, mesh) in rigid_list {
+        let d = &case.domains[k];
+        let density = laws[d.material.as_str()].density();
+        let body = RigidBody::new(&d.name, mesh, rigid_frames[&k], density, case.formulation, case.thickness);
+        parts.push((k, Part::Rigid(k, Box::new(body))));
+    }
     // the parts in the case's order (a grid where its first body is)
     parts.sort_by_key(|(k, _)| *k);
     let interfaces = interfaces
@@ -1096,6 +1229,7 @@ fn number(
         parts: parts.into_iter().map(|(_, p)| p).collect(),
         interfaces,
         ties,
+        rigid_frames: rigid_frames.into_iter().map(|(k, f)| (case.domains[k].name.clone(), f)).collect(),
     })
 }
 
@@ -1341,9 +1475,45 @@ pub(super) fn place_domains(case: &Case, model: &mut Model, parts: Vec<Part>) ->
                 model.domains.push(domain);
             }
             Part::Grid(grid) => model.domains.push(Box::new(grid.domain)),
+            Part::Rigid(k, body) => {
+                place_rigid(case, k, model, &body);
+                model.domains.push(body);
+            }
         }
     }
     Ok(())
+}
+
+/// A rigid body's initial velocity and prescribed motion in `model`: `initial_velocity`
+/// (uniform) on its centre, `initial_angular_velocity` on its rotation, one constraint for the
+/// prescribed entries of `motion` (scaled by its amplitude) and one holding the rotation
+/// node's unused second DOF.
+fn place_rigid(case: &Case, k: usize, model: &mut Model, body: &RigidBody) {
+    let d = &case.domains[k];
+    let [x, y, theta] = body.frame().dofs();
+    if let Some(v0) = &d.initial_velocity {
+        let v = v0.at(&[0.0; 3], 2);
+        (model.committed.v[x], model.committed.v[y]) = (v[0], v[1]);
+    }
+    model.committed.v[theta] = d.initial_angular_velocity.unwrap_or(0.0);
+    model.state.v.clone_from(&model.committed.v);
+    let motion = d.motion.clone().unwrap_or_default();
+    let prescribed: Vec<(usize, f64)> = [x, y]
+        .into_iter()
+        .zip(motion.displacement.iter().map(|v| *v).chain([None, None]))
+        .chain([(theta, motion.rotation)])
+        .filter_map(|(dof, v)| v.map(|v| (dof, v)))
+        .collect();
+    if !prescribed.is_empty() {
+        let (dofs, values) = prescribed.into_iter().unzip();
+        model.constraints.push(loam_fem::model::Constraint { dofs, values, amplitude: motion.amplitude });
+    }
+    let unused = 2 * body.frame().rotation_node + 1;
+    model.constraints.push(loam_fem::model::Constraint {
+        dofs: vec![unused],
+        values: vec![0.0],
+        amplitude: Default::default(),
+    });
 }
 
 /// Mean cell size `h = (V_box / cells)^(1/dim)` of a mesh (the length in the equilibration

@@ -111,7 +111,7 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     model.domains.extend(ties.into_iter().map(|t| Box::new(t) as Box<dyn loam_fem::domain::Domain>));
     let load_of_load = conditions::loads(case, &mut model, &regions)?;
     conditions::gravity(case, &mut model)?;
-    let monitors = monitors::build(case, &model, &regions, &discretisation.interfaces)?;
+    let monitors = monitors::build(case, &model, &regions, &discretisation.interfaces, &discretisation.rigid_frames)?;
     let (inputs, outputs) = fmu_variables::resolve(case, &bcs, &load_of_load, &monitors)?;
     let interfaces = discretisation.interfaces.iter().map(|i| i.summary.clone()).collect();
     Ok(BuiltModel { model, monitors, regions, inputs, outputs, interfaces })

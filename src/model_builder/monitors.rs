@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 
 use loam_fem::domain::{PointQuantity, PointTensor};
 use loam_fem::model::Model;
+use loam_fem::rigid_body::RigidFrame;
 
 use super::meshes::ResolvedInterface;
 use super::regions::{nearest_node, region, select_points};
@@ -18,6 +19,7 @@ pub(super) fn build(
     model: &Model,
     regions: &BTreeMap<String, Vec<usize>>,
     interfaces: &[ResolvedInterface],
+    rigid_frames: &BTreeMap<String, RigidFrame>,
 ) -> Result<Vec<Monitor>, CaseError> {
     let dim = case.formulation.dim();
     let mut monitor_names = std::collections::BTreeSet::new();
@@ -112,6 +114,37 @@ pub(super) fn build(
                     component: component_index(&format!("{loc}.component"), *component, dim)?,
                 }
             }
+            MonitorSpec::RigidBody { domain, quantity, component, .. } => {
+                let frame = rigid_frames.get(domain).ok_or_else(|| {
+                    let message = match case.domains.iter().any(|d| d.name == *domain) {
+                        true => format!("'{domain}' is not a rigid domain (\"type\": \"rigid\")"),
+                        false => crate::model_builder::unknown_name(
+                            "rigid domain",
+                            domain,
+                            "domains",
+                            rigid_frames.keys().map(String::as_str),
+                        ),
+                    };
+                    CaseError::new(format!("{loc}.domain"), message)
+                })?;
+                let component = match (quantity.is_vector(), component) {
+                    (true, Some(c)) => component_index(&format!("{loc}.component"), *c, dim)?,
+                    (true, None) => {
+                        return Err(CaseError::new(
+                            format!("{loc}.component"),
+                            "a vector quantity of the centroid needs a component (\"x\", \"y\" or \"magnitude\")",
+                        ))
+                    }
+                    (false, Some(_)) => {
+                        return Err(CaseError::new(
+                            format!("{loc}.component"),
+                            "a rotational quantity is one angle: omit component",
+                        ))
+                    }
+                    (false, None) => None,
+                };
+                MonitorKind::RigidBody { dofs: frame.dofs(), quantity: *quantity, component }
+            }
             MonitorSpec::MaterialVolume { within, .. } | MonitorSpec::MaterialMass { within, .. } => {
                 if model.domains.iter().all(|d| d.point_extents().is_empty()) {
                     return Err(CaseError::new(format!("{loc}.type"), "the model has no material points"));
@@ -196,5 +229,6 @@ pub fn monitor_unit(kind: &MonitorKind) -> &'static str {
         MonitorKind::MaterialMass { .. } => "kg",
         MonitorKind::KineticEnergy { .. } | MonitorKind::StrainEnergy { .. } => "J",
         MonitorKind::Momentum { .. } => "kg m/s",
+        MonitorKind::RigidBody { quantity, .. } => quantity.unit(),
     }
 }

@@ -15,9 +15,21 @@ pub(super) fn select_all(
 ) -> Result<BTreeMap<String, Vec<usize>>, CaseError> {
     let dim = case.formulation.dim();
     let tol = line_tolerance(coords);
+    // a rigid body's mesh nodes are not model nodes: a region naming its interface facets
+    // is selected on its mesh alone (model_builder::meshes, couple_grids)
+    let rigid = |name: &str| {
+        case.interfaces
+            .iter()
+            .filter(|i| i.region == name)
+            .any(|i| case.domains.iter().any(|d| d.name == i.structure && d.kind == crate::case::DomainKind::Rigid))
+    };
     let mut regions = BTreeMap::new();
     for (name, spec) in &case.regions {
-        regions.insert(name.clone(), select_region(name, spec, coords, dim, groups, tol)?);
+        let nodes = match select_region(name, spec, coords, dim, groups, tol) {
+            Err(e) if rigid(name) && e.message.starts_with("selects no node") => Vec::new(),
+            selected => selected?,
+        };
+        regions.insert(name.clone(), nodes);
     }
     Ok(regions)
 }
