@@ -10,7 +10,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{case, monitor, report, run, History};
+use common::{case, case_json, monitor, parse, report, run, History};
 use loam::case::Case;
 use loam::simulation::Simulation;
 use nalgebra::DMatrix;
@@ -551,6 +551,39 @@ fn footing_fem_on_mpm_by_contact() {
         "material points inside the footing (more than 1 mm from its faces, base now at y = {:.3} m): {inside}",
         5.0 - end
     );
+    assert_eq!(inside, 0, "soil entered the footing");
+}
+
+/// Benchmark 15 with a rigid footing (issue 25, item 4): `cases/footing_fem_on_mpm.json` with
+/// the concrete footing as a rigid body of the same mesh (`"type": "rigid"`), pushed down by
+/// its prescribed `motion` (0.15 m, no rotation, no sway: the symmetry line) instead of a
+/// displacement of its top nodes; `q_over_su` from the rigid body's reaction. The plateau is
+/// within 5 % of Prandtl's 2 + π (the concrete footing's 5.213 is the same to the penalty's
+/// and the concrete's elastic compliance), the reaction equals the contact force (1e-6),
+/// and no soil enters the footing. About 50 s.
+#[test]
+fn rigid_footing_on_mpm_by_contact() {
+    let mut json = case_json("footing_fem_on_mpm.json");
+    json["domains"][1]["type"] = serde_json::json!("rigid");
+    json["domains"][1]["motion"] = serde_json::json!({
+        "displacement": [0.0, -0.15], "rotation": 0.0, "amplitude": [[0.0, 0.0], [1.0, 1.0]]
+    });
+    let conditions = json["boundary_conditions"].as_array_mut().unwrap();
+    conditions.retain(|c| c["name"] != "settlement");
+    json["regions"].as_object_mut().unwrap().remove("footing_top");
+    json["monitors"][0] = serde_json::json!({
+        "name": "q_over_su", "type": "rigid_body", "domain": "footing", "quantity": "reaction",
+        "component": "y", "scale": -0.002
+    });
+    let (sim, h) = run(parse(json));
+    plateau_near_prandtl("rigid footing on MPM u–p by contact, B/20", &sim, &h, 0.05);
+    let (q, f) = (monitor(&sim, "q_over_su"), monitor(&sim, "interface_q"));
+    let last = &h.last().unwrap().1;
+    report("rigid footing by contact: contact force vs the footing's reaction", last[f], last[q], 1e-6);
+    let sunk = 5.0 - 0.15; // the footing's base after its prescribed motion (rigid, not turning)
+    let outline = [[0.0, sunk], [0.5, sunk], [0.5, sunk + 0.5], [0.0, sunk + 0.5]];
+    let inside = common::points_inside_quadrilateral(&sim, outline, 1e-3);
+    println!("material points inside the rigid footing (base now at y = {sunk:.3} m): {inside}");
     assert_eq!(inside, 0, "soil entered the footing");
 }
 

@@ -273,9 +273,13 @@ pub fn points_inside_structure(sim: &Simulation, corners: [[f64; 2]; 4], inset: 
             })
             .expect("the case has an FEM plate")
     };
-    let quad = corners.map(|c| current(nearest(c)));
+    points_inside_quadrilateral(sim, corners.map(|c| current(nearest(c))), inset)
+}
+
+/// How many material points lie inside the convex quadrilateral `quad` (current corners,
+/// counter-clockwise), at least `inset` (m) from each edge (2D).
+pub fn points_inside_quadrilateral(sim: &Simulation, quad: [[f64; 2]; 4], inset: f64) -> usize {
     let centre = [quad.iter().map(|q| q[0]).sum::<f64>() / 4.0, quad.iter().map(|q| q[1]).sum::<f64>() / 4.0];
-    // inside every edge (counter-clockwise corners), at least `inset` from it
     let inside = |x: [f64; 2]| {
         (0..4).all(|e| {
             let (a, b) = (quad[e], quad[(e + 1) % 4]);
@@ -286,5 +290,5 @@ pub fn points_inside_structure(sim: &Simulation, corners: [[f64; 2]; 4], inset: 
             centre_side > 0.0 && side > inset
         })
     };
-    loam::monitor::point_extents(m).iter().filter(|p| inside([p.position[0], p.position[1]])).count()
+    loam::monitor::point_extents(&sim.model).iter().filter(|p| inside([p.position[0], p.position[1]])).count()
 }
