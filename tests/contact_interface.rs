@@ -150,17 +150,8 @@ fn converged_slide_does_not_depend_on_the_newton_path() {
 /// `tangential_penalty`, an unknown `coupling`.
 #[test]
 fn check_reports_the_contact_and_refuses_bad_keys() {
-    let dir = std::env::temp_dir().join(format!("loam_contact_check_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let check = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
-        let mut json = case_json("block_on_incline_slide.json");
-        edit(&mut json);
-        let file = dir.join(format!("{name}.json"));
-        std::fs::write(&file, json.to_string()).unwrap();
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_loam")).arg("check").arg(&file).output().unwrap();
-        let text = |b: &[u8]| String::from_utf8_lossy(b).trim().to_string();
-        (out.status.code().unwrap_or(-1), text(&out.stdout), text(&out.stderr))
-    };
+    let check =
+        |name: &str, edit: &dyn Fn(&mut serde_json::Value)| check_edited("block_on_incline_slide.json", name, edit);
     let (code, stdout, _) = check("ok", &|_| {});
     println!("{stdout}");
     assert_eq!(code, 0);
@@ -190,7 +181,66 @@ fn check_reports_the_contact_and_refuses_bad_keys() {
         assert_eq!(stderr.lines().count(), 1, "{name}: one line");
         assert!(stderr.contains(key), "{name}: names {key}");
     }
-    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `loam check` on `case` (in `cases/`) edited by `edit`, written to a temporary file named
+/// after `name`: exit code, stdout and stderr.
+fn check_edited(case: &str, name: &str, edit: &dyn Fn(&mut serde_json::Value)) -> (i32, String, String) {
+    let dir = std::env::temp_dir().join(format!("loam_contact_check_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut json = case_json(case);
+    // the case's meshes where they are, not beside the temporary file
+    for domain in json["domains"].as_array_mut().unwrap() {
+        if let Some(path) = domain["mesh"]["gmsh"].as_str() {
+            let absolute = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases").join(path);
+            domain["mesh"]["gmsh"] = serde_json::json!(absolute);
+        }
+    }
+    edit(&mut json);
+    let file = dir.join(format!("{}.json", name.replace(' ', "_")));
+    std::fs::write(&file, json.to_string()).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_loam")).arg("check").arg(&file).output().unwrap();
+    std::fs::remove_file(&file).ok();
+    let text = |b: &[u8]| String::from_utf8_lossy(b).trim().to_string();
+    (out.status.code().unwrap_or(-1), text(&out.stdout), text(&out.stderr))
+}
+
+/// A rigid domain's keys: `loam check` accepts the rolling disk and refuses, with one line
+/// naming the key (exit 2), a static analysis with a free rigid body, a rigid structure
+/// coupled by shared nodes, a key of deformable domains, a `sine` initial velocity, a
+/// `rigid_body` monitor on an FEM domain, a rotational quantity with a component and a
+/// centroid quantity without one.
+#[test]
+fn check_refuses_bad_rigid_keys() {
+    use serde_json::json;
+    let (code, stdout, _) = check_edited("rigid_disk_rolling_on_mpm.json", "rigid ok", &|_| {});
+    assert_eq!(code, 0, "{stdout}");
+    type Edit = fn(&mut serde_json::Value);
+    let cases: [(&str, &str, Edit); 7] = [
+        ("static and free", "domains[1].motion", |v| v["analysis"]["type"] = json!("static")),
+        ("shared nodes", "interfaces[0].coupling", |v| {
+            v["interfaces"][0]["coupling"] = json!("shared_nodes");
+            v["interfaces"][0].as_object_mut().unwrap().remove("friction");
+        }),
+        ("mixed u-p rigid body", "domains[1].element_formulation", |v| {
+            v["domains"][1]["element_formulation"] = json!("mixed_up")
+        }),
+        ("sine velocity", "domains[1].initial_velocity", |v| {
+            v["domains"][1]["initial_velocity"] = json!({"sine": {"amplitude": [1.0, 0.0], "wavenumber": [1.0, 0.0]}})
+        }),
+        ("rigid_body monitor on soil", "monitors[0].domain", |v| v["monitors"][0]["domain"] = json!("soil")),
+        ("rotation with a component", "monitors[2].component", |v| v["monitors"][2]["component"] = json!("x")),
+        ("displacement without a component", "monitors[0].component", |v| {
+            v["monitors"][0].as_object_mut().unwrap().remove("component");
+        }),
+    ];
+    for (name, key, edit) in cases {
+        let (code, _, stderr) = check_edited("rigid_disk_rolling_on_mpm.json", name, &edit);
+        println!("{name}: exit {code}: {stderr}");
+        assert_eq!(code, 2, "{name}");
+        assert_eq!(stderr.lines().count(), 1, "{name}: one line");
+        assert!(stderr.contains(key), "{name}: names {key}");
+    }
 }
 
 /// Unilateral: with gravity reversed (upwards, ramped) the contact releases the block — no
