@@ -489,6 +489,18 @@ pub enum MeshSpec {
     },
     /// Gmsh MSH 4.1 file, path relative to the case file.
     Gmsh(PathBuf),
+    /// Set by the model builder, not the case file: one row of quad4 cells along a polyline,
+    /// on its right (the shape of a contact wall built as a rigid structure,
+    /// `model_builder::walls`).
+    #[serde(skip)]
+    Strip {
+        /// The polyline (m).
+        vertices: Vec<[f64; 2]>,
+        /// Width of the row (m), on the polyline's right.
+        width: f64,
+        /// Cells along each of its segments.
+        cells: Vec<usize>,
+    },
 }
 
 /// A named node set, selected geometrically or by a Gmsh physical group.
@@ -622,6 +634,10 @@ pub struct BoundaryConditionSpec {
     /// Time function scaling the values (default constant 1).
     #[serde(default)]
     pub amplitude: Amplitude,
+    /// Set by the model builder, not the case file: this contact wall (`penalty.contact`) is
+    /// built as a rigid structure with a contact interface (`model_builder::walls`).
+    #[serde(skip)]
+    pub as_rigid_wall: bool,
 }
 
 /// A non-conforming rigid wall on an MPM background grid: in the Dirichlet form (Chandra et

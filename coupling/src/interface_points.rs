@@ -604,7 +604,14 @@ impl Domain for InterfacePoints {
                 .collect();
             let soil = |f: &[(usize, f64)]| !f.is_empty() && f.iter().all(|&(a, _)| reached[a]);
             let functions = significant(functions);
-            let functions = if soil(&functions) { Some(functions) } else { self.extrapolated(&x, &reached) };
+            // no soil at any of its nodes: none in the ring of cells around either (a cell of
+            // the ring shares a node with the point's own), so nothing to extrapolate from
+            let near_soil = functions.iter().any(|&(a, _)| reached[a]);
+            let functions = match (soil(&functions), near_soil) {
+                (true, _) => Some(functions),
+                (false, true) => self.extrapolated(&x, &reached),
+                (false, false) => None,
+            };
             let Some(functions) = functions.filter(|f| soil(f)) else {
                 self.gaps[p] = [0.0; 2];
                 self.multipliers[p] = 0.0;

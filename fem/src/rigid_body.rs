@@ -89,6 +89,14 @@ impl RigidFrame {
 /// Area, centroid and polar second moment of area about the centroid of a 2D mesh,
 /// `(A, X_c, ∫ |X − X_c|² dA)`, by the Gauss rule of its cells.
 pub fn area_properties(mesh: &Mesh) -> (f64, [f64; 2], f64) {
+    let (area, centre, polar, _) = mass_properties(mesh, |_| 1.0);
+    (area, centre, polar)
+}
+
+/// As [`area_properties`], and the measure `∫ t(X) dA` with the weight `t(X)` (the plane
+/// thickness, or `2πr` in axisymmetry) and its polar moment `∫ t(X) |X − X_c|² dA`:
+/// `(A, X_c, ∫ |X − X_c|² dA, [∫ t dA, ∫ t |X − X_c|² dA])`.
+fn mass_properties(mesh: &Mesh, weight: impl Fn([f64; 2]) -> f64) -> (f64, [f64; 2], f64, [f64; 2]) {
     let element = mesh.element;
     let nn = element.num_nodes();
     let (mut n, mut dn) = (vec![0.0; nn], vec![[0.0; 3]; nn]);
@@ -105,8 +113,11 @@ pub fn area_properties(mesh: &Mesh) -> (f64, [f64; 2], f64) {
     }
     let area: f64 = points.iter().map(|p| p.1).sum();
     let centre = [0, 1].map(|d| points.iter().map(|(x, w)| x[d] * w).sum::<f64>() / area);
-    let polar = points.iter().map(|(x, w)| w * ((x[0] - centre[0]).powi(2) + (x[1] - centre[1]).powi(2))).sum();
-    (area, centre, polar)
+    let arm = |x: &[f64; 2]| (x[0] - centre[0]).powi(2) + (x[1] - centre[1]).powi(2);
+    let polar = points.iter().map(|(x, w)| w * arm(x)).sum();
+    let measure = points.iter().map(|(x, w)| w * weight(*x)).sum();
+    let weighted_polar = points.iter().map(|(x, w)| w * weight(*x) * arm(x)).sum();
+    (area, centre, polar, [measure, weighted_polar])
 }
 
 /// A rigid plane body (see the module doc).
@@ -121,11 +132,15 @@ pub struct RigidBody {
     mass: f64,
     /// Moment of inertia about the centre `ρ t ∫ |X − X_c|² dA` (kg m²).
     inertia: f64,
+    /// Whether its three unknowns are all prescribed ([`RigidBody::driven`]).
+    driven: bool,
 }
 
 impl RigidBody {
     /// The body of `mesh` (2D) with density `density`, its unknowns at `frame` (whose centre
-    /// must be the mesh's centroid, [`area_properties`]).
+    /// must be the mesh's centroid, [`area_properties`]); its mass and inertia integrate the
+    /// formulation's measure (the thickness, or `2πr` in axisymmetry, where the body is a
+    /// ring that moves along the axis only: its radial motion and rotation must be held).
     pub fn new(
         name: &str,
         mesh: Mesh,
@@ -134,17 +149,27 @@ impl RigidBody {
         formulation: Formulation,
         thickness: f64,
     ) -> Self {
-        let (area, _, polar) = area_properties(&mesh);
-        let t = formulation.measure_factor(thickness, 0.0);
+        let (_, _, _, [measure, polar]) = mass_properties(&mesh, |x| formulation.measure_factor(thickness, x[0]));
         Self {
             name: name.to_string(),
             formulation,
             thickness,
             mesh,
             frame,
-            mass: density * t * area,
-            inertia: density * t * polar,
+            mass: density * measure,
+            inertia: density * polar,
+            driven: false,
         }
+    }
+
+    /// The same body with all three unknowns prescribed (a moving wall): its motion is an
+    /// input to the model, and its kinetic energy is not the model's (the energy monitors and
+    /// `analysis.stop_at_rest` leave it out; the trapezoidal rule's velocities of prescribed
+    /// DOFs also alternate about the true one after a kink of the motion, as when a wall
+    /// stops). Its momentum is still `m v_c`.
+    pub fn driven(mut self) -> Self {
+        self.driven = true;
+        self
     }
 
     /// Where the body's unknowns are.
@@ -205,8 +230,11 @@ impl Domain for RigidBody {
 
     fn commit(&mut self, _input: &AssemblyInput<'_>) {}
 
-    /// `½ m |v_c|² + ½ J ω²`.
+    /// `½ m |v_c|² + ½ J ω²`; 0 for a driven body ([`RigidBody::driven`]).
     fn kinetic_energy(&self, v: &[f64]) -> f64 {
+        if self.driven {
+            return 0.0;
+        }
         let (vc, omega) = self.frame.unknowns(v);
         0.5 * self.mass * (vc[0] * vc[0] + vc[1] * vc[1]) + 0.5 * self.inertia * omega * omega
     }

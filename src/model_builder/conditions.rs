@@ -8,10 +8,10 @@ use loam_fem::model::{Constraint, Load, Model};
 use loam_fem::slip::Slip;
 use loam_mpm::penalty_boundary::{BoundaryParticles, PenaltyBoundary, PenaltyKind, PenaltySettings};
 
-use super::meshes::{GridPart, Part};
+use super::meshes::Part;
 use super::regions::{mean_boundary_normal, region, select_points};
 use super::{check_len, check_positive};
-use crate::case::{Case, CaseError, LoadSpec, PenaltySpec};
+use crate::case::{Case, CaseError, DomainKind, LoadSpec, PenaltySpec};
 
 /// The boundary conditions of the case: constraints and slips on the model, penalty walls
 /// on their grids. Returns, per boundary condition, the index of its constraint (the slot
@@ -25,6 +25,12 @@ pub(super) fn boundary_conditions(
     let dim = case.formulation.dim();
     let mut constraint_of_bc = Vec::with_capacity(case.boundary_conditions.len());
     for (k, bc) in case.boundary_conditions.iter().enumerate() {
+        if bc.as_rigid_wall {
+            // a contact wall, built as a rigid structure (`walls`): the slot of its amplitude
+            constraint_of_bc.push(model.constraints.len());
+            model.constraints.push(Constraint::without_dofs(bc.amplitude.clone()));
+            continue;
+        }
         if let Some(spec) = &bc.penalty {
             let (part, wall) = build_penalty_wall(case, k, spec, parts)?;
             match &mut parts[part] {
@@ -221,14 +227,33 @@ pub(super) fn gravity(case: &Case, model: &mut Model) -> Result<(), CaseError> {
     Ok(())
 }
 
-/// The penalty wall of `boundary_conditions[k]` (`spec` its `penalty`) on the grid of an
-/// MPM domain; its name is the condition's `name` (default `penalty_<k>`).
-fn build_penalty_wall(
-    case: &Case,
-    k: usize,
-    spec: &PenaltySpec,
-    parts: &[Part],
-) -> Result<(usize, PenaltyBoundary), CaseError> {
+/// A penalty wall's keys, checked (see [`check_wall`]).
+pub(super) struct WallKeys {
+    /// The condition's `name` (default `penalty_<k>`): its output series.
+    pub name: String,
+    /// Its vertices (m).
+    pub vertices: Vec<[f64; 2]>,
+    /// `segment` or `polyline`: the key that gave them.
+    pub key: &'static str,
+    /// Spacing of the Dirichlet form's boundary particles (0 in the contact form).
+    pub spacing: f64,
+    /// Its displacement at amplitude 1 (m).
+    pub displacement: [f64; 3],
+    /// What it holds.
+    pub kind: PenaltyKind,
+    /// Case index of the MPM domain whose grid carries it (`penalty.domain`, or the only grid).
+    pub domain: usize,
+}
+
+/// Largest Coulomb coefficient a wall or slip boundary accepts (μ = 10 already holds any grain).
+pub(super) const MAX_FRICTION: f64 = 10.0;
+
+/// The keys of the penalty wall of `boundary_conditions[k]` (`spec` its `penalty`), each
+/// refused with one line naming it: 2D only, no region or slip key, a name that is not a
+/// domain's, a segment or a polyline of distinct points, the spacing of the Dirichlet form
+/// (and none in the contact form), a positive penalty factor, a displacement of numbers, a
+/// Coulomb coefficient only in the contact form; and the MPM domain whose grid carries it.
+pub(super) fn check_wall(case: &Case, k: usize, spec: &PenaltySpec) -> Result<WallKeys, CaseError> {
     let bc = &case.boundary_conditions[k];
     let loc = format!("boundary_conditions[{k}]");
     let dim = case.formulation.dim();
@@ -245,31 +270,7 @@ fn build_penalty_wall(
     if case.domains.iter().any(|d| d.name == name) {
         return Err(CaseError::new(format!("{loc}.name"), format!("'{name}' is already a domain name")));
     }
-    let grids: Vec<(usize, &GridPart)> = parts
-        .iter()
-        .enumerate()
-        .filter_map(|(i, p)| match p {
-            Part::Grid(g) => Some((i, &**g)),
-            Part::Fem(..) | Part::Rigid(..) => None,
-        })
-        .collect();
-    let (part, grid_part, domain) = match &spec.domain {
-        Some(d) => {
-            let found = grids.iter().find(|(_, g)| g.bodies.iter().any(|&b| case.domains[b].name == *d));
-            let &(i, g) = found.ok_or_else(|| {
-                CaseError::new(format!("{loc}.penalty.domain"), format!("no mpm domain named '{d}' in domains"))
-            })?;
-            (i, g, d.as_str())
-        }
-        None if grids.len() == 1 => (grids[0].0, grids[0].1, case.domains[grids[0].1.bodies[0]].name.as_str()),
-        None => {
-            return Err(CaseError::new(
-                format!("{loc}.penalty.domain"),
-                format!("name the mpm domain whose grid carries the wall ({} grids)", grids.len()),
-            ));
-        }
-    };
-    let grid = grid_part.domain.grid();
+    let domain = wall_domain(case, k, spec)?;
     let vertices: Vec<[f64; 2]> = match (&spec.segment, &spec.polyline) {
         (Some(s), None) => s.to_vec(),
         (None, Some(p)) => p.clone(),
@@ -290,7 +291,7 @@ fn build_penalty_wall(
         (Some(_), true) => {
             return Err(CaseError::new(
                 format!("{loc}.penalty.spacing"),
-                "the contact form has no boundary particles (its contact points are the material points)",
+                "the contact form has no boundary particles (its contact points lie on the wall's face, two per half cell)",
             ));
         }
         (None, false) => {
@@ -329,19 +330,12 @@ fn build_penalty_wall(
         }
     }
     bc.amplitude.check().map_err(|m| CaseError::new(format!("{loc}.amplitude"), m))?;
-    let samples = BoundaryParticles::on_polyline(&vertices, 1e-3 * length, case.formulation, case.thickness);
-    if !samples.position.iter().any(|x| grid.locate(x).is_some()) {
-        return Err(CaseError::new(
-            format!("{loc}.penalty.{key}"),
-            format!("lies outside the grid of domain '{domain}'"),
-        ));
-    }
     let kind = match spec.friction {
         None if spec.slip => PenaltyKind::Slip,
         None => PenaltyKind::NoSlip,
         Some(mu) => {
             let at = format!("{loc}.penalty.friction");
-            if !(mu.is_finite() && (0.0..=10.0).contains(&mu)) {
+            if !(mu.is_finite() && (0.0..=MAX_FRICTION).contains(&mu)) {
                 return Err(CaseError::new(at, format!("must be a Coulomb coefficient in [0, 10], got {mu}")));
             }
             if !spec.contact {
@@ -359,19 +353,74 @@ fn build_penalty_wall(
             PenaltyKind::Coulomb(mu)
         }
     };
-    let settings = PenaltySettings {
-        penalty_factor: spec.penalty_factor,
-        kind,
-        contact: spec.contact,
-        displacement,
-        amplitude: bc.amplitude.clone(),
-    };
-    Ok((part, PenaltyBoundary::new(&name, case.formulation, case.thickness, vertices, spacing, settings)))
+    Ok(WallKeys { name, vertices, key, spacing, displacement, kind, domain })
 }
 
-/// The boundary facets of every part (global node ids).
-/// Largest Coulomb coefficient a slip boundary accepts (μ = 10 already holds any grain).
-const MAX_FRICTION: f64 = 10.0;
+/// Case index of the MPM domain whose grid carries the wall of `boundary_conditions[k]`:
+/// `penalty.domain`, or the first body of the only grid (MPM domains with the same grid share
+/// it).
+fn wall_domain(case: &Case, k: usize, spec: &PenaltySpec) -> Result<usize, CaseError> {
+    let loc = format!("boundary_conditions[{k}].penalty.domain");
+    let mpm: Vec<usize> = (0..case.domains.len()).filter(|&d| case.domains[d].kind == DomainKind::Mpm).collect();
+    match &spec.domain {
+        Some(name) => mpm
+            .iter()
+            .copied()
+            .find(|&d| case.domains[d].name == *name)
+            .ok_or_else(|| CaseError::new(loc, format!("no mpm domain named '{name}' in domains"))),
+        None => {
+            let same_grid = |a: usize, b: usize| {
+                let (a, b) = (&case.domains[a], &case.domains[b]);
+                a.grid == b.grid && a.grid_mesh == b.grid_mesh
+            };
+            let grids = mpm.iter().enumerate().filter(|&(i, &d)| mpm[..i].iter().all(|&e| !same_grid(d, e))).count();
+            match mpm.first() {
+                Some(&d) if grids == 1 => Ok(d),
+                _ => {
+                    Err(CaseError::new(loc, format!("name the mpm domain whose grid carries the wall ({grids} grids)")))
+                }
+            }
+        }
+    }
+}
+
+/// The penalty wall (Dirichlet form) of `boundary_conditions[k]` (`spec` its `penalty`) on
+/// the grid of its MPM domain ([`check_wall`]), with the index of that grid's part.
+fn build_penalty_wall(
+    case: &Case,
+    k: usize,
+    spec: &PenaltySpec,
+    parts: &[Part],
+) -> Result<(usize, PenaltyBoundary), CaseError> {
+    let bc = &case.boundary_conditions[k];
+    let loc = format!("boundary_conditions[{k}]");
+    let wall = check_wall(case, k, spec)?;
+    let part = parts
+        .iter()
+        .position(|p| matches!(p, Part::Grid(g) if g.bodies.contains(&wall.domain)))
+        .expect("every mpm domain is on a grid");
+    let Part::Grid(grid_part) = &parts[part] else { unreachable!("a grid part") };
+    let grid = grid_part.domain.grid();
+    let length: f64 = wall.vertices.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum();
+    let samples = BoundaryParticles::on_polyline(&wall.vertices, 1e-3 * length, case.formulation, case.thickness);
+    if !samples.position.iter().any(|x| grid.locate(x).is_some()) {
+        return Err(CaseError::new(
+            format!("{loc}.penalty.{}", wall.key),
+            format!("lies outside the grid of domain '{}'", case.domains[wall.domain].name),
+        ));
+    }
+    let settings = PenaltySettings {
+        penalty_factor: spec.penalty_factor,
+        kind: wall.kind,
+        contact: spec.contact,
+        displacement: wall.displacement,
+        amplitude: bc.amplitude.clone(),
+    };
+    Ok((
+        part,
+        PenaltyBoundary::new(&wall.name, case.formulation, case.thickness, wall.vertices, wall.spacing, settings),
+    ))
+}
 
 /// `normal` turned to point out of the part whose boundary holds `nodes`: away from the
 /// centroid of that part's boundary nodes (the parts that carry slip boundaries, grids and

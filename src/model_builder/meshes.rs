@@ -169,6 +169,7 @@ pub(crate) fn build_mesh(case: &Case, loc: &str, spec: &MeshSpec) -> Result<Mesh
             check_block_size(case, &format!("{loc}.box.cells"), cells, *element)?;
             Mesh::cuboid(*origin, *size, *cells, *element)
         }
+        MeshSpec::Strip { vertices, width, cells } => super::walls::strip_mesh(vertices, *width, cells),
         MeshSpec::Gmsh(file) => {
             let path = case.directory.join(file);
             let limits = GmshLimits { max_entries: case.limits.cells as u64, ..GmshLimits::default() };
@@ -376,10 +377,10 @@ fn check_rigid_keys(case: &Case, k: usize) -> Result<(), CaseError> {
     if d.mesh.is_none() {
         return Err(CaseError::new(format!("{loc}.mesh"), "a rigid domain needs a mesh (its shape)"));
     }
-    if !matches!(case.formulation, Formulation::PlaneStrain | Formulation::PlaneStress) {
+    if case.formulation == Formulation::ThreeD {
         return Err(CaseError::new(
             format!("{loc}.type"),
-            "a rigid domain is plane (plane_strain or plane_stress) so far: its rotation is one angle",
+            "a rigid domain is 2D (plane or axisymmetric) so far: its rotation is one angle",
         ));
     }
     if let Some(InitialVelocity::Sine { .. }) = d.initial_velocity {
@@ -407,6 +408,14 @@ fn check_rigid_keys(case: &Case, k: usize) -> Result<(), CaseError> {
         return Err(CaseError::new(format!("{mloc}.rotation"), format!("must be finite, got {r}")));
     }
     motion.amplitude.check().map_err(|m| CaseError::new(format!("{mloc}.amplitude"), m))?;
+    if case.formulation == Formulation::Axisymmetric
+        && (motion.displacement.first() != Some(&Some(0.0)) || motion.rotation != Some(0.0))
+    {
+        return Err(CaseError::new(
+            mloc,
+            "an axisymmetric rigid body is a ring: it moves along the axis only (\"displacement\": [0, y or null], \"rotation\": 0)",
+        ));
+    }
     let held = motion.displacement.iter().filter(|v| v.is_some()).count() + usize::from(motion.rotation.is_some());
     if case.analysis.kind != AnalysisType::Dynamic && held < 3 {
         return Err(CaseError::new(
@@ -1206,6 +1215,10 @@ fn number(
         let d = &case.domains[k];
         let density = laws[d.material.as_str()].density();
         let body = RigidBody::new(&d.name, mesh, rigid_frames[&k], density, case.formulation, case.thickness);
+        let held = d.motion.as_ref().is_some_and(|m| {
+            m.displacement.len() == 2 && m.displacement.iter().all(Option::is_some) && m.rotation.is_some()
+        });
+        let body = if held { body.driven() } else { body };
         parts.push((k, Part::Rigid(k, Box::new(body))));
     }
     // the parts in the case's order (a grid where its first body is)

@@ -19,6 +19,7 @@ mod meshes;
 mod monitors;
 mod regions;
 mod settings;
+mod walls;
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -92,6 +93,9 @@ pub struct ModelOutput {
 
 /// Builds the model of `case` (see the module doc for the order of the steps).
 pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
+    // contact walls are rigid structures from here on
+    let with_walls = walls::as_rigid_structures(case)?;
+    let case = with_walls.as_ref().unwrap_or(case);
     let dim = case.formulation.dim();
     let scheme = settings::check(case)?;
     check_output_names(case)?;
@@ -192,7 +196,7 @@ fn check_output_names(case: &Case) -> Result<(), CaseError> {
         }
     }
     for (k, bc) in case.boundary_conditions.iter().enumerate() {
-        if bc.penalty.is_some() {
+        if bc.penalty.is_some() && !bc.as_rigid_wall {
             match &bc.name {
                 Some(name) => add(format!("boundary_conditions[{k}].name"), name)?,
                 None => add(format!("boundary_conditions[{k}]"), &format!("penalty_{k}"))?,
