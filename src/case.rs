@@ -643,8 +643,9 @@ pub struct BoundaryConditionSpec {
 /// A non-conforming rigid wall on an MPM background grid: in the Dirichlet form (Chandra et
 /// al. 2021) boundary particles along a segment or polyline add `β w N_I N_J` (no-slip) or
 /// `β w N_I N_J n⊗n` (slip) to the grid nodes of the cells they lie in, where those cells
-/// hold material; in the contact form the material points near the wall push against it
-/// while they penetrate (see `loam_mpm::penalty_boundary`).
+/// hold material (`loam_mpm::penalty_boundary`); in the contact form it is a rigid structure
+/// held or moved by the wall's motion, with a non-conforming contact on its face
+/// (`model_builder::walls`, issue 25).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PenaltySpec {
@@ -667,13 +668,14 @@ pub struct PenaltySpec {
     /// Frictionless: hold only the normal component (default false: no-slip).
     #[serde(default)]
     pub slip: bool,
-    /// Contact form: unilateral, the material points against the wall, for bodies that
-    /// leave the wall or roll on it (default false: the bilateral Dirichlet form).
+    /// Contact form: unilateral, for bodies that leave the wall, roll or slide on it, built as
+    /// a rigid structure with a contact interface `<name>_contact` (default false: the
+    /// bilateral Dirichlet form).
     #[serde(default)]
     pub contact: bool,
     /// Coulomb friction coefficient μ of a contact wall (instead of `slip`, which is μ = 0,
     /// and of the default no-slip): stick while the tangential force stays within μ times
-    /// the normal one, slide at that limit (`loam_mpm::penalty_boundary::coulomb_penalty`).
+    /// the normal one, slide at that limit (`loam_coupling::interface_law`).
     #[serde(default)]
     pub friction: Option<f64>,
 }

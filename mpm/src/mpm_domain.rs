@@ -577,10 +577,9 @@ impl MpmDomain {
         if self.walls.is_empty() {
             return false;
         }
-        let material: Vec<PointExtent> = self.point_extents();
         let mut changed = false;
         for wall in &mut self.walls {
-            changed |= wall.begin_step(&self.grid, &self.sums.mass, &material);
+            changed |= wall.begin_step(&self.grid, &self.sums.mass);
         }
         changed
     }

@@ -33,48 +33,19 @@
 //! compression (a clamp, or a slip support that cuts the grid). Benchmark 6 with slip: the
 //! cylinder slides ½ g sin α t² to 5e-7.
 //!
-//! # Contact form (a Loam extension)
+//! # The contact form is a rigid structure
 //!
-//! A body that *rolls* on a wall defeats the Dirichlet form: its boundary particles act over
-//! the whole band of cut cells that hold material (±6 cm along the wall for the 0.2 m
-//! cylinder on 0.02 m cells), and a rotation `Δθ` about the contact point moves the grid
-//! there by `Δθ s` normal to the wall at a distance `s` from the contact, which the penalty
-//! forbids. The no-slip cylinder of benchmark 6 then sticks and rocks in place, in Loam as in
-//! Kratos 10.4.4 (`"constrained": "fixed"`, same discretisation; measured after 0.1 s: 3.8 %
-//! and 0.9 % of the rolling distance). Kratos' separable variant (`"contact"`, normals
-//! flipped into the body) pivots about the foremost boundary particle and lifts off: −24 %,
-//! 7 mm off the wall after 0.1 s.
+//! A wall in the contact form (`"contact": true`: unilateral, the body may leave it, roll on
+//! it or slide on it with Coulomb friction) is not built here: the model builder writes it
+//! as a rigid structure held in place or moved by the wall's motion, with a non-conforming
+//! contact on its face (`src/model_builder/walls.rs`, `loam_coupling::interface_points`,
+//! `loam_fem::rigid_body`), so that walls and structures share one contact code (issue 25).
+//! This form, on boundary particles, is the Dirichlet one alone: a bilateral condition. (A
+//! no-slip Dirichlet wall stops a rolling body: its boundary particles hold the grid across
+//! the band of cut cells under it, which a rotation about the contact point moves, as in
+//! Kratos 10.4.4; measured 3.8 % and 0.9 % of the rolling distance after 0.1 s.)
 //!
-//! The contact form therefore measures the gap between the wall and the material itself.
-//! Its penalty points are the **material points** `p` near the wall, each a disk of radius
-//! `r_p = ℓ_p / 2` (`ℓ_p` the side of the square of its current volume) at distance
-//! `d_p = n·(x_p − x_wall)` from the wall at the start of the step. Over the step the point
-//! moves by `Δu_p = Σ_I N_I(x_p) Δu_I`, and its normal gap is
-//!
-//! $$ g_{N,p} = d_p - r_p + n\cdot(\Delta u_p - \Delta\bar u) . $$
-//!
-//! It pushes while `g_{N,p} < 0` and, with no-slip, sticks if it was already in contact at
-//! the start of the step (`d_p − r_p < 0`): with the weight `w_p = ℓ_p` × thickness (× 2πr
-//! in axisymmetry), `a_N = [g_{N,p} < 0]` and `a_T = [d_p − r_p < 0]`,
-//!
-//! $$ r_I \mathrel{+}= \beta\, w_p\, N_I(x_p) \big[ a_N\, g_{N,p}\, n
-//!        + a_T\, (I - n\otimes n)(\Delta u_p - \Delta\bar u) \big], \qquad
-//!    K_{IJ} \mathrel{+}= \beta\, w_p\, N_I N_J \big[ a_N\, n\otimes n + a_T\, (I - n\otimes n) \big] $$
-//!
-//! (slip: `a_T = 0`). The normal gap is total, not incremental: a body at rest keeps the
-//! penetration `f / (β w)` that carries it, a body leaves the wall freely, and a point ahead
-//! of a rolling contact is held only once it reaches the wall. The stick is decided once per
-//! step, not per Newton iteration: switched with the normal contact it would make the
-//! residual discontinuous, and Newton then cycles between the two states (observed); so a
-//! new contact slides freely for its first step, and a point leaving the wall is held
-//! tangentially until the end of the step. Points more than one size `ℓ_p` behind the wall
-//! line (its far side) are ignored. The contact moves from point to point around a rolling
-//! body, whose surface is its material points: benchmark 6 with no-slip rolls ⅓ g sin α t²
-//! to about 2 % over 1 s, but the corners of this discrete surface make the cylinder hop
-//! (up to 3 cm off the plane at 4 m/s) as the trapezoidal rule returns the energy of each
-//! corner's impact.
-//!
-//! Both forms keep their penalty matrix in the solve for the initial acceleration
+//! The wall keeps its penalty matrix in the solve for the initial acceleration
 //! (assembly with `stiffness == false`), so `a₀` obeys the wall as `Δu` does later: a body
 //! pressed on a wall does not start with the free-fall acceleration into it (which the
 //! trapezoidal rule would carry as a `±a` alternation for the whole run). A wall is a
@@ -84,7 +55,7 @@
 
 use loam_fem::amplitude::Amplitude;
 use loam_fem::assembly::BlockLayout;
-use loam_fem::domain::{AssemblyInput, DomainOutput, Field, PointExtent};
+use loam_fem::domain::{AssemblyInput, DomainOutput, Field};
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
 
@@ -103,70 +74,10 @@ pub struct GridNodes<'a> {
 /// Which components of the motion a penalty wall holds.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PenaltyKind {
-    /// Every component (`P = I`): the body sticks to the wall (it may still roll).
+    /// Every component (`P = I`): the body is held to the wall.
     NoSlip,
     /// The normal component only (`P = n ⊗ n`): frictionless sliding along the wall.
     Slip,
-    /// Coulomb friction of coefficient `μ` (contact form only): a point in contact sticks
-    /// while its tangential penalty force stays within `μ` times its normal one and slides
-    /// at that limit otherwise ([`coulomb_penalty`]).
-    Coulomb(f64),
-}
-
-/// The penalty vector `v` of a point in contact with a Coulomb wall (force on the body
-/// `−β w v`) and its derivative `∂v/∂g`, for the point's displacement relative to the wall
-/// over the step `g`, the unit normal `n` (into the body) and the normal gap at the start
-/// of the step `gap` (the return mapping of penalty friction, Wriggers, *Computational
-/// Contact Mechanics*, 2nd ed., §5.2 and §6.3, with the normal and tangential penalty
-/// factors equal):
-///
-/// `g_N = n·g + gap < 0` (else no contact: `v = 0`), `v_N = g_N n`; the trial stick
-/// `s = (I − n⊗n) g`; if `|s| ≤ μ |g_N|` it sticks, `v_T = s`, `∂v_T/∂g = I − n⊗n`; else it
-/// slides, `v_T = μ |g_N| ŝ`, `ŝ = s/|s|`,
-/// `∂v_T/∂g = −μ ŝ ⊗ n + μ |g_N| (I − ŝ⊗ŝ)(I − n⊗n)/|s|` (unsymmetric: the friction force
-/// follows the normal force). The force is continuous across the stick–slip switch, so the
-/// state is decided at every Newton iterate. Returns `(v, ∂v/∂g, in contact)`.
-pub fn coulomb_penalty(g: [f64; 3], n: [f64; 3], gap: f64, mu: f64, dim: usize) -> ([f64; 3], [[f64; 3]; 3], bool) {
-    let mut v = [0.0; 3];
-    let mut dv = [[0.0; 3]; 3];
-    let gn_step: f64 = (0..dim).map(|i| n[i] * g[i]).sum();
-    let gn = gn_step + gap;
-    if gn >= 0.0 {
-        return (v, dv, false);
-    }
-    let mut s = [0.0; 3];
-    for i in 0..dim {
-        s[i] = g[i] - gn_step * n[i];
-    }
-    let norm = (0..dim).map(|i| s[i] * s[i]).sum::<f64>().sqrt();
-    let limit = -mu * gn;
-    let tangent = |i: usize, j: usize| f64::from(u8::from(i == j)) - n[i] * n[j];
-    for i in 0..dim {
-        v[i] = gn * n[i];
-        for j in 0..dim {
-            dv[i][j] = n[i] * n[j];
-        }
-    }
-    if norm <= limit {
-        for i in 0..dim {
-            v[i] += s[i];
-            for j in 0..dim {
-                dv[i][j] += tangent(i, j);
-            }
-        }
-    } else {
-        let hat: Vec<f64> = (0..dim).map(|i| s[i] / norm).collect();
-        for i in 0..dim {
-            v[i] += limit * hat[i];
-            for j in 0..dim {
-                // (I − ŝ⊗ŝ)(I − n⊗n)
-                let projected: f64 =
-                    (0..dim).map(|k| (f64::from(u8::from(i == k)) - hat[i] * hat[k]) * tangent(k, j)).sum();
-                dv[i][j] += -mu * hat[i] * n[j] + limit * projected / norm;
-            }
-        }
-    }
-    (v, dv, true)
 }
 
 /// Boundary particles of a wall: reference positions, measures and normals.
@@ -253,17 +164,13 @@ pub struct PenaltySettings {
     pub penalty_factor: f64,
     /// No-slip or slip.
     pub kind: PenaltyKind,
-    /// Contact form (material points against the wall, unilateral) instead of the Dirichlet
-    /// form (boundary particles, bilateral).
-    pub contact: bool,
     /// Wall displacement (m) scaled by `amplitude(t)`: a moving wall (zero for a fixed one).
     pub displacement: [f64; 3],
     /// Time function of the wall displacement.
     pub amplitude: Amplitude,
 }
 
-/// One penalty point of a step: a boundary particle (Dirichlet form) or a material point
-/// near the wall (contact form).
+/// One penalty point of a step: a boundary particle where the material is.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct PenaltyPoint {
     /// Grid support that holds it (its cell on the linear basis).
@@ -274,8 +181,6 @@ struct PenaltyPoint {
     weight: f64,
     /// Unit normal from the wall into the body.
     normal: [f64; 3],
-    /// Normal gap at the start of the step (contact form: `d_p − r_p`; Dirichlet form: 0).
-    gap: f64,
     /// Position at the start of the step.
     position: [f64; 3],
 }
@@ -296,9 +201,7 @@ pub struct PenaltyBoundary {
     name: String,
     formulation: Formulation,
     thickness: f64,
-    /// Wall polyline (positions at `t = 0`).
-    vertices: Vec<[f64; 2]>,
-    /// Boundary particles (Dirichlet form; empty in the contact form).
+    /// Boundary particles.
     particles: BoundaryParticles,
     settings: PenaltySettings,
     /// Time `t_n` of the committed state.
@@ -317,8 +220,8 @@ pub struct PenaltyBoundary {
 }
 
 impl PenaltyBoundary {
-    /// A wall along the 2D polyline `vertices` (the body on its left); in the Dirichlet form
-    /// its boundary particles are `spacing` apart ([`BoundaryParticles::on_polyline`]).
+    /// A wall along the 2D polyline `vertices` (the body on its left), its boundary particles
+    /// `spacing` apart ([`BoundaryParticles::on_polyline`]).
     pub fn new(
         name: &str,
         formulation: Formulation,
@@ -327,16 +230,11 @@ impl PenaltyBoundary {
         spacing: f64,
         settings: PenaltySettings,
     ) -> Self {
-        let particles = if settings.contact {
-            BoundaryParticles::default()
-        } else {
-            BoundaryParticles::on_polyline(&vertices, spacing, formulation, thickness)
-        };
+        let particles = BoundaryParticles::on_polyline(&vertices, spacing, formulation, thickness);
         Self {
             name: name.to_string(),
             formulation,
             thickness,
-            vertices,
             particles,
             settings,
             time: 0.0,
@@ -391,20 +289,12 @@ impl PenaltyBoundary {
     /// grid node): on the linear basis every node of its cell, on a smooth one every node of
     /// its support whose function is not zero there (the functions of a point, without a
     /// GIMP domain: the field's value at `x`).
-    fn place(
-        &self,
-        grid: &Grid,
-        x: [f64; 3],
-        weight: f64,
-        normal: [f64; 3],
-        gap: f64,
-        mass: &[f64],
-    ) -> Option<PenaltyPoint> {
+    fn place(&self, grid: &Grid, x: [f64; 3], weight: f64, normal: [f64; 3], mass: &[f64]) -> Option<PenaltyPoint> {
         let (cell, g) = grid.point_functions(&x, [0.0; 3], self.formulation, self.thickness)?;
         if !grid.support(cell).iter().zip(&g.shape).all(|(&a, &n)| n == 0.0 || mass[a] > 0.0) {
             return None;
         }
-        Some(PenaltyPoint { cell, shape: g.shape, weight, normal, gap, position: x })
+        Some(PenaltyPoint { cell, shape: g.shape, weight, normal, position: x })
     }
 
     /// Penalty vector `v` (force on the body `−β w v`) of point `k` at `input`, its
@@ -430,24 +320,16 @@ impl PenaltyBoundary {
             }
         }
         let n = p.normal;
-        if let PenaltyKind::Coulomb(mu) = self.settings.kind {
-            return coulomb_penalty(g, n, p.gap, mu, dim);
-        }
         let gn: f64 = (0..dim).map(|i| n[i] * g[i]).sum();
-        let no_slip = self.settings.kind == PenaltyKind::NoSlip;
-        let (normal, tangential) =
-            if self.settings.contact { (gn + p.gap < 0.0, no_slip && p.gap < 0.0) } else { (true, no_slip) };
         let mut v = [0.0; 3];
         let mut dv = [[0.0; 3]; 3];
         for i in 0..dim {
-            if normal {
-                v[i] += (gn + p.gap) * n[i];
-                for j in 0..dim {
-                    dv[i][j] += n[i] * n[j];
-                }
+            v[i] += gn * n[i];
+            for j in 0..dim {
+                dv[i][j] += n[i] * n[j];
             }
         }
-        if tangential {
+        if self.settings.kind == PenaltyKind::NoSlip {
             for i in 0..dim {
                 v[i] += g[i] - gn * n[i];
                 for j in 0..dim {
@@ -455,50 +337,24 @@ impl PenaltyBoundary {
                 }
             }
         }
-        (v, dv, normal || tangential)
+        (v, dv, true)
     }
 }
 
 impl PenaltyBoundary {
-    /// Places the penalty points at the wall's position at `t_n`: the boundary particles
-    /// (Dirichlet form) or the material points within one size of the wall (contact form),
-    /// each kept only where its functions reach projected mass alone; their supports (cells on
-    /// the linear basis) are the
-    /// element blocks.
-    ///
-    /// `mass` is the nodal mass projected by the bodies (per grid node), `material` the
-    /// material points of the bodies on the grid. Returns whether the blocks changed.
-    pub fn begin_step(&mut self, grid: &Grid, mass: &[f64], material: &[PointExtent]) -> bool {
+    /// Places the penalty points at the wall's position at `t_n`: the boundary particles,
+    /// each kept only where its functions reach projected mass alone (`mass` per grid node);
+    /// their supports (cells on the linear basis) are the element blocks. Returns whether the
+    /// blocks changed.
+    pub fn begin_step(&mut self, grid: &Grid, mass: &[f64]) -> bool {
         self.offset = self.wall_displacement(self.time);
         let o = self.offset;
         let mut points = Vec::new();
-        if self.settings.contact {
-            let segs = segments(&self.vertices);
-            for &PointExtent { position: x, size, .. } in material {
-                let r = 0.5 * size;
-                // the nearest segment on whose span the point lies
-                let near = segs
-                    .iter()
-                    .filter_map(|seg| {
-                        let (a, d, n) = (seg.start, seg.direction, seg.normal);
-                        let rel = [x[0] - a[0] - o[0], x[1] - a[1] - o[1]];
-                        let s = (rel[0] * d[0] + rel[1] * d[1]) / seg.length;
-                        let dist = rel[0] * n[0] + rel[1] * n[1];
-                        (s >= 0.0 && s <= seg.length && dist > -size && dist - r < size).then_some((dist, n))
-                    })
-                    .min_by(|a, b| a.0.abs().total_cmp(&b.0.abs()));
-                if let Some((dist, n)) = near {
-                    let w = size * self.formulation.measure_factor(self.thickness, x[0]);
-                    points.extend(self.place(grid, x, w, n, dist - r, mass));
-                }
-            }
-        } else {
-            for b in 0..self.particles.len() {
-                let x0 = self.particles.position[b];
-                let x = [x0[0] + o[0], x0[1] + o[1], x0[2] + o[2]];
-                let (w, n) = (self.particles.weight[b], self.particles.normal[b]);
-                points.extend(self.place(grid, x, w, n, 0.0, mass));
-            }
+        for b in 0..self.particles.len() {
+            let x0 = self.particles.position[b];
+            let x = [x0[0] + o[0], x0[1] + o[1], x0[2] + o[2]];
+            let (w, n) = (self.particles.weight[b], self.particles.normal[b]);
+            points.extend(self.place(grid, x, w, n, mass));
         }
         // by cell, then by position (deterministic whatever the order of the projection)
         points.sort_by(|a, b| {
@@ -592,8 +448,7 @@ impl PenaltyBoundary {
         self.time = input.time;
     }
 
-    /// The penalty points of the last step (boundary particles, or the material points near
-    /// the wall) with `force` (of the wall on the body, N), `normal` and `active` (1 where the
+    /// The penalty points of the last step (its boundary particles where the material is) with `force` (of the wall on the body, N), `normal` and `active` (1 where the
     /// point acted).
     pub fn output(&self) -> DomainOutput {
         let n = self.points.len().min(self.force.len());
@@ -630,15 +485,12 @@ mod tests {
     const WALL: [[f64; 2]; 2] = [[0.1, 0.3], [2.9, 1.7]];
 
     /// A 3 × 2 quad grid of unit cells, a wall along a slanted segment through it, and a
-    /// projection with mass on every node but the top-right one; in the contact form, three
-    /// material points of size 0.2 near the wall (one 0.05 behind its line, one touching it,
-    /// one 0.15 in front).
+    /// projection with mass on every node but the top-right one.
     struct Fixture {
         wall: PenaltyBoundary,
         grid: Grid,
         ids: Vec<usize>,
         mass: Vec<f64>,
-        material: Vec<PointExtent>,
     }
 
     impl Fixture {
@@ -647,7 +499,7 @@ mod tests {
         }
 
         fn begin(&mut self) -> bool {
-            self.wall.begin_step(&self.grid, &self.mass, &self.material)
+            self.wall.begin_step(&self.grid, &self.mass)
         }
 
         fn ndof(&self) -> usize {
@@ -655,26 +507,15 @@ mod tests {
         }
     }
 
-    fn setup(kind: PenaltyKind, contact: bool) -> Fixture {
+    fn setup(kind: PenaltyKind) -> Fixture {
         let grid = Grid::new([0.0; 3], [3.0, 2.0, 0.0], [3, 2, 1], ElementType::Quad4);
         let nodes = grid.mesh.coords.len();
-        let settings = PenaltySettings {
-            penalty_factor: 1e3,
-            kind,
-            contact,
-            displacement: [0.0; 3],
-            amplitude: Amplitude::default(),
-        };
+        let settings =
+            PenaltySettings { penalty_factor: 1e3, kind, displacement: [0.0; 3], amplitude: Amplitude::default() };
         let wall = PenaltyBoundary::new("wall", Formulation::PlaneStrain, 2.0, WALL.to_vec(), 0.25, settings);
         let mut mass = vec![1.0; nodes];
         mass[nodes - 1] = 0.0;
-        let n = [-0.4472135954999579, 0.8944271909999159];
-        let mut material = Vec::new();
-        for (s, d) in [(0.6, 0.05), (1.2, 0.1), (1.8, 0.25)] {
-            let x = [WALL[0][0] + s * 0.8944271909999159 + d * n[0], WALL[0][1] + s * 0.4472135954999579 + d * n[1]];
-            material.push(PointExtent::new([x[0], x[1], 0.0], 0.2));
-        }
-        Fixture { wall, grid, ids: (0..nodes).collect(), mass, material }
+        Fixture { wall, grid, ids: (0..nodes).collect(), mass }
     }
 
     fn input<'a>(state: &'a NodalState, committed: &'a NodalState) -> AssemblyInput<'a> {
@@ -693,19 +534,11 @@ mod tests {
 
     #[test]
     fn penalty_points_lie_where_the_material_is() {
-        let mut f = setup(PenaltyKind::NoSlip, false);
+        let mut f = setup(PenaltyKind::NoSlip);
         assert!(f.begin());
         // the segment crosses cells 0, 1, 4 and 5; cell 5 has the massless top-right node
         assert_eq!(f.wall.cells, vec![0, 1, 4]);
         assert!(!f.begin(), "same blocks: the pattern is kept");
-        // contact form: the three material points, gaps d − r
-        let mut f = setup(PenaltyKind::NoSlip, true);
-        assert!(f.begin());
-        let gaps: Vec<f64> = f.wall.points.iter().map(|p| p.gap).collect();
-        assert_eq!(gaps.len(), 3);
-        for (g, e) in gaps.iter().zip([-0.05, 0.0, 0.15]) {
-            assert!((g - e).abs() < 1e-12, "{gaps:?}");
-        }
     }
 
     /// A uniform increment `u` of every node.
@@ -718,167 +551,99 @@ mod tests {
     }
 
     /// The penalty tangent is the derivative of the penalty residual (central differences),
-    /// both forms, no-slip and slip (the contact form away from its switches).
+    /// no-slip and slip.
     #[test]
     fn tangent_matches_finite_differences_of_the_residual() {
         for kind in [PenaltyKind::NoSlip, PenaltyKind::Slip] {
-            for contact in [false, true] {
-                let mut f = setup(kind, contact);
-                f.begin();
-                let mut layout = BlockLayout::default();
-                f.wall.blocks(f.at(), &mut layout);
-                let ndof = f.ndof();
-                let committed = NodalState::zeros(ndof);
-                let mut state = NodalState::zeros(ndof);
-                for (k, u) in state.u.iter_mut().enumerate() {
-                    // 0.02 into the wall (−n = (0.447, −0.894)) plus a pseudo-random part
-                    *u = 0.02 * (if k % 2 == 0 { 0.447 } else { -0.894 }) + 1e-3 * ((k * 7919) % 13) as f64 / 13.0;
-                }
-                let mut mats = vec![0.0; layout.matrix_len()];
-                let mut vecs = vec![0.0; layout.vector_len()];
-                f.wall.assemble(f.at(), &input(&state, &committed), &mut mats, &mut vecs);
-                let scale = mats.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                assert!(scale > 0.0);
-                let h = 1e-6;
-                for blk in 0..layout.num_blocks() {
-                    let dofs = &layout.dofs[layout.dof_ptr[blk]..layout.dof_ptr[blk + 1]];
-                    let nd = dofs.len();
-                    for (j, &gj) in dofs.iter().enumerate() {
-                        let mut r = [vec![0.0; layout.vector_len()], vec![0.0; layout.vector_len()]];
-                        for (s, sign) in [1.0, -1.0].into_iter().enumerate() {
-                            let mut st = state.clone();
-                            st.u[gj] += sign * h;
-                            let mut m = vec![0.0; layout.matrix_len()];
-                            f.wall.assemble(f.at(), &input(&st, &committed), &mut m, &mut r[s]);
-                        }
-                        for i in 0..nd {
-                            let fd = (r[0][layout.dof_ptr[blk] + i] - r[1][layout.dof_ptr[blk] + i]) / (2.0 * h);
-                            let k = mats[layout.matrix_offset[blk] + i * nd + j];
-                            assert!((fd - k).abs() <= 1e-7 * scale, "{kind:?} contact {contact}: K {k} vs FD {fd}");
-                        }
+            let mut f = setup(kind);
+            f.begin();
+            let mut layout = BlockLayout::default();
+            f.wall.blocks(f.at(), &mut layout);
+            let ndof = f.ndof();
+            let committed = NodalState::zeros(ndof);
+            let mut state = NodalState::zeros(ndof);
+            for (k, u) in state.u.iter_mut().enumerate() {
+                // 0.02 into the wall (−n = (0.447, −0.894)) plus a pseudo-random part
+                *u = 0.02 * (if k % 2 == 0 { 0.447 } else { -0.894 }) + 1e-3 * ((k * 7919) % 13) as f64 / 13.0;
+            }
+            let mut mats = vec![0.0; layout.matrix_len()];
+            let mut vecs = vec![0.0; layout.vector_len()];
+            f.wall.assemble(f.at(), &input(&state, &committed), &mut mats, &mut vecs);
+            let scale = mats.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(scale > 0.0);
+            let h = 1e-6;
+            for blk in 0..layout.num_blocks() {
+                let dofs = &layout.dofs[layout.dof_ptr[blk]..layout.dof_ptr[blk + 1]];
+                let nd = dofs.len();
+                for (j, &gj) in dofs.iter().enumerate() {
+                    let mut r = [vec![0.0; layout.vector_len()], vec![0.0; layout.vector_len()]];
+                    for (s, sign) in [1.0, -1.0].into_iter().enumerate() {
+                        let mut st = state.clone();
+                        st.u[gj] += sign * h;
+                        let mut m = vec![0.0; layout.matrix_len()];
+                        f.wall.assemble(f.at(), &input(&st, &committed), &mut m, &mut r[s]);
+                    }
+                    for i in 0..nd {
+                        let fd = (r[0][layout.dof_ptr[blk] + i] - r[1][layout.dof_ptr[blk] + i]) / (2.0 * h);
+                        let k = mats[layout.matrix_offset[blk] + i * nd + j];
+                        assert!((fd - k).abs() <= 1e-7 * scale, "{kind:?}: K {k} vs FD {fd}");
                     }
                 }
             }
         }
     }
 
-    /// Slip holds only the normal component, no-slip also the tangential one; in the contact
-    /// form only the points whose gap closes push, with the total gap, and only those in
-    /// contact at the start of the step stick.
+    /// Slip holds only the normal component, no-slip also the tangential one, at every
+    /// boundary particle.
     #[test]
-    fn forces_of_both_forms() {
+    fn forces_of_slip_and_no_slip() {
         let n = [-0.4472135954999579, 0.8944271909999159];
         let t = [n[1], -n[0]];
         // uniform motion: tangential 1 cm, normal 0.1 into the wall
         let u = [0.01 * t[0] - 0.1 * n[0], 0.01 * t[1] - 0.1 * n[1]];
         for kind in [PenaltyKind::Slip, PenaltyKind::NoSlip] {
-            for contact in [false, true] {
-                let mut fx = setup(kind, contact);
-                fx.begin();
-                let ndof = fx.ndof();
-                let (committed, state) = (NodalState::zeros(ndof), uniform(ndof, u));
-                let at = GridNodes { grid: &fx.grid, node_ids: &fx.ids };
-                fx.wall.commit(at, &input(&state, &committed));
-                let wall = &fx.wall;
-                let f = wall.total_force();
-                let (fn_, ft) = (f[0] * n[0] + f[1] * n[1], f[0] * t[0] + f[1] * t[1]);
-                let (expected_n, expected_t, acting) = if contact {
-                    // points of weight 0.2 × thickness 2 with gaps −0.05 and 0 close by 0.1 (not
-                    // the one at 0.15); only the first was in contact at the start: it sticks
-                    let stick = if kind == PenaltyKind::NoSlip { -1e3 * 0.4 * 0.01 } else { 0.0 };
-                    (1e3 * 0.4 * (0.15 + 0.1), stick, 2)
-                } else {
-                    // every boundary particle of cells 0, 1, 4
-                    let m: f64 = wall.points.iter().map(|p| p.weight).sum();
-                    let stick = if kind == PenaltyKind::NoSlip { -1e3 * m * 0.01 } else { 0.0 };
-                    (1e3 * 0.1 * m, stick, wall.points.len())
-                };
-                assert_eq!(wall.acting_points(), acting, "{kind:?} contact {contact}");
-                assert!((fn_ - expected_n).abs() < 1e-9 * expected_n, "{kind:?} {contact}: normal force {fn_}");
-                assert!((ft - expected_t).abs() < 1e-9 * fn_.abs(), "{kind:?} {contact}: tangential force {ft}");
-            }
+            let mut fx = setup(kind);
+            fx.begin();
+            let ndof = fx.ndof();
+            let (committed, state) = (NodalState::zeros(ndof), uniform(ndof, u));
+            let at = GridNodes { grid: &fx.grid, node_ids: &fx.ids };
+            fx.wall.commit(at, &input(&state, &committed));
+            let wall = &fx.wall;
+            let f = wall.total_force();
+            let (fn_, ft) = (f[0] * n[0] + f[1] * n[1], f[0] * t[0] + f[1] * t[1]);
+            // every boundary particle of cells 0, 1, 4
+            let m: f64 = wall.points.iter().map(|p| p.weight).sum();
+            let stick = if kind == PenaltyKind::NoSlip { -1e3 * m * 0.01 } else { 0.0 };
+            assert_eq!(wall.acting_points(), wall.points.len(), "{kind:?}");
+            assert!((fn_ - 1e3 * 0.1 * m).abs() < 1e-9 * fn_, "{kind:?}: normal force {fn_}");
+            assert!((ft - stick).abs() < 1e-9 * fn_.abs(), "{kind:?}: tangential force {ft}");
         }
-        // contact releases a body moving away from the wall
-        let mut fx = setup(PenaltyKind::Slip, true);
-        fx.begin();
-        let ndof = fx.ndof();
-        let (committed, state) = (NodalState::zeros(ndof), uniform(ndof, [0.1 * n[0], 0.1 * n[1]]));
-        let at = GridNodes { grid: &fx.grid, node_ids: &fx.ids };
-        fx.wall.commit(at, &input(&state, &committed));
-        assert_eq!((fx.wall.acting_points(), fx.wall.total_force()), (0, [0.0; 3]));
     }
 
     /// A moving wall (displacement × amplitude ramp): a body that follows the wall's
     /// increment feels no force, one left behind is pulled along; boundary particles move
-    /// with the wall, and the contact form measures gaps from the moved wall.
+    /// with the wall.
     #[test]
     fn moving_wall_prescribes_its_increment() {
-        for contact in [false, true] {
-            let mut fx = setup(PenaltyKind::NoSlip, contact);
-            fx.wall.settings.displacement = [0.05, -0.02, 0.0];
-            fx.wall.settings.amplitude = Amplitude::Table(vec![[0.0, 0.0], [1.0, 1.0], [2.0, 3.0]]);
-            fx.begin();
-            let ndof = fx.ndof();
-            let committed = NodalState::zeros(ndof);
-            let at = GridNodes { grid: &fx.grid, node_ids: &fx.ids };
-            fx.wall.commit(at, &input(&committed, &committed));
-            let left_behind = fx.wall.total_force();
-            // t = 1 → 2: the wall moves by 2 × (0.05, −0.02)
-            fx.begin();
-            let state = uniform(ndof, [0.1, -0.04]);
-            let at = GridNodes { grid: &fx.grid, node_ids: &fx.ids };
-            fx.wall.commit(at, &AssemblyInput { time: 2.0, ..input(&state, &committed) });
-            let wall = &fx.wall;
-            let f = wall.total_force();
-            if contact {
-                // the wall moved away from the points (which the test keeps in place)
-                let n = wall.points[0].normal;
-                let away = -(n[0] * 0.05 - n[1] * 0.02);
-                assert!((wall.points[0].gap - (-0.05 + away)).abs() < 1e-12, "{}", wall.points[0].gap);
-            } else {
-                assert!(f.iter().all(|v| v.abs() < 1e-9), "a following body feels {f:?}");
-                assert!(left_behind[0] > 1.0 && left_behind[1] < -1.0, "left behind: {left_behind:?}");
-                let x = wall.points[0].position;
-                assert!((x[0] - wall.particles.position[0][0] - 0.05).abs() < 1e-12, "{x:?}");
-            }
-        }
-    }
-
-    /// The Coulomb penalty's derivative against central differences of its vector, in stick
-    /// and in slip, on an inclined wall (relative error < 1e-7), and the force continuous
-    /// across the stick–slip limit.
-    #[test]
-    fn coulomb_penalty_derivative_matches_finite_differences() {
-        let a = 0.4f64;
-        let n = [-a.sin(), a.cos(), 0.0];
-        for (g, gap, mu) in
-            [([0.001, -0.002, 0.0], -1e-4, 0.5), ([0.02, 0.001, 0.0], -1e-3, 0.3), ([0.03, -0.01, 0.0], 0.0, 0.2)]
-        {
-            let (v, dv, contact) = coulomb_penalty(g, n, gap, mu, 2);
-            assert!(contact);
-            let h = 1e-8;
-            let scale = dv.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-            for j in 0..2 {
-                let (mut gp, mut gm) = (g, g);
-                gp[j] += h;
-                gm[j] -= h;
-                let (vp, _, _) = coulomb_penalty(gp, n, gap, mu, 2);
-                let (vm, _, _) = coulomb_penalty(gm, n, gap, mu, 2);
-                for i in 0..2 {
-                    let fd = (vp[i] - vm[i]) / (2.0 * h);
-                    assert!((fd - dv[i][j]).abs() < 1e-7 * scale, "g {g:?}: dv[{i}][{j}] {} vs FD {fd}", dv[i][j]);
-                }
-            }
-            // the tangential part never exceeds μ times the normal one
-            let vn: f64 = (0..2).map(|i| v[i] * n[i]).sum();
-            let vt = ((v[0] - vn * n[0]).powi(2) + (v[1] - vn * n[1]).powi(2)).sqrt();
-            assert!(vt <= mu * vn.abs() * (1.0 + 1e-12), "{vt} > μ {}", vn.abs());
-        }
-        // continuity at the limit: |s| = μ |g_N|
-        let (gap, mu) = (-1e-3, 0.5);
-        let t = [n[1], -n[0], 0.0];
-        let at = |r: f64| coulomb_penalty([r * t[0], r * t[1], 0.0], n, gap, mu, 2).0;
-        let (below, above) = (at(5e-4 * (1.0 - 1e-9)), at(5e-4 * (1.0 + 1e-9)));
-        assert!((0..2).all(|i| (below[i] - above[i]).abs() < 1e-11));
+        let mut fx = setup(PenaltyKind::NoSlip);
+        fx.wall.settings.displacement = [0.05, -0.02, 0.0];
+        fx.wall.settings.amplitude = Amplitude::Table(vec![[0.0, 0.0], [1.0, 1.0], [2.0, 3.0]]);
+        fx.begin();
+        let ndof = fx.ndof();
+        let committed = NodalState::zeros(ndof);
+        let at = GridNodes { grid: &fx.grid, node_ids: &fx.ids };
+        fx.wall.commit(at, &input(&committed, &committed));
+        let left_behind = fx.wall.total_force();
+        // t = 1 → 2: the wall moves by 2 × (0.05, −0.02)
+        fx.begin();
+        let state = uniform(ndof, [0.1, -0.04]);
+        let at = GridNodes { grid: &fx.grid, node_ids: &fx.ids };
+        fx.wall.commit(at, &AssemblyInput { time: 2.0, ..input(&state, &committed) });
+        let wall = &fx.wall;
+        let f = wall.total_force();
+        assert!(f.iter().all(|v| v.abs() < 1e-9), "a following body feels {f:?}");
+        assert!(left_behind[0] > 1.0 && left_behind[1] < -1.0, "left behind: {left_behind:?}");
+        let x = wall.points[0].position;
+        assert!((x[0] - wall.particles.position[0][0] - 0.05).abs() < 1e-12, "{x:?}");
     }
 }

@@ -240,9 +240,20 @@ pub(super) struct WallKeys {
     /// Its displacement at amplitude 1 (m).
     pub displacement: [f64; 3],
     /// What it holds.
-    pub kind: PenaltyKind,
+    pub hold: WallHold,
     /// Case index of the MPM domain whose grid carries it (`penalty.domain`, or the only grid).
     pub domain: usize,
+}
+
+/// What a penalty wall holds (`slip`, `friction`, neither).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum WallHold {
+    /// Every component.
+    NoSlip,
+    /// The normal component: frictionless.
+    Slip,
+    /// Coulomb friction of this coefficient (contact form only).
+    Coulomb(f64),
 }
 
 /// Largest Coulomb coefficient a wall or slip boundary accepts (μ = 10 already holds any grain).
@@ -330,9 +341,9 @@ pub(super) fn check_wall(case: &Case, k: usize, spec: &PenaltySpec) -> Result<Wa
         }
     }
     bc.amplitude.check().map_err(|m| CaseError::new(format!("{loc}.amplitude"), m))?;
-    let kind = match spec.friction {
-        None if spec.slip => PenaltyKind::Slip,
-        None => PenaltyKind::NoSlip,
+    let hold = match spec.friction {
+        None if spec.slip => WallHold::Slip,
+        None => WallHold::NoSlip,
         Some(mu) => {
             let at = format!("{loc}.penalty.friction");
             if !(mu.is_finite() && (0.0..=MAX_FRICTION).contains(&mu)) {
@@ -350,10 +361,10 @@ pub(super) fn check_wall(case: &Case, k: usize, spec: &PenaltySpec) -> Result<Wa
                     "give either \"slip\": true (frictionless) or a friction coefficient, not both",
                 ));
             }
-            PenaltyKind::Coulomb(mu)
+            WallHold::Coulomb(mu)
         }
     };
-    Ok(WallKeys { name, vertices, key, spacing, displacement, kind, domain })
+    Ok(WallKeys { name, vertices, key, spacing, displacement, hold, domain })
 }
 
 /// Case index of the MPM domain whose grid carries the wall of `boundary_conditions[k]`:
@@ -409,10 +420,14 @@ fn build_penalty_wall(
             format!("lies outside the grid of domain '{}'", case.domains[wall.domain].name),
         ));
     }
+    let kind = match wall.hold {
+        WallHold::NoSlip => PenaltyKind::NoSlip,
+        WallHold::Slip => PenaltyKind::Slip,
+        WallHold::Coulomb(_) => unreachable!("check_wall: friction needs the contact form, a rigid structure"),
+    };
     let settings = PenaltySettings {
         penalty_factor: spec.penalty_factor,
-        kind: wall.kind,
-        contact: spec.contact,
+        kind,
         displacement: wall.displacement,
         amplitude: bc.amplitude.clone(),
     };

@@ -24,9 +24,8 @@
 use loam_fem::element::ElementType;
 use loam_fem::mesh::Mesh;
 use loam_mpm::grid::Grid;
-use loam_mpm::penalty_boundary::PenaltyKind;
 
-use super::conditions::{check_wall, MAX_FRICTION};
+use super::conditions::{check_wall, WallHold, MAX_FRICTION};
 use super::meshes::{build_mesh, structured_grid};
 use crate::case::{
     Case, CaseError, DomainKind, DomainSpec, ElementFormulation, InterfaceCoupling, InterfaceSpec, MeshSpec,
@@ -87,10 +86,10 @@ pub(super) fn as_rigid_structures(case: &Case) -> Result<Option<Case>, CaseError
             quadrature: Quadrature::MaterialPoints,
             ghost_penalty: None,
         });
-        let friction = match wall.kind {
-            PenaltyKind::Slip => 0.0,
-            PenaltyKind::Coulomb(mu) => mu,
-            PenaltyKind::NoSlip => MAX_FRICTION,
+        let friction = match wall.hold {
+            WallHold::Slip => 0.0,
+            WallHold::Coulomb(mu) => mu,
+            WallHold::NoSlip => MAX_FRICTION,
         };
         let interface = format!("{}_contact", wall.name);
         out.interfaces.push(InterfaceSpec {
