@@ -1050,7 +1050,8 @@ fn number(
     fem_meshes: BTreeMap<usize, Mesh>,
     groups: Vec<GridGroup<'_>>,
 ) -> Result<Discretisation, CaseError> {
-    let (rigid_list, fem_list): (Vec<(usize, Mesh)>, Vec<(usize, Mesh)>) =
+    type Meshes = Vec<(usize, Mesh)>;
+    let (rigid_list, fem_list): (Meshes, Meshes) =
         fem_meshes.into_iter().partition(|(k, _)| case.domains[*k].kind == DomainKind::Rigid);
     let meshes: Vec<Mesh> = fem_list.iter().map(|(_, m)| m.clone()).collect();
     let (mut coords, fem_ids) = merge_nodes(&meshes);
@@ -1513,7 +1514,7 @@ fn place_rigid(case: &Case, k: usize, model: &mut Model, body: &RigidBody) {
     let motion = d.motion.clone().unwrap_or_default();
     let prescribed: Vec<(usize, f64)> = [x, y]
         .into_iter()
-        .zip(motion.displacement.iter().map(|v| *v).chain([None, None]))
+        .zip(motion.displacement.iter().copied().chain([None, None]))
         .chain([(theta, motion.rotation)])
         .filter_map(|(dof, v)| v.map(|v| (dof, v)))
         .collect();
