@@ -346,15 +346,21 @@ fn assert_no_soil_inside_disk(sim: &Simulation, label: &str, cx: f64, cy: f64) {
 #[test]
 fn disk_dropped_on_soil_transfers_the_contact_impulse() {
     let (sim, h) = run(case("disk_drop_on_mpm_soil.json"));
+    check_dropped_disk(&sim, &h, "FEM disk on soil");
+}
+
+/// The checks of a disk of `disk_r0.05.msh` dropped on the soil of
+/// `disk_drop_on_mpm_soil.json` (monitors `disk_py`, `contact_fy`, `disk_vy`): its `momentum`
+/// in free fall, before the contact force appears, `−m g t` (to 1e-9); the impulse balance
+/// ([`check_disk_impulse`]); at least two impacts; no soil inside it.
+fn check_dropped_disk(sim: &Simulation, h: &History, label: &str) {
     let mass = disk_mass("disk_r0.05.msh");
-    // the `momentum` monitor of the FEM disk (its mass matrix on the nodal velocities) in
-    // free fall, before the contact force appears: −m g t
-    let (p, f) = (monitor(&sim, "disk_py"), monitor(&sim, "contact_fy"));
+    let (p, f) = (monitor(sim, "disk_py"), monitor(sim, "contact_fy"));
     let falling = h.iter().take_while(|r| r.1[f] == 0.0).last().expect("a free-fall row");
-    report("FEM disk in free fall: momentum [N s/m]", falling.1[p], -mass * 9.81 * falling.0, 1e-9);
-    let impacts = check_disk_impulse(&sim, &h, "disk on soil", mass, "contact_fy", "disk_vy");
+    report(&format!("{label}, in free fall: momentum [N s/m]"), falling.1[p], -mass * 9.81 * falling.0, 1e-9);
+    let impacts = check_disk_impulse(sim, h, label, mass, "contact_fy", "disk_vy");
     assert!(impacts >= 2, "the disk bounces: {impacts} impacts");
-    assert_no_soil_inside_disk(&sim, "disk on soil", 0.3, 0.28);
+    assert_no_soil_inside_disk(sim, label, 0.3, 0.28);
 }
 
 /// Issue 25, item 5 (an MPM body on an FEM structure): an elastic MPM disk (R = 0.05 m,
@@ -575,13 +581,7 @@ fn rigid_disk_dropped_on_soil_transfers_the_contact_impulse() {
     let mesh = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/meshes/disk_r0.05.msh");
     json["domains"][1]["mesh"]["gmsh"] = serde_json::json!(mesh);
     let (sim, h) = run(parse(json));
-    let mass = disk_mass("disk_r0.05.msh");
-    let (p, f) = (monitor(&sim, "disk_py"), monitor(&sim, "contact_fy"));
-    let falling = h.iter().take_while(|r| r.1[f] == 0.0).last().expect("a free-fall row");
-    report("rigid disk in free fall: momentum [N s/m]", falling.1[p], -mass * 9.81 * falling.0, 1e-9);
-    let impacts = check_disk_impulse(&sim, &h, "rigid disk on soil", mass, "contact_fy", "disk_vy");
-    assert!(impacts >= 2, "the disk bounces: {impacts} impacts");
-    assert_no_soil_inside_disk(&sim, "rigid disk on soil", 0.3, 0.28);
+    check_dropped_disk(&sim, &h, "rigid disk on soil");
 }
 
 /// Issue 25, item 4 (a rigid body free to roll; `cases/rigid_disk_rolling_on_mpm.json`): a
