@@ -133,6 +133,8 @@ pub struct Simulation {
     pub outputs: Vec<ModelOutput>,
     /// The interfaces between soil and structures.
     pub interfaces: Vec<InterfaceSummary>,
+    /// The rigid domains (what `loam check` reports).
+    pub rigid_bodies: Vec<crate::model_builder::RigidSummary>,
     /// Length of the next step taken by [`Simulation::step`] (the case's `time_step`, or
     /// what adaptive step control made of it).
     pub time_step: f64,
@@ -223,6 +225,7 @@ impl Simulation {
             inputs: built.inputs,
             outputs: built.outputs,
             interfaces: built.interfaces,
+            rigid_bodies: built.rigid_bodies,
             time_step: case_time_step,
             peak_kinetic_energy: 0.0,
             rest_since: None,

@@ -36,6 +36,19 @@ pub fn check_command(case: &Path) -> ExitCode {
                     measure.1
                 );
             }
+            for r in &sim.rigid_bodies {
+                let names = ["u_x", "u_y", "θ"];
+                let held: Vec<&str> = (0..3).filter(|&k| r.held[k]).map(|k| names[k]).collect();
+                let motion = match held.len() {
+                    0 => "free".to_string(),
+                    3 => "driven (u_x, u_y, θ prescribed)".to_string(),
+                    _ => format!("{} prescribed, the rest free", held.join(", ")),
+                };
+                println!(
+                    "  rigid body '{}': mass {:.6e} kg, moment of inertia {:.6e} kg m² about its centroid ({:.6}, {:.6}) m; {motion}",
+                    r.name, r.mass, r.inertia, r.centre[0], r.centre[1]
+                );
+            }
             ExitCode::SUCCESS
         }
         Err(e) => bad_input(&e),

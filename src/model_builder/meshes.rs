@@ -91,6 +91,24 @@ pub(super) struct Discretisation {
     pub ties: Vec<InterfacePoints>,
     /// Where each rigid domain's unknowns are, by domain name.
     pub rigid_frames: BTreeMap<String, RigidFrame>,
+    /// What `loam check` reports of each rigid domain.
+    pub rigid_bodies: Vec<RigidSummary>,
+}
+
+/// A rigid domain as `loam check` reports it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RigidSummary {
+    /// Domain name.
+    pub name: String,
+    /// Mass (kg, over the plane thickness or the full ring) and moment of inertia about the
+    /// centroid (kg m²).
+    pub mass: f64,
+    /// Moment of inertia about the centroid (kg m²).
+    pub inertia: f64,
+    /// Centroid (m).
+    pub centre: [f64; 2],
+    /// Which unknowns `motion` prescribes (`u_x`, `u_y`, `θ`).
+    pub held: [bool; 3],
 }
 
 /// A non-conforming tie of a grid, before numbering.
@@ -1212,6 +1230,7 @@ fn number(
         .map_err(|e| CaseError::new(format!("domains[{k}].mesh"), format!("element {}: {}", e.element, e.message)))?;
         parts.push((k, Part::Fem(k, Box::new(domain))));
     }
+    let mut rigid_bodies = Vec::new();
     for (k, mesh) in rigid_list {
         let d = &case.domains[k];
         let density = laws[d.material.as_str()].density();
@@ -1220,6 +1239,19 @@ fn number(
             m.displacement.len() == 2 && m.displacement.iter().all(Option::is_some) && m.rotation.is_some()
         });
         let body = if held { body.driven() } else { body };
+        let motion = d.motion.clone().unwrap_or_default();
+        let (mass, inertia) = body.mass_and_inertia();
+        rigid_bodies.push(RigidSummary {
+            name: d.name.clone(),
+            mass,
+            inertia,
+            centre: body.frame().centre,
+            held: [
+                motion.displacement.first().copied().flatten().is_some(),
+                motion.displacement.get(1).copied().flatten().is_some(),
+                motion.rotation.is_some(),
+            ],
+        });
         parts.push((k, Part::Rigid(k, Box::new(body))));
     }
     // the parts in the case's order (a grid where its first body is)
@@ -1244,6 +1276,7 @@ fn number(
         interfaces,
         ties,
         rigid_frames: rigid_frames.into_iter().map(|(k, f)| (case.domains[k].name.clone(), f)).collect(),
+        rigid_bodies,
     })
 }
 

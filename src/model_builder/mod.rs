@@ -31,6 +31,7 @@ use loam_laws::ConstitutiveLaw;
 use crate::case::{Case, CaseError, Component};
 use crate::monitor::Monitor;
 
+pub use meshes::RigidSummary;
 pub(crate) use meshes::{body_points, build_mesh, structured_grid};
 pub use monitors::monitor_unit;
 pub use regions::nearest_node;
@@ -50,6 +51,8 @@ pub struct BuiltModel {
     pub outputs: Vec<ModelOutput>,
     /// The interfaces between soil and structures, as `loam check` reports them.
     pub interfaces: Vec<InterfaceSummary>,
+    /// The rigid domains, as `loam check` reports them.
+    pub rigid_bodies: Vec<RigidSummary>,
 }
 
 /// Where an input acts in the [`Model`].
@@ -118,7 +121,8 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     let monitors = monitors::build(case, &model, &regions, &discretisation.interfaces, &discretisation.rigid_frames)?;
     let (inputs, outputs) = fmu_variables::resolve(case, &bcs, &load_of_load, &monitors)?;
     let interfaces = discretisation.interfaces.iter().map(|i| i.summary.clone()).collect();
-    Ok(BuiltModel { model, monitors, regions, inputs, outputs, interfaces })
+    let rigid_bodies = discretisation.rigid_bodies.clone();
+    Ok(BuiltModel { model, monitors, regions, inputs, outputs, interfaces, rigid_bodies })
 }
 
 /// The laws of the case's materials, checked.
