@@ -218,6 +218,10 @@ pub struct InterfacePoints {
     tracked: Vec<bool>,
     /// The grid's largest cell extent ([`InterfacePoints::largest_cell`]).
     largest_cell: f64,
+    /// The cells around each grid node (CSR: `node_cells[node_cell_ptr[a]..node_cell_ptr[a + 1]]`),
+    /// for the ring of cells around a point's ([`InterfacePoints::extrapolated`]).
+    node_cell_ptr: Vec<usize>,
+    node_cells: Vec<usize>,
 }
 
 impl InterfacePoints {
@@ -248,6 +252,7 @@ impl InterfacePoints {
         }
         let n = points.len();
         let largest_cell = Self::largest_cell(&grid);
+        let (node_cell_ptr, node_cells) = Self::cells_around_nodes(&grid);
         Self {
             name: name.to_string(),
             formulation,
@@ -271,7 +276,46 @@ impl InterfacePoints {
             soil_points: None,
             tracked: vec![false; n],
             largest_cell,
+            node_cell_ptr,
+            node_cells,
         }
+    }
+
+    /// The cells around each node of `grid`, CSR (see the fields).
+    fn cells_around_nodes(grid: &Grid) -> (Vec<usize>, Vec<usize>) {
+        let mesh = &grid.mesh;
+        let mut count = vec![0usize; mesh.coords.len() + 1];
+        for c in 0..mesh.num_cells() {
+            for &a in mesh.cell(c) {
+                count[a + 1] += 1;
+            }
+        }
+        for a in 0..mesh.coords.len() {
+            count[a + 1] += count[a];
+        }
+        let mut cells = vec![0; count[mesh.coords.len()]];
+        let mut next = count.clone();
+        for c in 0..mesh.num_cells() {
+            for &a in mesh.cell(c) {
+                cells[next[a]] = c;
+                next[a] += 1;
+            }
+        }
+        (count, cells)
+    }
+
+    /// The cells sharing a node with `cell` (itself included), ascending.
+    fn ring(&self, cell: usize) -> Vec<usize> {
+        let mut ring: Vec<usize> = self
+            .grid
+            .mesh
+            .cell(cell)
+            .iter()
+            .flat_map(|&a| self.node_cells[self.node_cell_ptr[a]..self.node_cell_ptr[a + 1]].iter().copied())
+            .collect();
+        ring.sort_unstable();
+        ring.dedup();
+        ring
     }
 
     /// The same contact with the soil's material points (module doc, "Open points"): a point
@@ -458,8 +502,7 @@ impl InterfacePoints {
             (centre[0] - x[0]).hypot(centre[1] - x[1])
         };
         let nearest = self
-            .grid
-            .dilate(&[cell])
+            .ring(cell)
             .into_iter()
             .filter(|&c| self.grid.mesh.cell(c).iter().all(|&a| reached[a]))
             .min_by(|&a, &b| distance(a).total_cmp(&distance(b)))?;
