@@ -127,6 +127,20 @@ fn open_contact_resumes_bit_for_bit() {
     });
 }
 
+/// A free rigid body (issue 25, item 4): the rigid disk rolling on soil
+/// (`rigid_disk_rolling_on_mpm`, the first 0.1 s on its 10 mm grid), resumed after step 50:
+/// its translation and rotation (nodal DOFs of its centre and rotation nodes) and the
+/// contact's state come back with the checkpoint.
+#[test]
+fn rolling_rigid_disk_resumes_bit_for_bit() {
+    resume_equals_uninterrupted("rigid_disk_rolling_on_mpm", 25, 50, |j| {
+        j["analysis"]["end_time"] = serde_json::json!(0.1);
+        j["domains"][0]["grid"]["cells"] = serde_json::json!([80, 35]);
+        j["domains"][0]["material_points"]["cells"]["mesh"]["rectangle"]["cells"] = serde_json::json!([80, 10]);
+        j["domains"][1]["mesh"]["gmsh"] = serde_json::json!(root().join("cases/meshes/disk_r0.1_rigid.msh"));
+    });
+}
+
 /// The Bui column collapsing onto the rubber plate (coupled, adaptive, to rest), resumed
 /// after step 300. Long (two runs of about 40 s).
 #[test]
