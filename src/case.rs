@@ -1299,6 +1299,8 @@ pub enum InputTarget {
     /// The factor of the prescribed displacements of the boundary condition with this
     /// `name`.
     BoundaryCondition(String),
+    /// The factor of the prescribed `motion` of the rigid domain with this name.
+    Motion(String),
     /// The gravity factor.
     Gravity,
 }

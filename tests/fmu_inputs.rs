@@ -124,6 +124,64 @@ fn boundary_condition_input_ramp_equals_amplitude_table() {
     assert!(max_diff <= 1e-12);
 }
 
+/// A rigid block (`"type": "rigid"`) pressed into elastic MPM soil by its prescribed
+/// `motion` (static, frictionless contact on its base): an input driving the motion
+/// (`"drives": {"motion": "block"}`) gives the run of the same case with the ramp as the
+/// motion's amplitude table (to 1e-12), block reaction and soil settlement alike.
+fn rigid_block() -> Value {
+    json!({
+        "description": "a rigid block pressed into MPM soil for the input tests",
+        "materials": {
+            "soil": { "law": "neo_hookean", "density": 1000.0, "young_modulus": 1.0e6, "poisson_ratio": 0.3 },
+            "block": { "law": "linear_elastic", "density": 1000.0, "young_modulus": 1.0e9, "poisson_ratio": 0.3 }
+        },
+        "domains": [
+            { "name": "soil", "type": "mpm", "material": "soil",
+              "grid": { "origin": [0.0, 0.0], "size": [0.6, 0.3], "cells": [30, 15], "element": "quad4" },
+              "material_points": { "cells": { "mesh": { "rectangle": { "origin": [0.0, 0.0], "size": [0.6, 0.2], "cells": [30, 10], "element": "quad4" } }, "points_per_cell": 4 } } },
+            { "name": "block", "type": "rigid", "material": "block",
+              "mesh": { "rectangle": { "origin": [0.2, 0.2], "size": [0.2, 0.05], "cells": [8, 2], "element": "quad4" } },
+              "motion": { "displacement": [0.0, -0.005], "rotation": 0.0, "amplitude": 0.0 } }
+        ],
+        "regions": { "base": { "y": 0.0 }, "sides": { "box": { "min": [0.0, 0.0], "max": [0.0, 0.3] } }, "right": { "x": 0.6 },
+                     "face": { "segment": { "from": [0.2, 0.2], "to": [0.4, 0.2] } } },
+        "boundary_conditions": [
+            { "region": "base", "displacement": [0.0, 0.0] },
+            { "region": "sides", "displacement": [0.0, null] },
+            { "region": "right", "displacement": [0.0, null] }
+        ],
+        "interfaces": [ { "name": "contact", "soil": "soil", "structure": "block", "region": "face", "coupling": "contact" } ],
+        "analysis": { "type": "static", "time_step": 0.01, "end_time": 0.2 },
+        "solver": { "residual_relative_tolerance": 1e-10, "residual_absolute_tolerance": 1e-8 },
+        "monitors": [
+            { "name": "block_ry", "type": "rigid_body", "domain": "block", "quantity": "reaction", "component": "y" },
+            { "name": "block_uy", "type": "rigid_body", "domain": "block", "quantity": "displacement", "component": "y" },
+            { "name": "soil_uy", "type": "material_point_displacement", "point": [0.3, 0.195], "component": "y" }
+        ]
+    })
+}
+
+#[test]
+fn rigid_motion_input_ramp_equals_amplitude_table() {
+    let a = with_fmu_input(rigid_block(), json!({ "motion": "block" }));
+    let mut b = rigid_block();
+    b["domains"][1]["motion"]["amplitude"] = table();
+    let d = compare(&a, &b, "u");
+    println!("rigid motion input vs amplitude table: max relative difference = {d:e} (tolerance 1e-12)");
+    assert!(d <= 1e-12);
+    // a domain that is not rigid, or a rigid one without motion, is refused naming the key
+    for (domain, edit) in [("soil", false), ("block", true)] {
+        let mut c = with_fmu_input(rigid_block(), json!({ "motion": domain }));
+        if edit {
+            c["domains"][1].as_object_mut().unwrap().remove("motion");
+            c["analysis"]["type"] = json!("dynamic");
+        }
+        let e = build_error(&c);
+        println!("drives motion of '{domain}': {e}");
+        assert!(e.contains("fmu.inputs[0].drives.motion"), "{e}");
+    }
+}
+
 #[test]
 fn held_input_over_sub_steps_equals_constant_amplitude() {
     // advance_to over several case steps holds the input (zero-order hold)

@@ -1,5 +1,5 @@
-//! The case's FMU variables: inputs resolved to loads, boundary conditions or gravity,
-//! outputs to monitors.
+//! The case's FMU variables: inputs resolved to loads, boundary conditions, rigid bodies'
+//! motions or gravity, outputs to monitors.
 
 use std::collections::BTreeMap;
 
@@ -8,18 +8,25 @@ use super::{InputSlot, ModelInput, ModelOutput};
 use crate::case::{Case, CaseError, InputTarget};
 use crate::monitor::Monitor;
 
-/// Resolves `fmu.inputs` to loads, constraints or gravity, and `fmu.outputs` (default:
-/// every monitor) to monitors; names must be unique, non-empty and not `time`.
+/// Resolves `fmu.inputs` to loads, constraints (of boundary conditions and of rigid bodies'
+/// `motion`, `motion_of` by domain name) or gravity, and `fmu.outputs` (default: every
+/// monitor) to monitors; names must be unique, non-empty and not `time`. A contact wall built
+/// as a rigid structure (`walls`) is driven through its body's motion.
 pub(super) fn resolve(
     case: &Case,
     constraint_of_bc: &[usize],
     load_of_load: &[usize],
+    motion_of: &BTreeMap<String, usize>,
     monitors: &[Monitor],
 ) -> Result<(Vec<ModelInput>, Vec<ModelOutput>), CaseError> {
     let mut bc_names = BTreeMap::new();
     for (k, bc) in case.boundary_conditions.iter().enumerate() {
         if let Some(name) = &bc.name {
-            if bc_names.insert(name.as_str(), constraint_of_bc[k]).is_some() {
+            let slot = match motion_of.get(name) {
+                Some(&c) if bc.as_rigid_wall => c,
+                _ => constraint_of_bc[k],
+            };
+            if bc_names.insert(name.as_str(), slot).is_some() {
                 return Err(CaseError::new(
                     format!("boundary_conditions[{k}].name"),
                     format!("duplicate boundary condition name '{name}'"),
@@ -74,6 +81,16 @@ pub(super) fn resolve(
                     format!("{loc}.drives.boundary_condition"),
                     format!("no boundary condition named '{n}' in boundary_conditions"),
                 )
+            })?),
+            InputTarget::Motion(n) => InputSlot::Constraint(*motion_of.get(n.as_str()).ok_or_else(|| {
+                let message = match case.domains.iter().find(|d| d.name == *n) {
+                    Some(d) if d.kind == crate::case::DomainKind::Rigid => {
+                        format!("the rigid domain '{n}' prescribes no motion (give it \"motion\")")
+                    }
+                    Some(_) => format!("'{n}' is not a rigid domain (\"type\": \"rigid\")"),
+                    None => format!("no domain named '{n}' in domains"),
+                };
+                CaseError::new(format!("{loc}.drives.motion"), message)
             })?),
             InputTarget::Gravity => {
                 if case.gravity.is_none() {

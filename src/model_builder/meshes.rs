@@ -1506,9 +1506,15 @@ fn velocity_blend(case: &Case, k: usize) -> Result<VelocityBlend, CaseError> {
 }
 
 /// Puts the parts into the model as domains, in the case's order, and gives FEM domains
-/// their initial velocity.
-pub(super) fn place_domains(case: &Case, model: &mut Model, parts: Vec<Part>) -> Result<(), CaseError> {
+/// their initial velocity. Returns, by rigid domain name, the index of the constraint of its
+/// prescribed motion (whose amplitude an FMU input can drive).
+pub(super) fn place_domains(
+    case: &Case,
+    model: &mut Model,
+    parts: Vec<Part>,
+) -> Result<BTreeMap<String, usize>, CaseError> {
     let dim = case.formulation.dim();
+    let mut motions = BTreeMap::new();
     for part in parts {
         match part {
             Part::Fem(k, domain) => {
@@ -1523,19 +1529,22 @@ pub(super) fn place_domains(case: &Case, model: &mut Model, parts: Vec<Part>) ->
             }
             Part::Grid(grid) => model.domains.push(Box::new(grid.domain)),
             Part::Rigid(k, body) => {
-                place_rigid(case, k, model, &body);
+                if let Some(c) = place_rigid(case, k, model, &body) {
+                    motions.insert(case.domains[k].name.clone(), c);
+                }
                 model.domains.push(body);
             }
         }
     }
-    Ok(())
+    Ok(motions)
 }
 
 /// A rigid body's initial velocity and prescribed motion in `model`: `initial_velocity`
 /// (uniform) on its centre, `initial_angular_velocity` on its rotation, one constraint for the
 /// prescribed entries of `motion` (scaled by its amplitude) and one holding the rotation
-/// node's unused second DOF.
-fn place_rigid(case: &Case, k: usize, model: &mut Model, body: &RigidBody) {
+/// node's unused second DOF. Returns the index of the motion's constraint, if it prescribes
+/// anything.
+fn place_rigid(case: &Case, k: usize, model: &mut Model, body: &RigidBody) -> Option<usize> {
     let d = &case.domains[k];
     let [x, y, theta] = body.frame().dofs();
     if let Some(v0) = &d.initial_velocity {
@@ -1551,16 +1560,18 @@ fn place_rigid(case: &Case, k: usize, model: &mut Model, body: &RigidBody) {
         .chain([(theta, motion.rotation)])
         .filter_map(|(dof, v)| v.map(|v| (dof, v)))
         .collect();
-    if !prescribed.is_empty() {
+    let motion_constraint = (!prescribed.is_empty()).then(|| {
         let (dofs, values) = prescribed.into_iter().unzip();
         model.constraints.push(loam_fem::model::Constraint { dofs, values, amplitude: motion.amplitude });
-    }
+        model.constraints.len() - 1
+    });
     let unused = 2 * body.frame().rotation_node + 1;
     model.constraints.push(loam_fem::model::Constraint {
         dofs: vec![unused],
         values: vec![0.0],
         amplitude: Default::default(),
     });
+    motion_constraint
 }
 
 /// Mean cell size `h = (V_box / cells)^(1/dim)` of a mesh (the length in the equilibration

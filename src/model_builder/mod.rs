@@ -114,12 +114,12 @@ pub fn build_model(case: &Case) -> Result<BuiltModel, CaseError> {
     let bcs = conditions::boundary_conditions(case, &mut model, &regions, &mut parts)?;
     conditions::check_supported(case, &model)?;
     interfaces::attach(case, &mut model, &mut parts)?;
-    meshes::place_domains(case, &mut model, parts)?;
+    let motions = meshes::place_domains(case, &mut model, parts)?;
     model.domains.extend(ties.into_iter().map(|t| Box::new(t) as Box<dyn loam_fem::domain::Domain>));
     let load_of_load = conditions::loads(case, &mut model, &regions)?;
     conditions::gravity(case, &mut model)?;
     let monitors = monitors::build(case, &model, &regions, &discretisation.interfaces, &discretisation.rigid_frames)?;
-    let (inputs, outputs) = fmu_variables::resolve(case, &bcs, &load_of_load, &monitors)?;
+    let (inputs, outputs) = fmu_variables::resolve(case, &bcs, &load_of_load, &motions, &monitors)?;
     let interfaces = discretisation.interfaces.iter().map(|i| i.summary.clone()).collect();
     let rigid_bodies = discretisation.rigid_bodies.clone();
     Ok(BuiltModel { model, monitors, regions, inputs, outputs, interfaces, rigid_bodies })
