@@ -182,6 +182,21 @@ fn rigid_motion_input_ramp_equals_amplitude_table() {
     }
 }
 
+/// A contact wall is a rigid structure (issue 25): an input driving its boundary condition
+/// drives the body's motion, the constraint on its three DOFs (the repose case's gate).
+#[test]
+fn contact_wall_input_drives_its_rigid_body() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/repose_phi20.json");
+    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    v["fmu"] =
+        json!({ "inputs": [ { "name": "gate_factor", "drives": { "boundary_condition": "gate" }, "start": 0.0 } ] });
+    let s = sim(&v);
+    let loam::model_builder::InputSlot::Constraint(c) = s.inputs[0].slot else { panic!("a constraint slot") };
+    let dofs = &s.model.constraints[c].dofs;
+    println!("the gate's input drives constraint {c} on DOFs {dofs:?}");
+    assert_eq!(dofs.len(), 3, "the gate's u_x, u_y and θ");
+}
+
 #[test]
 fn held_input_over_sub_steps_equals_constant_amplitude() {
     // advance_to over several case steps holds the input (zero-order hold)
