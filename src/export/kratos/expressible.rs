@@ -53,7 +53,10 @@ fn model(case: &Case, raw: &Value, notes: &mut Vec<String>) -> Result<(), Export
         if d.kind != DomainKind::Mpm {
             return refuse(
                 format!("{loc}.type"),
-                "fem domains are not exported (a Kratos MPM case holds material points and a grid)",
+                &format!(
+                    "{} domains are not exported (a Kratos MPM case holds material points and a grid)",
+                    d.kind.as_str()
+                ),
             );
         }
         let given = |key: &str| raw["domains"][k].get(key).is_some();
