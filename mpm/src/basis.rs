@@ -555,12 +555,14 @@ impl SmoothLattice {
         }
     }
 
-    /// Supports sharing a node with any support of `supports` (ascending, included): the
-    /// set grown by one ring.
-    pub fn dilate(&self, supports: &[usize]) -> Vec<usize> {
+    /// Supports whose window is within `reach` node rows of a window of `supports`
+    /// (ascending, included) along every axis: `reach = 2` gives the supports sharing a node
+    /// with one of `supports` (the set grown by one ring), `reach = 1` those overlapping one
+    /// by two node rows (half the ring's width).
+    pub fn dilate(&self, supports: &[usize], reach: usize) -> Vec<usize> {
         let n = self.windows();
         let mut mark = vec![false; self.num_supports()];
-        let reach = |w: usize, d: usize| w.saturating_sub(2)..(w + 3).min(n[d]);
+        let reach = |w: usize, d: usize| w.saturating_sub(reach)..(w + reach + 1).min(n[d]);
         for &s in supports {
             let w = self.window(s);
             for kk in reach(w[2], 2) {

@@ -312,10 +312,12 @@ impl Grid {
         }
     }
 
-    /// Supports sharing a node with any of `supports` (ascending, included).
-    pub fn dilate_supports(&self, supports: &[usize]) -> Vec<usize> {
+    /// Supports sharing a node with any of `supports` (ascending, included); on a smooth
+    /// basis with `narrow`, only those whose windows are one node row from one of `supports`
+    /// ([`SmoothLattice::dilate`]: the ring half as wide).
+    pub fn dilate_supports(&self, supports: &[usize], narrow: bool) -> Vec<usize> {
         match &self.smooth {
-            Some(lattice) => lattice.dilate(supports),
+            Some(lattice) => lattice.dilate(supports, if narrow { 1 } else { 2 }),
             None => self.dilate(supports),
         }
     }

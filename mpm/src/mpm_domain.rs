@@ -402,9 +402,14 @@ impl MpmDomain {
             cb.pattern.is_empty() || active.iter().any(|&c| !cb.in_pattern[c])
         };
         if changed {
+            // a smooth basis's ring is half as wide where no ghost penalty needs the empty
+            // neighbour supports' blocks: its supports span three node rows, so a full ring
+            // (supports sharing a node) adds two rows on each side and its zero blocks cost
+            // fill in every factorisation; the price is more frequent rebuilds of the pattern
+            let narrow = self.ghost.is_none();
             let mut cells = active.clone();
             for _ in 0..cb.rings {
-                cells = self.grid.dilate_supports(&cells);
+                cells = self.grid.dilate_supports(&cells, narrow);
             }
             cb.in_pattern = vec![false; num_cells];
             for &c in &cells {
