@@ -402,11 +402,17 @@ impl MpmDomain {
             cb.pattern.is_empty() || active.iter().any(|&c| !cb.in_pattern[c])
         };
         if changed {
-            // a smooth basis's ring is half as wide where no ghost penalty needs the empty
-            // neighbour supports' blocks: its supports span three node rows, so a full ring
-            // (supports sharing a node) adds two rows on each side and its zero blocks cost
-            // fill in every factorisation; the price is more frequent rebuilds of the pattern
-            let narrow = self.ghost.is_none();
+            // a smooth basis's ring is half as wide where only the points act on the grid: its
+            // supports span three node rows, so a full ring (supports sharing a node) adds two
+            // rows on each side and its zero blocks cost fill in every factorisation; the price
+            // is more frequent rebuilds of the pattern. A ghost penalty, a penalty wall, an
+            // attached structure or a contact acts on nodes beside the points, which the full
+            // ring gives a place (an identity row for a direction they do not hold)
+            let narrow = self.ghost.is_none()
+                && self.walls.is_empty()
+                && self.attachment.is_none()
+                && Arc::strong_count(&self.soil_nodes) == 1
+                && Arc::strong_count(&self.soil_points) == 1;
             let mut cells = active.clone();
             for _ in 0..cb.rings {
                 cells = self.grid.dilate_supports(&cells, narrow);
