@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Loam's whole test suite: Rust unit, validation and CLI tests, then the Python checks
 # (VTK files read by meshio, FMUs run by fmpy) in a virtual environment it sets up itself.
-#   scripts/test.sh               the default suite (12–14 minutes on 2 cores)
+#   scripts/test.sh               the default suite (12–16 minutes on 2 cores)
 #   LOAM_LONG=1 scripts/test.sh   also the long validation runs: every test marked
 #                                 #[ignore = "long ..."] (about 25 minutes in all)
 #   LOAM_PETSC=1 scripts/test.sh  also the `petsc` feature's tests (needs scripts/install_petsc.sh;
