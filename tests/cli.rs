@@ -535,7 +535,8 @@ fn trace_newton_prints_every_iteration() {
     let lines: Vec<&str> = traced.lines().filter(|l| l.starts_with("newton t=")).collect();
     println!("{} Newton lines, first: {}", lines.len(), lines.first().copied().unwrap_or(""));
     assert!(lines.len() >= 2, "{traced}");
-    assert!(lines[0].contains(" it=0 ") && lines[0].contains("|r|="), "{}", lines[0]);
+    assert!(lines[0].contains(" it=0 ") && lines[0].contains("|r|=") && lines[0].contains(" peak="), "{}", lines[0]);
+    assert!(lines[1].contains(" dpeak="), "{}", lines[1]);
     assert!(!run(false).contains("newton t="));
     let help = loam().args(["run", "--help"]).output().unwrap();
     assert!(String::from_utf8_lossy(&help.stdout).contains("--trace-newton"));

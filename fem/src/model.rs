@@ -695,6 +695,7 @@ impl Model {
             gravity,
             f_ext: &f_ext,
             kinematic_dofs: self.coords.len() * self.dim,
+            coords: &self.coords,
         };
         let mut result =
             NewtonStrategy { settings: self.settings, reference_residual: None }.solve(&mut problem, &mut report);

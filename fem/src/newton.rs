@@ -167,9 +167,39 @@ pub struct StepProblem<'a> {
     pub f_ext: &'a [f64],
     /// Number of displacement DOFs (the DOFs with velocity and acceleration).
     pub kinematic_dofs: usize,
+    /// Reference coordinates of the nodes (for the trace's residual peak: where it is).
+    pub coords: &'a [[f64; 3]],
 }
 
 impl StepProblem<'_> {
+    /// ` peak=<node>@(<x>, <y>[, <z>]):<force>`: the node whose displacement equations carry
+    /// the largest residual ([`Assembler::largest_nodal_residual`]), where it was at the start
+    /// of the step, or nothing.
+    fn residual_peak(&self) -> String {
+        let Some((node, force, _)) = self.assembler.largest_nodal_residual() else { return String::new() };
+        format!(" peak={node}@({}):{force:.3e}", self.node_position(node))
+    }
+
+    /// ` dpeak=<node>@(<x>, <y>[, <z>]):<norm>`: the node whose displacement moved most in the
+    /// step so far (`‖Δu‖` over its components), or nothing before the first correction.
+    fn increment_peak(&self, du_step: &[f64]) -> String {
+        let dim = self.kinematic_dofs / self.coords.len().max(1);
+        let norm = |n: usize| du_step[n * dim..(n + 1) * dim].iter().map(|d| d * d).sum::<f64>().sqrt();
+        let peak = (0..self.coords.len()).max_by(|&a, &b| norm(a).total_cmp(&norm(b)));
+        match peak.filter(|&n| norm(n) > 0.0) {
+            Some(n) => format!(" dpeak={n}@({}):{:.3e}", self.node_position(n), norm(n)),
+            None => String::new(),
+        }
+    }
+
+    /// `x, y[, z]` of node `n` at the start of the step.
+    fn node_position(&self, n: usize) -> String {
+        let dim = self.kinematic_dofs / self.coords.len().max(1);
+        let at: Vec<String> =
+            (0..dim.min(3)).map(|i| format!("{:.4}", self.coords[n][i] + self.committed.u[n * dim + i])).collect();
+        at.join(", ")
+    }
+
     /// `u ← u + s δu` for the last correction, with the step's increment `Δu` and the
     /// kinematics following.
     fn apply_correction(&mut self, s: f64, du_step: &mut [f64]) {
@@ -256,6 +286,9 @@ impl NewtonStrategy {
                 let reuse_failed = reused_last
                     && !taken_back
                     && assembled.as_ref().map_or(true, |r| r.partial_cmp(&r_prev) != Some(std::cmp::Ordering::Less));
+                if let (Err(e), true) = (&assembled, settings.trace) {
+                    eprintln!("newton t={:.6e} dt={:.3e} it={it} refused: {e}", problem.time, problem.dt);
+                }
                 let r = if reuse_failed { f64::NAN } else { assembled? };
                 if reuse_failed {
                     // a correction from kept factors that did not reduce the residual (or that
@@ -289,8 +322,8 @@ impl NewtonStrategy {
             if settings.trace {
                 let b = problem.assembler.block_norms();
                 eprintln!(
-                    "newton t={:.6e} dt={:.3e} it={it} |r|={r_norm:.3e} (soil {:.3e} interface {:.3e} structure {:.3e}) |du|={last_du:.3e} |Du|={:.3e} backtracks={backtracks} tangent={with_tangent} reused={reused_last}",
-                    problem.time, problem.dt, b.soil, b.interface, b.structure, problem.assembler.dof_norm(&du_step)
+                    "newton t={:.6e} dt={:.3e} it={it} |r|={r_norm:.3e} (soil {:.3e} interface {:.3e} structure {:.3e}) |du|={last_du:.3e} |Du|={:.3e} backtracks={backtracks} tangent={with_tangent} reused={reused_last}{}{}",
+                    problem.time, problem.dt, b.soil, b.interface, b.structure, problem.assembler.dof_norm(&du_step), problem.residual_peak(), problem.increment_peak(&du_step)
                 );
             }
             if !r_norm.is_finite() {
