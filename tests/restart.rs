@@ -115,6 +115,20 @@ fn sliding_contact_resumes_bit_for_bit() {
     resume_equals_uninterrupted("block_on_incline_slide", 25, 50, |_| {});
 }
 
+/// A static MPM case with the ghost penalty (the B-spline footing at h = B/10, 10 steps),
+/// resumed after step 6: a domain restored from a checkpoint keeps its sparsity pattern, so
+/// its ghost penalty must declare its blocks without a change of pattern (until 5 December
+/// 2026 it did not, and a resumed run went on without the penalty until the pattern
+/// changed).
+#[test]
+fn ghost_penalty_resumes_bit_for_bit() {
+    resume_equals_uninterrupted("footing_undrained_mpm_up_smooth", 3, 6, |j| {
+        j["domains"][0]["grid"]["cells"] = serde_json::json!([50, 54]);
+        j["domains"][0]["material_points"]["polygon"]["spacing"] = serde_json::json!(0.1 / 3.0);
+        j["analysis"]["end_time"] = serde_json::json!(0.2);
+    });
+}
+
 /// The disk dropped on soil by frictionless contact (0.12 s, 240 steps; the impact at
 /// about 0.078 s), resumed after step 120, while it falls: the open contact points' gaps, taken
 /// from the soil's points and carried since, and which points are tracked come back with the

@@ -630,6 +630,16 @@ impl Body {
         }
     }
 
+    /// Adds the nodal weight `Σ_p N_I w_p` of this body's points (their quadrature weights:
+    /// the measure of the material each node's function covers) to `weights`.
+    pub fn add_node_weights(&self, grid: &Grid, weights: &mut [f64]) {
+        for (p, &support) in self.support_of_point.iter().enumerate() {
+            for (a, &node) in grid.support(support).iter().enumerate() {
+                weights[node] += self.geometry[p].shape[a] * self.geometry[p].weight;
+            }
+        }
+    }
+
     /// Nodal mass `Σ_p N_I m_p` of this body's points (per grid node).
     pub fn nodal_mass(&self, grid: &Grid, mass: &mut [f64]) {
         for (p, &support) in self.support_of_point.iter().enumerate() {

@@ -30,24 +30,31 @@
 //! grid's cells does, has none, and its results are those of the unstabilised method (the
 //! MPM cantilever of benchmark 1 keeps FEM's strain energy to 1e-9).
 //!
-//! **On a smooth basis** ([`crate::basis`]) the same face term acts on the grid's nodal
-//! values through the cells' linear functions, i.e. on the kinks of the control net rather
-//! than of the field: for quadratic B-splines the jump of the net's normal derivative at a
-//! node is `h` times the field's second derivative there, so the term penalises
-//! `α E h² |∂²Δu|²` near the material's edge, a higher-order ghost penalty that still
-//! vanishes for linear increments. There a node is in the system when a point's function
-//! reaches it, even in a cell without points, so the faces marked are those between cells
-//! whose nodes are all in the system, one of them cut (an empty cell counts as cut).
-//! Measured on the smooth footing of issue 23 at h = B/10 (contact wall, u–p): without it
-//! Newton's converged increments moved nodes the material barely reaches by up to 2.9 m in
-//! steps of 3 mm of footing travel; with α = 0.1 by at most 0.05 m; the cantilever's tip
-//! moves by 0.03 % (GIMP) and 0.006 % (B-splines).
+//! **On a smooth basis** ([`crate::basis`]) the penalty acts on the grid's nodal values, the
+//! control net, i.e. on the kinks of the net rather than of the field: for quadratic
+//! B-splines the net's second difference at a node is `h²` times the field's second
+//! derivative there, so the term penalises `α E h² |∂²Δu|²` near the material's edge, a
+//! higher-order ghost penalty that still vanishes for linear increments. There a node is
+//! in the system when a point's function reaches it, even in a cell without points, and at
+//! a ragged surface a node can be in it while every cell around it has a node that is not,
+//! so the face term, which needs both cells' nodes, would leave it unheld. The smooth bases
+//! therefore take the face term lumped node by node ([`GhostPenalty::rebuild_lattice`],
+//! [`GhostPenalty::mark_lattice`]): every line of three lattice nodes in the system one of
+//! which the material barely covers (its weight `Σ_p N_I w_p` below [`CUT_FRACTION`] of a
+//! cell) penalises the net's second divided difference along the line, with the face
+//! term's weight. Measured on the smooth footing of issue 23 at h = B/10 (contact wall,
+//! u–p): without a ghost penalty Newton's converged increments moved nodes the material
+//! barely reaches by up to 2.9 m in steps of 3 mm of footing travel; with the face form at
+//! α = 0.1 by at most 0.05 m; at B/40 the face form left a node above the footing's corner
+//! unheld (a correction of 15 m, and the run stopped), which the lines hold.
 //!
-//! Each face between two cells of the sparsity pattern near a cut cell (the cut cells grown by
+//! On the linear basis, each face between two cells of the sparsity pattern near a cut cell (the cut cells grown by
 //! one ring when the blocks were last declared) is a block over the union of the two cells'
 //! nodes (6 for quads, 4 for triangles, 12 for hexahedra, 5 for tetrahedra); faces that are
 //! not ghost faces in a step write zeros, and a cut cell outside that zone declares the
-//! blocks anew. A material that fills its cells declares none and keeps its sparsity.
+//! blocks anew; on a smooth basis each line of three nodes is a block, declared around the
+//! edge cells the same way. A material that fills its cells declares none and keeps its
+//! sparsity.
 
 use std::collections::HashMap;
 
@@ -81,13 +88,28 @@ struct Face {
 pub struct GhostPenalty {
     /// Dimensionless factor α of `γ = α E`.
     alpha: f64,
-    /// Faces between two cells of the pattern.
+    /// Faces between two cells of the pattern (linear basis).
     faces: Vec<Face>,
-    /// Per face: `γ` if it is a ghost face in this step, else 0.
+    /// Lines of three lattice nodes (smooth bases, [`GhostPenalty::rebuild_lattice`]).
+    stencils: Vec<Stencil>,
+    /// Per face or stencil: `γ` if it acts in this step, else 0.
     gamma: Vec<f64>,
-    /// Per grid cell: whether faces of it were declared at the last rebuild.
+    /// Per grid cell: whether blocks of it were declared at the last rebuild.
     zone: Vec<bool>,
+    /// Per grid node, per lattice direction: its neighbours on the minus and plus side
+    /// (`usize::MAX` where there is none); built with the first lattice rebuild.
+    neighbours: Vec<[[usize; 2]; 3]>,
 }
+
+/// Three consecutive nodes `a, b, c` of a lattice line along `direction`.
+#[derive(Debug, Clone, Copy)]
+struct Stencil {
+    nodes: [usize; 3],
+    direction: usize,
+}
+
+/// No neighbour on that side.
+const NONE: usize = usize::MAX;
 
 /// A facet's global nodes, ascending, padded with `usize::MAX`.
 type FacetKey = [usize; 4];
@@ -105,13 +127,121 @@ fn facet_key(cell: &[usize], facet: &[usize]) -> FacetKey {
 impl GhostPenalty {
     /// A ghost penalty of factor `alpha` (no faces until [`GhostPenalty::rebuild`]).
     pub fn new(alpha: f64) -> Self {
-        Self { alpha, faces: Vec::new(), gamma: Vec::new(), zone: Vec::new() }
+        Self {
+            alpha,
+            faces: Vec::new(),
+            stencils: Vec::new(),
+            gamma: Vec::new(),
+            zone: Vec::new(),
+            neighbours: Vec::new(),
+        }
     }
 
-    /// Nodes per face block on `grid`.
+    /// Nodes per face block on `grid` (a stencil has three).
     fn face_nodes(grid: &Grid) -> usize {
         let element = grid.mesh.element;
         2 * element.num_nodes() - element.facets()[0].len()
+    }
+
+    /// Per node and lattice direction, the neighbours along the cells' edges (the cells are
+    /// lattice cells: two nodes of a cell are neighbours along `d` where their local
+    /// coordinates differ in `d` alone).
+    fn lattice_neighbours(grid: &Grid) -> Vec<[[usize; 2]; 3]> {
+        let mesh = &grid.mesh;
+        let element = mesh.element;
+        let mut neighbours = vec![[[NONE; 2]; 3]; mesh.coords.len()];
+        for c in 0..mesh.num_cells() {
+            let cell = mesh.cell(c);
+            for (i, &a) in cell.iter().enumerate() {
+                let xa = element.node_local(i);
+                for (j, &b) in cell.iter().enumerate() {
+                    let xb = element.node_local(j);
+                    let differ: Vec<usize> = (0..3).filter(|&d| xa[d] != xb[d]).collect();
+                    if let [d] = differ[..] {
+                        if xb[d] > xa[d] {
+                            neighbours[a][d][1] = b;
+                            neighbours[b][d][0] = a;
+                        }
+                    }
+                }
+            }
+        }
+        neighbours
+    }
+
+    /// Declares the line blocks of a smooth basis, after the faces ([`GhostPenalty::rebuild`]):
+    /// every line of three lattice nodes `a, b, c` whose middle node `b` is a node of a cell
+    /// of the zone and whose nodes are all unknowns of the pattern (`in_pattern`). See
+    /// [`GhostPenalty::mark_lines`] for the nodes they hold.
+    pub fn add_lattice_lines(&mut self, grid: &Grid, in_pattern: &[bool]) {
+        if self.neighbours.len() != grid.mesh.coords.len() {
+            self.neighbours = Self::lattice_neighbours(grid);
+        }
+        let dim = grid.mesh.element.dim();
+        let mut in_zone = vec![false; grid.mesh.coords.len()];
+        for c in (0..grid.mesh.num_cells()).filter(|&c| self.zone[c]) {
+            for &a in grid.mesh.cell(c) {
+                in_zone[a] = true;
+            }
+        }
+        self.stencils.clear();
+        for b in (0..in_zone.len()).filter(|&b| in_zone[b] && in_pattern[b]) {
+            for direction in 0..dim {
+                let [a, c] = self.neighbours[b][direction];
+                if a != NONE && c != NONE && in_pattern[a] && in_pattern[c] {
+                    self.stencils.push(Stencil { nodes: [a, b, c], direction });
+                }
+            }
+        }
+        self.gamma.resize(self.faces.len() + self.stencils.len(), 0.0);
+    }
+
+    /// Marks the lines of a step on a smooth basis, after the faces ([`GhostPenalty::mark`]):
+    /// those whose nodes are all unknowns (`reached`: a point's function reaches them) and one
+    /// of which the material barely covers (`weak`: its weight `Σ_p N_I w_p` below
+    /// [`CUT_FRACTION`] of a cell) while no ghost face of the step holds it, with `γ = α E`,
+    /// `E` the largest modulus (`modulus`, per cell) of the cells around the three nodes, or
+    /// `fallback` where none of them holds points. A line penalises the control net's second
+    /// divided difference along it with the face term's weight ([`stencil_matrix`]).
+    ///
+    /// A smooth function reaches nodes one and a half cells from its point: at a ragged
+    /// surface a node can be an unknown while every cell around it has a node that is not
+    /// (a node above a heave, reached by the tail of one point's function). The faces need
+    /// both cells' nodes, so none holds such a node and nothing but that tail's tiny
+    /// stiffness does. Measured on the B/40 B-spline footing (`loam run --trace-newton`, its
+    /// `dpeak`): at 0.10 m of settlement the first Newton correction of a step moved the node
+    /// at (0.5, 5.0) m, above the footing's corner and beside the soil that had left its side,
+    /// by 15 m at every step size down to an eighth, and the run stopped with an inverted
+    /// point; with the lines the same step from the same checkpoint converges (its largest
+    /// nodal increment 4 mm) and the run reaches 0.15 m. A line of three nodes always exists
+    /// for an unknown node (the 3 × 3 block of the support that reached it). Only the nodes
+    /// the faces leave are held this way: lines through every weak node would penalise a bent
+    /// beam's curvature along its surface (they stiffened the GIMP cantilever's tip by 8 % at
+    /// h = 0.25 m, where the faces stiffen it by 1.3 %).
+    pub fn mark_lines(&mut self, grid: &Grid, reached: &[bool], weak: &[bool], modulus: &[f64], fallback: f64) {
+        let mesh = &grid.mesh;
+        let mut node_modulus = vec![0.0f64; mesh.coords.len()];
+        for c in 0..mesh.num_cells() {
+            for &a in mesh.cell(c) {
+                node_modulus[a] = node_modulus[a].max(modulus[c]);
+            }
+        }
+        let mut held = vec![false; mesh.coords.len()];
+        for (face, &gamma) in self.faces.iter().zip(&self.gamma) {
+            if gamma > 0.0 {
+                face.nodes.iter().for_each(|&a| held[a] = true);
+            }
+        }
+        let faces = self.faces.len();
+        for (stencil, gamma) in self.stencils.iter().zip(self.gamma[faces..].iter_mut()) {
+            let nodes = stencil.nodes;
+            *gamma = if nodes.iter().all(|&n| reached[n]) && nodes.iter().any(|&n| weak[n] && !held[n]) {
+                let e = nodes.iter().map(|&n| node_modulus[n]).fold(0.0, f64::max);
+                self.alpha * if e > 0.0 { e } else { fallback }
+            } else {
+                0.0
+            };
+        }
     }
 
     /// Declares the face blocks: the faces shared by two cells of `pattern` (ascending cell
@@ -123,6 +253,7 @@ impl GhostPenalty {
         let element = mesh.element;
         let mut open: HashMap<FacetKey, (usize, usize)> = HashMap::new();
         self.faces.clear();
+        self.stencils.clear();
         for &c in pattern {
             let cell = mesh.cell(c);
             for (f, facet) in element.facets().iter().enumerate() {
@@ -150,10 +281,11 @@ impl GhostPenalty {
         self.zone = zone;
     }
 
-    /// Whether the face blocks declared at the last [`GhostPenalty::rebuild`] hold every
-    /// face of the cells `cut`.
+    /// Whether the blocks declared at the last rebuild hold every face (or stencil) of the
+    /// cells `cut`; never before the first rebuild (a domain restored from a checkpoint keeps
+    /// its pattern, so only this declares its blocks).
     pub fn covers(&self, cut: &[bool]) -> bool {
-        cut.iter().zip(&self.zone).all(|(&e, &z)| !e || z)
+        self.zone.len() == cut.len() && cut.iter().zip(&self.zone).all(|(&e, &z)| !e || z)
     }
 
     /// Marks the ghost faces of a step: faces between two cells holding points (`active`)
@@ -171,23 +303,35 @@ impl GhostPenalty {
         }
     }
 
-    /// Number of face blocks.
+    /// Number of blocks (faces or stencils).
     pub fn num_blocks(&self) -> usize {
-        self.faces.len()
+        self.faces.len() + self.stencils.len()
     }
 
-    /// Global displacement DOFs of each face block, in block order.
-    pub fn blocks(&self, grid: &Grid, node_ids: &[usize], layout: &mut loam_fem::assembly::BlockLayout) {
-        let dim = grid.mesh.element.dim();
-        for face in &self.faces {
-            layout.push(face.nodes.iter().flat_map(|&a| (0..dim).map(move |i| node_ids[a] * dim + i)));
+    /// The grid nodes of block `k`.
+    fn block(&self, k: usize) -> &[usize] {
+        match self.faces.get(k) {
+            Some(face) => &face.nodes,
+            None => &self.stencils[k - self.faces.len()].nodes,
         }
     }
 
-    /// Lengths of the matrix and vector buffers of the face blocks.
+    /// Global displacement DOFs of each block, in block order.
+    pub fn blocks(&self, grid: &Grid, node_ids: &[usize], layout: &mut loam_fem::assembly::BlockLayout) {
+        let dim = grid.mesh.element.dim();
+        for k in 0..self.num_blocks() {
+            layout.push(self.block(k).iter().flat_map(|&a| (0..dim).map(move |i| node_ids[a] * dim + i)));
+        }
+    }
+
+    /// Lengths of the matrix and vector buffers of the blocks.
     pub fn buffer_lengths(&self, grid: &Grid) -> (usize, usize) {
-        let nd = Self::face_nodes(grid) * grid.mesh.element.dim();
-        (self.faces.len() * nd * nd, self.faces.len() * nd)
+        let dim = grid.mesh.element.dim();
+        let (face, line) = (Self::face_nodes(grid) * dim, 3 * dim);
+        (
+            self.faces.len() * face * face + self.stencils.len() * line * line,
+            self.faces.len() * face + self.stencils.len() * line,
+        )
     }
 
     /// Residual `G Δu` and tangent `G` of every face block (see the module doc); `Δu` is the
@@ -205,49 +349,71 @@ impl GhostPenalty {
     ) -> Result<(), DomainError> {
         use rayon::prelude::*;
         let dim = grid.mesh.element.dim();
-        let nf = Self::face_nodes(grid);
-        let nd = nf * dim;
-        matrices
-            .par_chunks_mut(nd * nd)
-            .zip(vectors.par_chunks_mut(nd))
-            .zip(self.faces.par_iter())
-            .zip(&self.gamma)
-            .try_for_each(|(((km, fv), face), &gamma)| {
-                fv.fill(0.0);
-                if input.with_tangent {
-                    km.fill(0.0);
+        let faces = self.faces.len();
+        let nd_face = Self::face_nodes(grid) * dim;
+        let (face_matrices, line_matrices) = matrices.split_at_mut(faces * nd_face * nd_face);
+        let (face_vectors, line_vectors) = vectors.split_at_mut(faces * nd_face);
+        let add = |nodes: &[usize], g: &[f64], km: &mut [f64], fv: &mut [f64]| {
+            let (nf, nd) = (nodes.len(), nodes.len() * dim);
+            let mut du = [[0.0; 3]; MAX_FACE_NODES];
+            for (d, &a) in du.iter_mut().zip(nodes) {
+                let dof = node_ids[a] * dim;
+                for i in 0..dim {
+                    d[i] = input.state.u[dof + i] - input.committed.u[dof + i];
                 }
-                if gamma == 0.0 {
-                    return Ok(());
-                }
-                let g = face_matrix(grid, formulation, thickness, face, gamma).map_err(|message| DomainError {
-                    domain: String::new(),
-                    element: face.cells[0],
-                    message,
-                })?;
-                let mut du = [[0.0; 3]; MAX_FACE_NODES];
-                for (d, &a) in du.iter_mut().zip(&face.nodes) {
-                    let dof = node_ids[a] * dim;
+            }
+            for a in 0..nf {
+                for b in 0..nf {
+                    let gab = g[a * nf + b];
+                    if gab == 0.0 {
+                        continue;
+                    }
                     for i in 0..dim {
-                        d[i] = input.state.u[dof + i] - input.committed.u[dof + i];
-                    }
-                }
-                for a in 0..nf {
-                    for b in 0..nf {
-                        let gab = g[a * nf + b];
-                        if gab == 0.0 {
-                            continue;
-                        }
-                        for i in 0..dim {
-                            fv[a * dim + i] += gab * du[b][i];
-                            if input.with_tangent {
-                                km[(a * dim + i) * nd + b * dim + i] += gab;
-                            }
+                        fv[a * dim + i] += gab * du[b][i];
+                        if input.with_tangent {
+                            km[(a * dim + i) * nd + b * dim + i] += gab;
                         }
                     }
                 }
-                Ok(())
-            })
+            }
+        };
+        let clear = |km: &mut [f64], fv: &mut [f64]| {
+            fv.fill(0.0);
+            if input.with_tangent {
+                km.fill(0.0);
+            }
+        };
+        face_matrices
+            .par_chunks_mut(nd_face * nd_face)
+            .zip(face_vectors.par_chunks_mut(nd_face))
+            .zip(self.faces.par_iter())
+            .zip(&self.gamma[..faces])
+            .try_for_each(|(((km, fv), face), &gamma)| {
+                clear(km, fv);
+                if gamma > 0.0 {
+                    let g = face_matrix(grid, formulation, thickness, face, gamma).map_err(|message| DomainError {
+                        domain: String::new(),
+                        element: face.cells[0],
+                        message,
+                    })?;
+                    add(&face.nodes, &g, km, fv);
+                }
+                Ok::<(), DomainError>(())
+            })?;
+        let nd_line = 3 * dim;
+        line_matrices
+            .par_chunks_mut(nd_line * nd_line)
+            .zip(line_vectors.par_chunks_mut(nd_line))
+            .zip(self.stencils.par_iter())
+            .zip(&self.gamma[faces..])
+            .for_each(|(((km, fv), &stencil), &gamma)| {
+                clear(km, fv);
+                if gamma > 0.0 {
+                    let g = stencil_matrix(grid, formulation, thickness, stencil, gamma);
+                    add(&stencil.nodes, &g, km, fv);
+                }
+            });
+        Ok(())
     }
 }
 
@@ -319,6 +485,47 @@ fn face_matrix(
     Ok(g)
 }
 
+/// `G_ab = w k_a k_b` of one stencil `a, b, c` (row-major over its three nodes): the
+/// control net's second divided difference along the line, `s = k · Δu` with
+/// `k = (1/l_ab, −1/l_ab − 1/l_bc, 1/l_bc)` (`l`: the nodes' distances at the grid's current
+/// position), weighted `w = γ h_F A_⊥` with `A_⊥` the lattice's cross-section per line (the
+/// product of the other directions' spacings; in 2D times the thickness, or `2πr` at `b`
+/// in axisymmetry) and `h_F = A_⊥^{1/(dim−1)}` of the grid's own cross-section: the lumped
+/// form of the face term, `γ h_F ∫_F [∂_n Δu]²`, which for a kink `κ` along a lattice plane
+/// gives `γ h_F κ²` per unit of its measure in both. Zero for a displacement linear along
+/// straight lattice lines (a lattice that the mesh motion bends by `δθ` between two
+/// segments sees `|A δθ|²` of a linear field `A x`, on the edge cells only).
+fn stencil_matrix(
+    grid: &Grid,
+    formulation: Formulation,
+    thickness: f64,
+    stencil: Stencil,
+    gamma: f64,
+) -> [f64; MAX_FACE_NODES * MAX_FACE_NODES] {
+    let dim = grid.mesh.element.dim();
+    let [a, b, c] = stencil.nodes.map(|n| grid.mesh.coords[n]);
+    let distance = |p: [f64; 3], q: [f64; 3]| (0..dim).map(|i| (p[i] - q[i]).powi(2)).sum::<f64>().sqrt();
+    let (l_ab, l_bc) = (distance(a, b), distance(b, c));
+    let k = [1.0 / l_ab, -1.0 / l_ab - 1.0 / l_bc, 1.0 / l_bc];
+    // the cross-section of one lattice line: the spacings along the other directions
+    let spacing = grid.lattice_spacing().unwrap_or([l_ab.max(l_bc); 3]);
+    let cross: f64 = (0..dim).filter(|&d| d != stencil.direction).map(|d| spacing[d]).product();
+    let h_f = if dim == 2 { cross } else { cross.sqrt() };
+    let out_of_plane = match formulation {
+        Formulation::Axisymmetric => 2.0 * std::f64::consts::PI * b[0],
+        _ if dim == 2 => thickness,
+        _ => 1.0,
+    };
+    let w = gamma * h_f * cross * out_of_plane;
+    let mut g = [0.0; MAX_FACE_NODES * MAX_FACE_NODES];
+    for i in 0..3 {
+        for j in 0..3 {
+            g[i * 3 + j] = w * k[i] * k[j];
+        }
+    }
+    g
+}
+
 /// Gauss rule over a face with `corners` corners: per point the corners' interpolation
 /// weights and the point's weight in the face's parameter space (which sums to 1).
 fn face_rule(corners: usize, dim: usize) -> Vec<([f64; 4], f64)> {
@@ -386,6 +593,42 @@ mod tests {
             }
         }
         energy
+    }
+
+    /// The smooth bases' lines of three nodes: none acts on a displacement linear in x and y;
+    /// a kink `u = κ (x − 1)⁺` gives each line through a node of x = 1 along x the energy
+    /// `γ h_F h κ²` (h = 0.5), the face term's `γ h_F κ²` per unit length of the kink, and
+    /// the lines along y nothing; every node with two neighbours along a direction has its
+    /// line.
+    #[test]
+    fn lattice_lines_vanish_on_linear_fields_and_measure_a_kink_as_the_faces_do() {
+        let mut grid = Grid::new([0.0; 3], [2.0, 1.0, 1.0], [4, 2, 1], ElementType::Quad4);
+        grid.set_basis(crate::basis::Basis::Bspline2).unwrap();
+        let mut ghost = GhostPenalty::new(1.0);
+        let nodes = grid.mesh.coords.len();
+        ghost.rebuild(&grid, &[], vec![true; grid.mesh.num_cells()]);
+        ghost.add_lattice_lines(&grid, &vec![true; nodes]);
+        // 5 × 3 nodes: 3 × 3 middles along x, 5 × 1 along y
+        assert_eq!(ghost.stencils.len(), 9 + 5);
+        let energy = |stencil: Stencil, field: &dyn Fn(&[f64; 3]) -> f64| {
+            let g = stencil_matrix(&grid, Formulation::PlaneStrain, 1.0, stencil, 1.0);
+            let u = stencil.nodes.map(|a| field(&grid.mesh.coords[a]));
+            (0..3).flat_map(|i| (0..3).map(move |j| (i, j))).map(|(i, j)| u[i] * g[i * 3 + j] * u[j]).sum::<f64>()
+        };
+        let linear = |x: &[f64; 3]| 0.3 + 2.0 * x[0] - 1.5 * x[1];
+        let kink = |x: &[f64; 3]| 0.7 * (x[0] - 1.0).max(0.0);
+        for &stencil in &ghost.stencils {
+            assert!(energy(stencil, &linear).abs() < 1e-12, "linear field on {:?}", stencil.nodes);
+            let middle = grid.mesh.coords[stencil.nodes[1]];
+            let expected =
+                if stencil.direction == 0 && (middle[0] - 1.0).abs() < 1e-12 { 0.5 * 0.5 * 0.49 } else { 0.0 };
+            let measured = energy(stencil, &kink);
+            assert!(
+                (measured - expected).abs() < 1e-12,
+                "kink on {:?}: {measured} (expected {expected})",
+                stencil.nodes
+            );
+        }
     }
 
     /// A displacement linear across the faces has no jump: the penalty does not act on it

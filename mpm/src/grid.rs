@@ -284,6 +284,12 @@ impl Grid {
         Ok(())
     }
 
+    /// The spacing of a smooth basis's lattice (its reference cells' sides), `None` on the
+    /// linear basis.
+    pub fn lattice_spacing(&self) -> Option<[f64; 3]> {
+        self.smooth.as_ref().map(|lattice| lattice.spacing())
+    }
+
     /// The grid's shape functions.
     pub fn basis(&self) -> Basis {
         self.smooth.as_ref().map_or(Basis::Linear, SmoothLattice::basis)

@@ -182,6 +182,24 @@ pub struct MpmDomain {
     owners: Option<loam_fem::ranks::BlockOwners>,
 }
 
+/// The grid nodes that the bodies' points reach (`reached`) but barely cover: a node's
+/// weight `Σ_p N_I w_p` below [`CUT_FRACTION`] of its smallest cell's measure (`volume`,
+/// per cell); an interior node's is about one cell's.
+fn weak_nodes(grid: &Grid, bodies: &[Body], reached: &[bool], volume: &[f64]) -> Vec<bool> {
+    let nodes = grid.mesh.coords.len();
+    let mut weight = vec![0.0f64; nodes];
+    for body in bodies {
+        body.add_node_weights(grid, &mut weight);
+    }
+    let mut full = vec![f64::INFINITY; nodes];
+    for (c, &v) in volume.iter().enumerate() {
+        for &a in grid.mesh.cell(c) {
+            full[a] = full[a].min(v);
+        }
+    }
+    (0..nodes).map(|a| reached[a] && weight[a] < CUT_FRACTION * full[a]).collect()
+}
+
 impl MpmDomain {
     /// A domain on `grid`, whose local node `a` is global node `node_ids[a]`, with its first
     /// body; the domain takes the body's name.
@@ -492,28 +510,36 @@ impl MpmDomain {
             // cells in the system: those holding points (linear basis), or those whose nodes a
             // point's function reaches (smooth basis: their nodes are unknowns even without
             // points in them, and the faces to them hold those nodes)
-            let active: Vec<bool> = if self.grid.basis().is_smooth() {
+            let smooth = self.grid.basis().is_smooth();
+            let active: Vec<bool> = if smooth {
                 (0..num_cells).map(|c| self.grid.mesh.cell(c).iter().all(|&a| reached[a])).collect()
             } else {
                 fill.iter().map(|&w| w > 0.0).collect()
             };
-            let cut: Vec<bool> = (0..num_cells)
-                .map(|c| {
-                    active[c] && fill[c] < CUT_FRACTION * cell_volume(&self.grid, self.formulation, self.thickness, c)
-                })
-                .collect();
-            if changed || !ghost.covers(&cut) {
+            let volume: Vec<f64> =
+                (0..num_cells).map(|c| cell_volume(&self.grid, self.formulation, self.thickness, c)).collect();
+            let cut: Vec<bool> = (0..num_cells).map(|c| active[c] && fill[c] < CUT_FRACTION * volume[c]).collect();
+            // smooth basis: the nodes that the material barely covers (a node's weight
+            // `Σ_p N_I w_p` below CUT_FRACTION of a cell), which the lines of the ghost
+            // penalty hold where no face does; their cells join the zone of the blocks
+            let weak = if smooth { weak_nodes(&self.grid, &self.bodies, &reached, &volume) } else { Vec::new() };
+            let edge: Vec<bool> = if smooth {
+                (0..num_cells).map(|c| cut[c] || self.grid.mesh.cell(c).iter().any(|&a| weak[a])).collect()
+            } else {
+                cut.clone()
+            };
+            if changed || !ghost.covers(&edge) {
                 // faces declared around the cut cells
-                let cut_cells: Vec<usize> = (0..num_cells).filter(|&c| cut[c]).collect();
-                let zone_cells = self.grid.dilate(&cut_cells);
+                let edge_cells: Vec<usize> = (0..num_cells).filter(|&c| edge[c]).collect();
+                let zone_cells = self.grid.dilate(&edge_cells);
                 let mut zone = vec![false; num_cells];
                 for &c in &zone_cells {
                     zone[c] = true;
                 }
-                if self.grid.basis().is_smooth() {
+                if smooth {
                     // the faces' cells: those around the zone whose nodes are all unknowns of
                     // the pattern's supports (a node outside them would be an equation
-                    // without a row)
+                    // without a row), and the lines of such nodes
                     let mut in_pattern = vec![false; self.grid.mesh.coords.len()];
                     for &s in &cb.pattern {
                         for &a in self.grid.support(s) {
@@ -523,12 +549,17 @@ impl MpmDomain {
                     let mut cells = self.grid.dilate(&zone_cells);
                     cells.retain(|&c| self.grid.mesh.cell(c).iter().all(|&a| in_pattern[a]));
                     ghost.rebuild(&self.grid, &cells, zone);
+                    ghost.add_lattice_lines(&self.grid, &in_pattern);
                 } else {
                     ghost.rebuild(&self.grid, &cb.pattern, zone);
                 }
                 changed = true;
             }
             ghost.mark(&active, &cut, &modulus);
+            if smooth {
+                let stiffest = modulus.iter().copied().fold(0.0, f64::max);
+                ghost.mark_lines(&self.grid, &reached, &weak, &modulus, stiffest);
+            }
         }
         changed
     }
