@@ -37,12 +37,12 @@
 //! higher-order ghost penalty that still vanishes for linear increments. There a node is
 //! in the system when a point's function reaches it, even in a cell without points, and at
 //! a ragged surface a node can be in it while every cell around it has a node that is not,
-//! so the face term, which needs both cells' nodes, would leave it unheld. The smooth bases
-//! therefore take the face term lumped node by node ([`GhostPenalty::rebuild_lattice`],
-//! [`GhostPenalty::mark_lattice`]): every line of three lattice nodes in the system one of
-//! which the material barely covers (its weight `Σ_p N_I w_p` below [`CUT_FRACTION`] of a
-//! cell) penalises the net's second divided difference along the line, with the face
-//! term's weight. Measured on the smooth footing of issue 23 at h = B/10 (contact wall,
+//! so the face term, which needs both cells' nodes, leaves it unheld. The smooth bases
+//! therefore add the face term lumped node by node for such nodes
+//! ([`GhostPenalty::add_lattice_lines`], [`GhostPenalty::mark_lines`]): every line of three
+//! lattice nodes in the system one of which the material barely covers (its weight
+//! `Σ_p N_I w_p` below [`CUT_FRACTION`] of a cell) while no ghost face holds it penalises
+//! the net's second divided difference along the line, with the face term's weight. Measured on the smooth footing of issue 23 at h = B/10 (contact wall,
 //! u–p): without a ghost penalty Newton's converged increments moved nodes the material
 //! barely reaches by up to 2.9 m in steps of 3 mm of footing travel; with the face form at
 //! α = 0.1 by at most 0.05 m; at B/40 the face form left a node above the footing's corner
@@ -88,9 +88,9 @@ struct Face {
 pub struct GhostPenalty {
     /// Dimensionless factor α of `γ = α E`.
     alpha: f64,
-    /// Faces between two cells of the pattern (linear basis).
+    /// Faces between two cells of the pattern.
     faces: Vec<Face>,
-    /// Lines of three lattice nodes (smooth bases, [`GhostPenalty::rebuild_lattice`]).
+    /// Lines of three lattice nodes (smooth bases, [`GhostPenalty::add_lattice_lines`]).
     stencils: Vec<Stencil>,
     /// Per face or stencil: `γ` if it acts in this step, else 0.
     gamma: Vec<f64>,
@@ -202,7 +202,7 @@ impl GhostPenalty {
     /// [`CUT_FRACTION`] of a cell) while no ghost face of the step holds it, with `γ = α E`,
     /// `E` the largest modulus (`modulus`, per cell) of the cells around the three nodes, or
     /// `fallback` where none of them holds points. A line penalises the control net's second
-    /// divided difference along it with the face term's weight ([`stencil_matrix`]).
+    /// divided difference along it with the face term's weight (`stencil_matrix`).
     ///
     /// A smooth function reaches nodes one and a half cells from its point: at a ragged
     /// surface a node can be an unknown while every cell around it has a node that is not
