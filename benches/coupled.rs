@@ -10,6 +10,12 @@
 //! - **beam**: the split beam of benchmark 12, dynamic (`coupled_beam_split_dynamic.json`)
 //!   against its MPM half clamped at x = 4 and its FEM half clamped at x = 0, each alone.
 //!
+//! - **contact** (issue 25, item 6): the rubber plate met by Coulomb contact, rotated 10°
+//!   against the unmoved grid (`cases/coupled_collapse_rubber_rotated.json`), against the
+//!   shared-node plate of the first row, over the same fixed steps: Newton iterations per step
+//!   (target within 1.5× of the shared nodes') and the contact's share of the assembly (its
+//!   interface's element kernels, target ≤ 20 %).
+//!
 //! Prints the per-step phase split of every run and the ratio
 //! `coupled / (MPM alone + FEM alone)` (target ≤ 1.15). Threads from `LOAM_BENCH_THREADS`
 //! (default 1), steps from `LOAM_BENCH_STEPS` (default 20). Run: `cargo bench --bench coupled`.
@@ -52,10 +58,25 @@ fn points(sim: &Simulation) -> usize {
     sim.model.domains.iter().map(|d| d.point_extents().len()).sum()
 }
 
-fn timed(mut sim: Simulation, label: &str, start: f64, threads: usize, steps: usize) -> StepTiming {
+fn timed(sim: Simulation, label: &str, start: f64, threads: usize, steps: usize) -> StepTiming {
+    timed_with_kernels(sim, label, start, threads, steps).0
+}
+
+/// As [`timed`], with the seconds of each domain's element kernels in the timed steps, by
+/// domain name.
+fn timed_with_kernels(
+    mut sim: Simulation,
+    label: &str,
+    start: f64,
+    threads: usize,
+    steps: usize,
+) -> (StepTiming, Vec<(String, f64)>) {
     advance(&mut sim, start);
     let n = points(&sim);
-    time_steps(&mut sim, label, n, threads, 1, steps)
+    let before = sim.model.kernel_seconds_by_domain();
+    let timing = time_steps(&mut sim, label, n, threads, 1, steps);
+    let kernels = sim.model.domains.iter().zip(sim.model.kernel_seconds_by_domain()).zip(before);
+    (timing, kernels.map(|((d, after), before)| (d.name().to_string(), after - before)).collect())
 }
 
 fn per_step(r: &StepTiming) -> f64 {
@@ -100,6 +121,8 @@ fn main() {
     plate["regions"] = json!({ "foot": { "y": 0.0 } });
     plate["boundary_conditions"] = json!([{ "region": "foot", "displacement": [0.0, 0.0] }]);
     plate["monitors"] = json!([]);
+    let mut rotated = case_json("coupled_collapse_rubber_rotated.json");
+    fixed_steps(&mut rotated, dt, end);
     let rows = vec![
         timed(build(coupled), "Bui column onto the rubber plate (coupled)", start, threads, steps),
         timed(build(soil), "Bui column, no plate (MPM alone)", start, threads, steps),
@@ -107,6 +130,30 @@ fn main() {
     ];
     print_table(&rows, &[]);
     compare("collapse onto the rubber plate", &rows);
+
+    // the same plate by contact, rotated against the grid
+    let interfaces: Vec<String> = rotated["interfaces"]
+        .as_array()
+        .expect("interfaces")
+        .iter()
+        .map(|i| i["name"].as_str().unwrap().into())
+        .collect();
+    let (mut by_contact, kernels) =
+        timed_with_kernels(build(rotated), "rubber plate rotated 10°, by contact", start, threads, steps);
+    let contact: f64 = kernels.iter().filter(|(name, _)| interfaces.contains(name)).map(|(_, s)| s).sum();
+    let share = contact / by_contact.timings.assembly;
+    by_contact.extra = vec![format!("{:.2} %", 100.0 * share)];
+    let mut shared = rows.into_iter().next().expect("the shared-node row");
+    shared.extra = vec!["—".into()];
+    let rows = vec![shared, by_contact];
+    print_table(&rows, &["contact kernels / assembly"]);
+    println!(
+        "\ncontact against shared nodes: {:.2} against {:.2} Newton it/step (ratio {:.2}, target ≤ 1.5); the contact's kernels {:.2} % of the assembly (target ≤ 20 %)",
+        iterations(&rows[1]),
+        iterations(&rows[0]),
+        iterations(&rows[1]) / iterations(&rows[0]),
+        100.0 * share
+    );
 
     // the split beam, dynamic
     let beam = case_json("coupled_beam_split_dynamic.json");

@@ -147,7 +147,8 @@ fn converged_slide_does_not_depend_on_the_newton_path() {
 
 /// `loam check` reports the contact with its law and penalties, and refuses with one line
 /// naming the key (exit 2): `friction < 0`, friction on a tie, a non-positive
-/// `tangential_penalty`, an unknown `coupling`.
+/// `tangential_penalty`, an unknown `coupling`, a region that selects no facet, a structure
+/// whose interface leaves the grid, material points that start inside the structure.
 #[test]
 fn check_reports_the_contact_and_refuses_bad_keys() {
     let check =
@@ -173,6 +174,26 @@ fn check_reports_the_contact_and_refuses_bad_keys() {
         }),
         ("unknown coupling", "interfaces[0].coupling", &|v: &mut serde_json::Value| {
             v["interfaces"][0]["coupling"] = serde_json::json!("velcro")
+        }),
+        // a region that selects none of the structure's facets
+        ("empty region", "interfaces[0].region", &|v: &mut serde_json::Value| {
+            v["regions"]["bed"]["segment"] = serde_json::json!({ "from": [0.1, 3.0], "to": [0.5, 3.0] })
+        }),
+        // the slab moved along x by 1 m: its lower end leaves the grid
+        ("structure outside the grid", "interfaces[0].region", &|v: &mut serde_json::Value| {
+            for (path, key) in
+                [("domains", "origin"), ("bed", "from"), ("bed", "to"), ("slab_base", "from"), ("slab_base", "to")]
+            {
+                let point = match path {
+                    "domains" => &mut v["domains"][1]["mesh"]["rectangle"][key],
+                    region => &mut v["regions"][region]["segment"][key],
+                };
+                point[0] = serde_json::json!(point[0].as_f64().unwrap() + 1.0);
+            }
+        }),
+        // the block's points start inside the slab
+        ("points inside the structure", "domains[0].material_points", &|v: &mut serde_json::Value| {
+            v["domains"][0]["material_points"]["cells"]["mesh"]["rectangle"]["origin"] = serde_json::json!([0.5, 1.0])
         }),
     ] {
         let (code, _, stderr) = check(name, edit);

@@ -177,7 +177,13 @@ fn run_writes_its_report() {
     assert_eq!(s["steps"], 1);
     assert!(s["newton"]["iterations"].as_u64().unwrap() >= 2);
     assert!(s["threads"].as_u64().unwrap() >= 1);
-    assert!(s["wall_time"]["total"].as_f64().unwrap() >= s["wall_time"]["assembly"].as_f64().unwrap());
+    let assembly = s["wall_time"]["assembly"].as_f64().unwrap();
+    assert!(s["wall_time"]["total"].as_f64().unwrap() >= assembly);
+    // the kernels of the one domain, part of the assembly
+    let kernels = s["wall_time"]["kernels_by_domain"].as_object().expect("kernels_by_domain");
+    assert_eq!(kernels.keys().collect::<Vec<_>>(), ["beam"]);
+    let beam = kernels["beam"].as_f64().unwrap();
+    assert!(beam > 0.0 && beam <= assembly, "kernels {beam} s of the assembly's {assembly} s");
     // memory: the FEM cantilever's symmetric tangent is factorised by Cholesky, whose factor
     // holds at least the matrix's lower triangle
     let (nnz, factor) =

@@ -124,6 +124,9 @@ pub struct Assembler {
     /// gathered, the residual summed over the ranks, the matrix assembled and solved by PETSc
     /// across them ([`crate::ranks`]).
     share: Option<RankShare>,
+    /// Wall-clock seconds each domain's kernels took in [`Assembler::assemble`], summed over
+    /// the calls (domain order).
+    kernel_seconds: Vec<f64>,
 }
 
 impl Assembler {
@@ -208,6 +211,7 @@ impl Assembler {
             solver,
             factors_for: None,
             share,
+            kernel_seconds: vec![0.0; domains.len()],
             dofs,
             pattern,
             domain_matrix,
@@ -243,6 +247,13 @@ impl Assembler {
     /// Accumulated linear-solver timings of this pattern.
     pub fn solver_timings(&self) -> SolverTimings {
         self.solver.timings
+    }
+
+    /// Seconds each domain's element kernels have taken in this pattern's assemblies, in
+    /// domain order (the kernel part of [`PhaseTimings::assembly`](crate::model::PhaseTimings);
+    /// the rest is the gather).
+    pub fn kernel_seconds(&self) -> &[f64] {
+        &self.kernel_seconds
     }
 
     /// The rigid-body motions of the nodes at `positions`, written per equation (local frames
@@ -353,7 +364,9 @@ impl Assembler {
         for (k, d) in domains.iter_mut().enumerate() {
             let (m, rest_m) = mats.split_at_mut(self.domain_matrix[k + 1] - self.domain_matrix[k]);
             let (v, rest_v) = vecs.split_at_mut(self.domain_vector[k + 1] - self.domain_vector[k]);
+            let kernels = std::time::Instant::now();
             result = d.assemble(input, m, v);
+            self.kernel_seconds[k] += kernels.elapsed().as_secs_f64();
             if result.is_err() {
                 break;
             }

@@ -293,6 +293,9 @@ pub struct Model {
     assembler: Option<Assembler>,
     /// The solver counters of the patterns dropped so far ([`Model::solver_timings`]).
     retired_solver_timings: SolverTimings,
+    /// The kernel seconds per domain of the patterns dropped so far
+    /// ([`Model::kernel_seconds_by_domain`]).
+    retired_kernel_seconds: Vec<f64>,
 }
 
 impl Model {
@@ -324,6 +327,7 @@ impl Model {
             restored_solver_memory: None,
             assembler: None,
             retired_solver_timings: SolverTimings::default(),
+            retired_kernel_seconds: Vec::new(),
         }
     }
 
@@ -398,6 +402,7 @@ impl Model {
     fn retire_assembler(&mut self) {
         if let Some(a) = self.assembler.take() {
             self.retired_solver_timings += a.solver_timings();
+            add_elementwise(&mut self.retired_kernel_seconds, a.kernel_seconds());
         }
     }
 
@@ -455,6 +460,17 @@ impl Model {
             t += a.solver_timings();
         }
         t
+    }
+
+    /// Seconds each domain's element kernels have taken over the run, in domain order (the
+    /// kernel part of [`PhaseTimings::assembly`]; the rest is the gather into the system).
+    pub fn kernel_seconds_by_domain(&self) -> Vec<f64> {
+        let mut seconds = self.retired_kernel_seconds.clone();
+        if let Some(a) = &self.assembler {
+            add_elementwise(&mut seconds, a.kernel_seconds());
+        }
+        seconds.resize(self.domains.len(), 0.0);
+        seconds
     }
 
     /// Gravity at time `t`.
@@ -989,6 +1005,16 @@ impl Linearisation<'_> {
 impl Drop for Linearisation<'_> {
     fn drop(&mut self) {
         self.model.state.clone_from(&self.model.committed);
+    }
+}
+
+/// `sum[k] += add[k]`, `sum` lengthened with zeros where `add` is longer.
+fn add_elementwise(sum: &mut Vec<f64>, add: &[f64]) {
+    if sum.len() < add.len() {
+        sum.resize(add.len(), 0.0);
+    }
+    for (s, a) in sum.iter_mut().zip(add) {
+        *s += a;
     }
 }
 

@@ -174,6 +174,11 @@ pub struct WallTimeReport {
     pub pattern: f64,
     /// Element kernels and gather.
     pub assembly: f64,
+    /// Of `assembly`: the element kernels of each domain of the model (bodies, structures,
+    /// interfaces, walls), by name in model order; the rest of `assembly` is the gather into
+    /// the system. Absent in reports of runs before it was measured.
+    #[serde(default)]
+    pub kernels_by_domain: NamedValues<f64>,
     /// Symbolic and numeric factorisation.
     pub factorisation: f64,
     /// Of `factorisation`: symbolic analyses.
@@ -197,6 +202,7 @@ impl WallTimeReport {
             search: t.search,
             pattern: t.pattern,
             assembly: t.assembly,
+            kernels_by_domain: NamedValues::default(),
             factorisation: t.factorisation,
             symbolic: t.symbolic,
             solve: t.solve,
@@ -343,8 +349,16 @@ fn one_rank() -> usize {
 
 impl RunSummary {
     /// The report of `sim` as it stands, with `status` and the wall times measured so far.
-    pub fn of(sim: &Simulation, status: RunStatus, wall_time: WallTimeReport) -> Self {
+    pub fn of(sim: &Simulation, status: RunStatus, mut wall_time: WallTimeReport) -> Self {
         let solver = sim.model.solver_timings();
+        let mut kernels: Vec<(String, f64)> = Vec::new();
+        for (d, seconds) in sim.model.domains.iter().zip(sim.model.kernel_seconds_by_domain()) {
+            match kernels.iter_mut().find(|(name, _)| name == d.name()) {
+                Some((_, sum)) => *sum += seconds,
+                None => kernels.push((d.name().to_string(), seconds)),
+            }
+        }
+        wall_time.kernels_by_domain = NamedValues(kernels);
         let monitors = NamedValues(
             sim.monitors
                 .iter()
