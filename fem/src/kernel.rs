@@ -41,7 +41,7 @@ pub const MAX_DOFS: usize = 3 * MAX_NODES;
 pub const SMALL_BLOCK_DOFS: usize = 24;
 
 /// Geometry of one integration point in the step reference configuration.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 pub struct PointGeometry {
     /// Shape functions `N_a` at the point.
     pub shape: [f64; MAX_NODES],
@@ -52,6 +52,31 @@ pub struct PointGeometry {
     pub weight: f64,
     /// Radius `R` of the point (axisymmetric only; 0 otherwise).
     pub radius: f64,
+}
+
+/// The integration points of one block as the kernels read them: a slice of
+/// [`PointGeometry`] records (FEM elements), or points packed to the block's nodes
+/// ([`PackedPoints`](crate::packed_geometry::PackedPoints), MPM bodies).
+pub trait Geometries {
+    /// Storage a point may be unpacked into ([`Geometries::point`]).
+    type Scratch: Default;
+    /// Number of points.
+    fn count(&self) -> usize;
+    /// Point `k`: a reference into the store, or `scratch` filled with it (weight, radius and
+    /// the entries of the block's nodes) and returned.
+    fn point<'a>(&'a self, k: usize, scratch: &'a mut Self::Scratch) -> &'a PointGeometry;
+}
+
+impl Geometries for [PointGeometry] {
+    type Scratch = ();
+
+    fn count(&self) -> usize {
+        self.len()
+    }
+
+    fn point<'a>(&'a self, k: usize, _: &'a mut ()) -> &'a PointGeometry {
+        &self[k]
+    }
 }
 
 /// Failure inside an element kernel.
@@ -400,10 +425,10 @@ pub(crate) fn gradient_operator(
 /// [`element_general`] with the zeros of `B` skipped (2× fewer operations in 2D, 3× in 3D),
 /// with sizes known at compile time and `K` accumulated on the stack
 /// (`k[a][i][b][k]` is the row-major layout of the output).
-fn element_tensor<const D: usize, const NN: usize>(
+fn element_tensor<const D: usize, const NN: usize, G: Geometries + ?Sized>(
     ctx: &KernelContext<'_>,
     disp: &[[f64; 3]],
-    geometry: &[PointGeometry],
+    geometry: &G,
     f0: &[Matrix3<f64>],
     f_prev: &[Matrix3<f64>],
     committed: &[f64],
@@ -416,7 +441,9 @@ fn element_tensor<const D: usize, const NN: usize>(
     let mut f = [[0.0; D]; NN];
     let mut k = [[[[0.0; D]; NN]; D]; NN];
     let mut response = StressResponse::default();
-    for (p, g) in geometry.iter().enumerate() {
+    let mut scratch = G::Scratch::default();
+    for p in 0..geometry.count() {
+        let g = geometry.point(p, &mut scratch);
         let state = PointState {
             f0: &f0[p],
             f_prev: &f_prev[p],
@@ -489,10 +516,10 @@ fn element_tensor<const D: usize, const NN: usize>(
 ///
 /// `f0`, `f_prev`, `geometry`, `point_out` hold one entry per point; `committed` and `trial` hold the
 /// points' histories back to back with stride `law.state_len()`. Outputs are overwritten.
-pub fn solid_element(
+pub fn solid_element<G: Geometries + ?Sized>(
     ctx: &KernelContext<'_>,
     disp: &[[f64; 3]],
-    geometry: &[PointGeometry],
+    geometry: &G,
     f0: &[Matrix3<f64>],
     f_prev: &[Matrix3<f64>],
     committed: &[f64],
@@ -503,14 +530,14 @@ pub fn solid_element(
 ) -> Result<(), KernelError> {
     use Formulation::*;
     let run = match (ctx.formulation, ctx.element.dim(), disp.len()) {
-        (PlaneStrain | PlaneStress, 2, 4) => element_tensor::<2, 4>,
-        (PlaneStrain | PlaneStress, 2, 3) => element_tensor::<2, 3>,
-        (PlaneStrain | PlaneStress, 2, 9) => element_tensor::<2, 9>,
-        (ThreeD, 3, 4) => element_tensor::<3, 4>,
-        (ThreeD, 3, 8) => element_tensor::<3, 8>,
-        (ThreeD, 3, 27) => element_tensor::<3, 27>,
-        (_, dim, nn) if nn * dim <= SMALL_BLOCK_DOFS => element_general::<SMALL_BLOCK_DOFS>,
-        _ => element_general::<MAX_DOFS>,
+        (PlaneStrain | PlaneStress, 2, 4) => element_tensor::<2, 4, G>,
+        (PlaneStrain | PlaneStress, 2, 3) => element_tensor::<2, 3, G>,
+        (PlaneStrain | PlaneStress, 2, 9) => element_tensor::<2, 9, G>,
+        (ThreeD, 3, 4) => element_tensor::<3, 4, G>,
+        (ThreeD, 3, 8) => element_tensor::<3, 8, G>,
+        (ThreeD, 3, 27) => element_tensor::<3, 27, G>,
+        (_, dim, nn) if nn * dim <= SMALL_BLOCK_DOFS => element_general::<SMALL_BLOCK_DOFS, G>,
+        _ => element_general::<MAX_DOFS, G>,
     };
     run(ctx, disp, geometry, f0, f_prev, committed, trial, point_out, f_int, stiffness)
 }
@@ -518,10 +545,10 @@ pub fn solid_element(
 /// [`solid_element`] through the general operator `B` of [`gradient_operator`]:
 /// `f = Σ_p w Bᵀ P̃`, `K = Σ_p w Bᵀ Ã B` (axisymmetry, where the hoop row `N_a / R` breaks the
 /// tensor structure that [`element_tensor`] uses).
-fn element_general<const CAPACITY: usize>(
+fn element_general<const CAPACITY: usize, G: Geometries + ?Sized>(
     ctx: &KernelContext<'_>,
     disp: &[[f64; 3]],
-    geometry: &[PointGeometry],
+    geometry: &G,
     f0: &[Matrix3<f64>],
     f_prev: &[Matrix3<f64>],
     committed: &[f64],
@@ -541,7 +568,9 @@ fn element_general<const CAPACITY: usize>(
     let mut bt_a = [[0.0; 9]; CAPACITY];
     let active = active_components(ctx.formulation);
     let mut response = StressResponse::default();
-    for (p, g) in geometry.iter().enumerate() {
+    let mut scratch = G::Scratch::default();
+    for p in 0..geometry.count() {
+        let g = geometry.point(p, &mut scratch);
         let state = PointState {
             f0: &f0[p],
             f_prev: &f_prev[p],
@@ -690,7 +719,7 @@ mod tests {
                 let mut f = vec![0.0; nd];
                 let mut out = vec![PointOutput::default(); np];
                 let mut trial = committed.clone();
-                solid_element(&ctx, d, &geometry, &f0s, &f0s, &committed, &mut trial, &mut out, &mut f, k).unwrap();
+                solid_element(&ctx, d, &geometry[..], &f0s, &f0s, &committed, &mut trial, &mut out, &mut f, k).unwrap();
                 f
             };
             let mut k = vec![0.0; nd * nd];
@@ -698,7 +727,7 @@ mod tests {
             if let Some(flag) = law.state_variables().iter().position(|v| *v == "yield_flag") {
                 let mut trial = committed.clone();
                 let (mut f, mut out) = (vec![0.0; nd], vec![PointOutput::default(); np]);
-                solid_element(&ctx, &disp, &geometry, &f0s, &f0s, &committed, &mut trial, &mut out, &mut f, None)
+                solid_element(&ctx, &disp, &geometry[..], &f0s, &f0s, &committed, &mut trial, &mut out, &mut f, None)
                     .unwrap();
                 let mut values = vec![0.0; law.state_variables().len()];
                 let plastic = trial.chunks(stride).filter(|st| {
@@ -756,11 +785,12 @@ mod tests {
             let mut out = vec![PointOutput::default(); np];
             let (mut f1, mut k1) = (vec![0.0; nd], vec![0.0; nd * nd]);
             let (mut f2, mut k2) = (vec![0.0; nd], vec![0.0; nd * nd]);
-            solid_element(&ctx, &disp, &geometry, &f0s, &f0s, &[], &mut [], &mut out, &mut f1, Some(&mut k1)).unwrap();
-            element_general::<MAX_DOFS>(
+            solid_element(&ctx, &disp, &geometry[..], &f0s, &f0s, &[], &mut [], &mut out, &mut f1, Some(&mut k1))
+                .unwrap();
+            element_general::<MAX_DOFS, [PointGeometry]>(
                 &ctx,
                 &disp,
-                &geometry,
+                &geometry[..],
                 &f0s,
                 &f0s,
                 &[],

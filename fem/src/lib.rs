@@ -29,6 +29,7 @@ pub mod mesh;
 pub mod mixed_kernel;
 pub mod model;
 pub mod newton;
+pub mod packed_geometry;
 pub mod pattern_lu;
 pub mod permuted_lower;
 #[cfg(feature = "petsc")]

@@ -68,8 +68,8 @@ use nalgebra::Matrix3;
 use crate::element::MAX_NODES;
 use crate::formulation::Formulation;
 use crate::kernel::{
-    active_components, cauchy_stress, delta_deformation_gradient, gradient_operator, pull_back_response, KernelContext,
-    KernelError, PointGeometry, PointOutput, MAX_DOFS, SMALL_BLOCK_DOFS,
+    active_components, cauchy_stress, delta_deformation_gradient, gradient_operator, pull_back_response, Geometries,
+    KernelContext, KernelError, PointGeometry, PointOutput, MAX_DOFS, SMALL_BLOCK_DOFS,
 };
 
 /// Largest u–p element block (a 3D smooth MPM support: 27 × (3 + 1) DOFs).
@@ -97,11 +97,11 @@ fn mixed_law<'a>(ctx: &KernelContext<'a>) -> Result<&'a dyn MixedLaw, KernelErro
 /// `projection_rule`: the cell's own Gauss points (weights: their share of the cell's
 /// volume) on which an MPM cell integrates the pressure projection, scaled by its fill
 /// fraction; `None` integrates it on the integration points (FEM).
-pub fn mixed_element(
+pub fn mixed_element<G: Geometries + ?Sized>(
     ctx: &KernelContext<'_>,
     disp: &[[f64; 3]],
     pressure: &[f64],
-    geometry: &[PointGeometry],
+    geometry: &G,
     f0: &[Matrix3<f64>],
     f_prev: &[Matrix3<f64>],
     committed: &[f64],
@@ -113,20 +113,20 @@ pub fn mixed_element(
 ) -> Result<(), KernelError> {
     // scratch sized by the block: the elements and 2D supports, or a 3D smooth support
     let run = if disp.len() * ctx.element.dim() <= SMALL_BLOCK_DOFS {
-        mixed_element_in::<SMALL_BLOCK_DOFS, { SMALL_BLOCK_DOFS / 2 }>
+        mixed_element_in::<SMALL_BLOCK_DOFS, { SMALL_BLOCK_DOFS / 2 }, G>
     } else {
-        mixed_element_in::<MAX_DOFS, MAX_NODES>
+        mixed_element_in::<MAX_DOFS, MAX_NODES, G>
     };
     run(ctx, disp, pressure, geometry, f0, f_prev, committed, trial, point_out, residual, stiffness, projection_rule)
 }
 
 /// [`mixed_element`] with scratch for `DOFS` displacement DOFs and `NODES` nodes.
 #[allow(clippy::too_many_arguments)]
-fn mixed_element_in<const DOFS: usize, const NODES: usize>(
+fn mixed_element_in<const DOFS: usize, const NODES: usize, G: Geometries + ?Sized>(
     ctx: &KernelContext<'_>,
     disp: &[[f64; 3]],
     pressure: &[f64],
-    geometry: &[PointGeometry],
+    geometry: &G,
     f0: &[Matrix3<f64>],
     f_prev: &[Matrix3<f64>],
     committed: &[f64],
@@ -157,7 +157,9 @@ fn mixed_element_in<const DOFS: usize, const NODES: usize>(
     // the projection's moments: m_a = Σ w0 N_a, V = Σ w0, and Σ w0 N_a p (for Π₀p)
     let mut moments = [0.0; NODES];
     let mut volume = 0.0;
-    for (q, g) in geometry.iter().enumerate() {
+    let mut scratch = G::Scratch::default();
+    for q in 0..geometry.count() {
+        let g = geometry.point(q, &mut scratch);
         let delta_f = delta_deformation_gradient(ctx, g, disp);
         let f = delta_f * f0[q];
         let p: f64 = (0..nn).map(|a| g.shape[a] * pressure[a]).sum();
@@ -245,7 +247,12 @@ fn mixed_element_in<const DOFS: usize, const NODES: usize>(
         }
     };
     match projection_rule {
-        None => geometry.iter().zip(f0).for_each(|(g, f)| integrate(g.weight / f.determinant(), &g.shape)),
+        None => {
+            for (q, f) in f0.iter().enumerate().take(geometry.count()) {
+                let g = geometry.point(q, &mut scratch);
+                integrate(g.weight / f.determinant(), &g.shape);
+            }
+        }
         Some(cell) => {
             let fill = volume / cell.iter().map(|g| g.weight).sum::<f64>();
             cell.iter().for_each(|g| integrate(g.weight * fill, &g.shape));
@@ -369,7 +376,7 @@ mod tests {
                 &ctx,
                 &disp,
                 &x[nn * dim..],
-                &geometry,
+                &geometry[..],
                 &f0s,
                 &f0s,
                 &committed,

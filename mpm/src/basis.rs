@@ -750,7 +750,7 @@ mod tests {
                     &ctx,
                     &disp,
                     &v[nu..],
-                    &geometry,
+                    &geometry[..],
                     &f0,
                     &f0,
                     &committed,
@@ -762,7 +762,8 @@ mod tests {
                 )
                 .unwrap();
             } else {
-                solid_element(&ctx, &disp, &geometry, &f0, &f0, &committed, &mut trial, &mut out, &mut f, k).unwrap();
+                solid_element(&ctx, &disp, &geometry[..], &f0, &f0, &committed, &mut trial, &mut out, &mut f, k)
+                    .unwrap();
             }
             f
         };
@@ -771,7 +772,8 @@ mod tests {
         if let Some(flag) = law.state_variables().iter().position(|v| *v == "yield_flag") {
             let disp = disp_of(&unknowns);
             let (mut f, mut out, mut trial) = (vec![0.0; nu], vec![PointOutput::default(); np], committed.clone());
-            solid_element(&ctx, &disp, &geometry, &f0, &f0, &committed, &mut trial, &mut out, &mut f, None).unwrap();
+            solid_element(&ctx, &disp, &geometry[..], &f0, &f0, &committed, &mut trial, &mut out, &mut f, None)
+                .unwrap();
             let mut values = vec![0.0; law.state_variables().len()];
             let yielded = trial.chunks(stride).filter(|st| {
                 law.state_output(st, &mut values);

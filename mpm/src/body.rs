@@ -22,6 +22,7 @@ use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
 use loam_fem::kernel::{solid_element, KernelContext, KernelError, PointGeometry, PointOutput};
 use loam_fem::mixed_kernel::mixed_element;
+use loam_fem::packed_geometry::PackedGeometry;
 use loam_laws::ConstitutiveLaw;
 use nalgebra::Matrix3;
 use rayon::prelude::*;
@@ -150,9 +151,13 @@ pub struct Body {
     /// Number of points at the start (ids run over `0..initial_count`).
     initial_count: usize,
     index_of_id: Vec<usize>,
-    /// Per point (in the sorted order): its support and its shape functions there.
+    /// Per point (in the sorted order): its support and its shape functions there, packed to
+    /// the support's nodes.
     support_of_point: Vec<usize>,
-    geometry: Vec<PointGeometry>,
+    geometry: PackedGeometry,
+    /// [`Body::locate`]'s scratch: every point's support and functions in the order before
+    /// the sort.
+    located: (Vec<Option<usize>>, PackedGeometry),
     /// Points of support `s`: `support_start[s]..support_start[s + 1]`.
     support_start: Vec<usize>,
     trial: Trial,
@@ -179,7 +184,8 @@ impl Body {
             initial_count,
             index_of_id: (0..initial_count).collect(),
             support_of_point: Vec::new(),
-            geometry: Vec::new(),
+            geometry: PackedGeometry::default(),
+            located: (Vec::new(), PackedGeometry::default()),
             support_start: Vec::new(),
             trial: Trial::default(),
             erased: 0,
@@ -246,7 +252,7 @@ impl Body {
     /// Sum of the quadrature weights of the body's points in support `s` (a grid cell on
     /// the linear basis).
     pub fn cell_weight(&self, s: usize) -> f64 {
-        self.geometry[self.points_in_support(s)].iter().map(|g| g.weight).sum()
+        self.points_in_support(s).map(|p| self.geometry.weight(p)).sum()
     }
 
     /// Adds the quadrature weights of the body's points to the grid cells that hold them
@@ -259,9 +265,9 @@ impl Body {
             }
             return;
         }
-        for (x, g) in self.points.position.iter().zip(&self.geometry) {
+        for (p, x) in self.points.position.iter().enumerate() {
             if let Some((c, _)) = grid.locate(x) {
-                weights[c] += g.weight;
+                weights[c] += self.geometry.weight(p);
             }
         }
     }
@@ -269,7 +275,7 @@ impl Body {
     /// Scales the quadrature weights of the body's points in support `s`.
     pub fn scale_cell_weights(&mut self, s: usize, factor: f64) {
         let range = self.points_in_support(s);
-        self.geometry[range].iter_mut().for_each(|g| g.weight *= factor);
+        self.geometry.scale_weights(range, factor);
     }
 
     /// Attaches a force to some of the body's points.
@@ -283,19 +289,26 @@ impl Body {
     /// volume, [`crate::basis`]).
     pub fn locate(&mut self, grid: &Grid, formulation: Formulation, thickness: f64) {
         let n_before = self.points.len();
+        let nodes = grid.support_len();
+        // every point's support and functions, packed, in the present order
+        let (supports, functions) = &mut self.located;
+        supports.resize(n_before, None);
+        functions.resize(nodes, n_before);
         let pts = &self.points;
-        let located: Vec<Option<(usize, PointGeometry)>> = (pts.position.par_iter(), pts.initial_volume.par_iter())
+        (functions.par_records_mut(), supports.par_iter_mut(), pts.position.par_iter(), pts.initial_volume.par_iter())
             .into_par_iter()
             .with_min_len(1024)
-            .map(|(x, &v0)| {
+            .for_each(|(record, support, x, &v0)| {
                 let half = 0.5 * point_size(formulation, thickness, v0, x);
-                grid.point_functions(x, [half; 3], formulation, thickness)
-            })
-            .collect();
+                *support = grid.point_functions(x, [half; 3], formulation, thickness).map(|(s, g)| {
+                    PackedGeometry::pack(record, &g);
+                    s
+                });
+            });
         // counting sort by support, each support's points by id: order (support, id)
         let num_cells = grid.num_supports();
         let mut start = vec![0usize; num_cells + 1];
-        for (c, _) in located.iter().flatten() {
+        for c in supports.iter().flatten() {
             start[c + 1] += 1;
         }
         for c in 0..num_cells {
@@ -306,8 +319,8 @@ impl Body {
         let mut order = vec![0usize; kept];
         {
             let mut fill = start.clone();
-            for (p, l) in located.iter().enumerate() {
-                if let Some((c, _)) = l {
+            for (p, s) in supports.iter().enumerate() {
+                if let Some(c) = s {
                     order[fill[*c]] = p;
                     fill[*c] += 1;
                 }
@@ -325,18 +338,18 @@ impl Body {
         for (k, &id) in self.points.id.iter().enumerate() {
             self.index_of_id[id] = k;
         }
+        let (supports, functions) = &self.located;
         self.support_of_point.clear();
-        self.support_of_point.extend(order.iter().map(|&p| located[p].as_ref().expect("kept points are located").0));
-        order
-            .par_iter()
+        self.support_of_point.extend(order.iter().map(|&p| supports[p].expect("kept points are located")));
+        // the functions in the sorted order, weighted by the points' present volumes
+        self.geometry.resize(nodes, kept);
+        (self.geometry.par_records_mut(), order.par_iter(), self.points.volume.par_iter())
+            .into_par_iter()
             .with_min_len(1024)
-            .zip(self.points.volume.par_iter())
-            .map(|(&p, &volume)| {
-                let mut g = located[p].as_ref().expect("kept points are located").1;
-                g.weight = volume;
-                g
-            })
-            .collect_into_vec(&mut self.geometry);
+            .for_each(|(record, &p, &volume)| {
+                record.copy_from_slice(functions.record(p));
+                record[0] = volume;
+            });
         self.support_start = start;
         self.trial.state.clone_from(&self.points.state);
         self.trial.out.resize(self.points.len(), PointOutput::default());
@@ -347,8 +360,8 @@ impl Body {
     pub fn project(&self, grid: &Grid, dim: usize, sums: &mut GridSums) {
         for (p, &support) in self.support_of_point.iter().enumerate() {
             let m = self.points.mass[p];
-            for (a, &node) in grid.support(support).iter().enumerate() {
-                let w = self.geometry[p].shape[a] * m;
+            for (&node, &n) in grid.support(support).iter().zip(self.geometry.shape(p)) {
+                let w = n * m;
                 sums.mass[node] += w;
                 for i in 0..dim {
                     sums.momentum[node][i] += w * self.points.velocity[p][i];
@@ -404,7 +417,7 @@ impl Body {
         let with_stiffness = input.with_tangent && input.stiffness;
         let mut stiffness = stiffness;
         let (geometry, committed) =
-            (&self.geometry[range.clone()], &self.points.state[range.start * sl..range.end * sl]);
+            (&self.geometry.points(range.clone()), &self.points.state[range.start * sl..range.end * sl]);
         let k = if with_stiffness { stiffness.as_deref_mut() } else { None };
         match pressure {
             None => solid_element(ctx, disp, geometry, f, f, committed, trial, out, f_int, k)?,
@@ -426,8 +439,8 @@ impl Body {
         }
         let mut lumped = [0.0; MAX_NODES];
         for p in range {
-            for (a, m) in lumped.iter_mut().enumerate().take(nn) {
-                *m += self.geometry[p].shape[a] * self.points.mass[p];
+            for (m, &n) in lumped.iter_mut().zip(self.geometry.shape(p)) {
+                *m += n * self.points.mass[p];
             }
         }
         for a in 0..nn {
@@ -465,7 +478,7 @@ impl Body {
                 let b = block_of_support(self.support_of_point[k]);
                 let v = &mut vectors[b * nd..(b + 1) * nd];
                 for a in 0..nn {
-                    let n = self.geometry[k].shape[a];
+                    let n = self.geometry.shape(k)[a];
                     for i in 0..dim {
                         v[a * dim + i] -= n * load.force[i] * f;
                     }
@@ -501,9 +514,8 @@ impl Body {
                 let mut du = [0.0; 3];
                 let mut acc = [0.0; 3];
                 let mut v_grid = [0.0; 3];
-                for (a_, &node) in nodes.iter().enumerate() {
+                for (&node, &n) in nodes.iter().zip(geometry.shape(p)) {
                     let g = node_ids[node] * dim;
-                    let n = geometry[p].shape[a_];
                     for i in 0..dim {
                         du[i] += n * (input.state.u[g + i] - input.committed.u[g + i]);
                         acc[i] += n * input.state.a[g + i];
@@ -572,10 +584,10 @@ impl Body {
         let dim = grid.mesh.element.dim();
         for (p, &support) in self.support_of_point.iter().enumerate() {
             let mut acc = [0.0; 3];
-            for (k, &node) in grid.support(support).iter().enumerate() {
+            for (&node, &n) in grid.support(support).iter().zip(self.geometry.shape(p)) {
                 let g = node_ids[node] * dim;
                 for i in 0..dim {
-                    acc[i] += self.geometry[p].shape[k] * a[g + i];
+                    acc[i] += n * a[g + i];
                 }
             }
             self.points.acceleration[p] = acc;
@@ -615,8 +627,8 @@ impl Body {
         for (p, &support) in self.support_of_point.iter().enumerate() {
             let f = &self.points.deformation_gradient[p];
             let pressure = f.determinant() * self.points.cauchy[p].trace() / 3.0;
-            for (a, &node) in grid.support(support).iter().enumerate() {
-                sums[node] += self.geometry[p].shape[a] * self.points.mass[p] * pressure;
+            for (&node, &n) in grid.support(support).iter().zip(self.geometry.shape(p)) {
+                sums[node] += n * self.points.mass[p] * pressure;
             }
         }
     }
@@ -624,8 +636,8 @@ impl Body {
     /// Marks the grid nodes whose function is non-zero at one of the body's points.
     pub fn mark_reached_nodes(&self, grid: &Grid, reached: &mut [bool]) {
         for (p, &support) in self.support_of_point.iter().enumerate() {
-            for (a, &node) in grid.support(support).iter().enumerate() {
-                reached[node] |= self.geometry[p].shape[a] != 0.0;
+            for (&node, &n) in grid.support(support).iter().zip(self.geometry.shape(p)) {
+                reached[node] |= n != 0.0;
             }
         }
     }
@@ -634,8 +646,8 @@ impl Body {
     /// the measure of the material each node's function covers) to `weights`.
     pub fn add_node_weights(&self, grid: &Grid, weights: &mut [f64]) {
         for (p, &support) in self.support_of_point.iter().enumerate() {
-            for (a, &node) in grid.support(support).iter().enumerate() {
-                weights[node] += self.geometry[p].shape[a] * self.geometry[p].weight;
+            for (&node, &n) in grid.support(support).iter().zip(self.geometry.shape(p)) {
+                weights[node] += n * self.geometry.weight(p);
             }
         }
     }
@@ -643,8 +655,8 @@ impl Body {
     /// Nodal mass `Σ_p N_I m_p` of this body's points (per grid node).
     pub fn nodal_mass(&self, grid: &Grid, mass: &mut [f64]) {
         for (p, &support) in self.support_of_point.iter().enumerate() {
-            for (a, &node) in grid.support(support).iter().enumerate() {
-                mass[node] += self.geometry[p].shape[a] * self.points.mass[p];
+            for (&node, &n) in grid.support(support).iter().zip(self.geometry.shape(p)) {
+                mass[node] += n * self.points.mass[p];
             }
         }
     }
