@@ -22,8 +22,11 @@
 //! during a write leaves the previous checkpoint intact. A checkpoint is refused (one line,
 //! exit 2) if it is not one, is truncated or corrupt (length, CRC), comes from another format
 //! version, or from another case: the case's fingerprint is the CRC-32 of its JSON with
-//! `analysis.end_time` and `analysis.checkpoint` removed (so a run can be resumed with a later
-//! end time or other checkpoint settings, nothing else).
+//! `analysis.end_time`, `analysis.checkpoint` and the output settings that do not touch the
+//! steps (`output.vtk`, `interval`, `time_interval`, `grid`; not `times`, which shortens
+//! steps) removed, so a run can be resumed with a later end time, other checkpoint settings or
+//! other VTK output (e.g. switched on to look at the steps before a failure), nothing else.
+//! Checkpoints of builds whose fingerprint kept the output settings are still read.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -79,17 +82,38 @@ pub enum CheckpointError {
     },
 }
 
-/// The fingerprint of a case file's text: CRC-32 of its JSON without `analysis.end_time` and
-/// `analysis.checkpoint`, keys in sorted order (whitespace and key order do not matter).
-pub fn fingerprint(text: &str) -> u32 {
+/// Output settings that change what is written, not the steps (left out of the fingerprint).
+const OUTPUT_ONLY_KEYS: [&str; 4] = ["vtk", "interval", "time_interval", "grid"];
+
+/// The fingerprints a case file's text accepts a checkpoint of: CRC-32 of its JSON without
+/// `analysis.end_time`, `analysis.checkpoint` and the output-only settings
+/// (`output.vtk`, `interval`, `time_interval`, `grid`; an `output` left empty is dropped),
+/// keys in sorted order (whitespace and key order do not matter); then the same with the
+/// output settings kept, as builds before 5 December 2026 wrote it. The first is written.
+pub fn fingerprints(text: &str) -> [u32; 2] {
     let Ok(mut value) = serde_json::from_str::<serde_json::Value>(text) else {
-        return crc32fast::hash(text.as_bytes());
+        let crc = crc32fast::hash(text.as_bytes());
+        return [crc, crc];
     };
     if let Some(analysis) = value.get_mut("analysis").and_then(|a| a.as_object_mut()) {
         analysis.remove("end_time");
         analysis.remove("checkpoint");
     }
-    crc32fast::hash(value.to_string().as_bytes())
+    let legacy = crc32fast::hash(value.to_string().as_bytes());
+    if let Some(case) = value.as_object_mut() {
+        if let Some(output) = case.get_mut("output").and_then(|o| o.as_object_mut()) {
+            OUTPUT_ONLY_KEYS.iter().for_each(|k| _ = output.remove(*k));
+            if output.is_empty() {
+                case.remove("output");
+            }
+        }
+    }
+    [crc32fast::hash(value.to_string().as_bytes()), legacy]
+}
+
+/// The fingerprint written into checkpoints: the first of [`fingerprints`].
+pub fn fingerprint(text: &str) -> u32 {
+    fingerprints(text)[0]
 }
 
 /// Writes `checkpoint` to `path` atomically (temporary file, sync, rename).
@@ -116,9 +140,9 @@ pub fn write(path: &Path, checkpoint: &Checkpoint) -> Result<(), CheckpointError
     std::fs::rename(&tmp, path).map_err(io)
 }
 
-/// Reads and checks the checkpoint at `path` against the case of fingerprint
-/// `case_fingerprint`.
-pub fn read(path: &Path, case_fingerprint: u32) -> Result<Checkpoint, CheckpointError> {
+/// Reads and checks the checkpoint at `path` against the case of [`fingerprints`]
+/// `case_fingerprints` (either one is accepted).
+pub fn read(path: &Path, case_fingerprints: [u32; 2]) -> Result<Checkpoint, CheckpointError> {
     let refused = |reason: String| CheckpointError::Refused { file: path.to_path_buf(), reason };
     let meta =
         std::fs::metadata(path).map_err(|e| CheckpointError::Io { file: path.to_path_buf(), reason: e.to_string() })?;
@@ -153,9 +177,9 @@ pub fn read(path: &Path, case_fingerprint: u32) -> Result<Checkpoint, Checkpoint
         bincode::DefaultOptions::new().with_fixint_encoding().allow_trailing_bytes().with_limit(payload.len() as u64);
     let checkpoint: Checkpoint =
         options.deserialize(payload).map_err(|e| refused(format!("corrupt (cannot decode: {e})")))?;
-    if checkpoint.case_fingerprint != case_fingerprint {
+    if !case_fingerprints.contains(&checkpoint.case_fingerprint) {
         return Err(refused(format!(
-            "written for another case ('{}', or this case with other settings than end_time and checkpoint)",
+            "written for another case ('{}', or this case with other settings than end_time, checkpoint and the VTK output)",
             checkpoint.case_name
         )));
     }
@@ -189,5 +213,39 @@ pub fn prune(out_dir: &Path, keep: usize) {
     let files = list(out_dir);
     for old in files.iter().take(files.len().saturating_sub(keep)) {
         let _ = std::fs::remove_file(old);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fingerprint leaves out the end time, the checkpoint settings and the output-only
+    /// settings (an `output` they leave empty counts as none), keeps `output.times` and the
+    /// rest; the second fingerprint is the one of builds that kept the output settings.
+    #[test]
+    fn fingerprints_leave_out_what_does_not_touch_the_steps() {
+        let base = r#"{"analysis": {"type": "static", "end_time": 1.0}, "domains": []}"#;
+        let same = [
+            r#"{"domains": [], "analysis": {"end_time": 2.0, "type": "static", "checkpoint": {"every_steps": 5}}}"#,
+            r#"{"analysis": {"type": "static"}, "domains": [], "output": {"vtk": false, "interval": 3}}"#,
+            r#"{"analysis": {"type": "static"}, "domains": [], "output": {"time_interval": 0.1, "grid": true}}"#,
+        ];
+        let [fp, legacy] = fingerprints(base);
+        assert_eq!(fp, legacy, "a case without output settings has one fingerprint");
+        for text in same {
+            assert_eq!(fingerprint(text), fp, "{text}");
+        }
+        let other = [
+            r#"{"analysis": {"type": "static"}, "domains": [], "output": {"times": [0.5]}}"#,
+            r#"{"analysis": {"type": "dynamic"}, "domains": []}"#,
+        ];
+        for text in other {
+            assert_ne!(fingerprint(text), fp, "{text}");
+        }
+        let with_vtk = r#"{"analysis": {"type": "static"}, "domains": [], "output": {"vtk": false}}"#;
+        let [fp_vtk, legacy_vtk] = fingerprints(with_vtk);
+        assert_eq!(fp_vtk, fp);
+        assert_ne!(legacy_vtk, fp, "the old fingerprint kept the output settings");
     }
 }

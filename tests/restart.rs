@@ -216,6 +216,58 @@ fn sigint_then_resume_the_default_bui_collapse() {
     sigint_then_resume("collapse_bui2008_quad", 300);
 }
 
+/// A run written without VTK output, resumed from a checkpoint with VTK switched on (to look
+/// at the steps after it, e.g. before a failure): the checkpoint is accepted, the resumed run
+/// writes the VTK series of the steps after it and `monitors.csv` equals the uninterrupted
+/// run's byte for byte. `output.times`, which shortens steps, is still part of the case: a
+/// checkpoint is refused when it changes.
+#[test]
+fn resume_with_vtk_switched_on() {
+    let dir = temp_dir("vtk_on");
+    let edit = |vtk: bool| {
+        move |j: &mut serde_json::Value| {
+            j["analysis"]["end_time"] = serde_json::json!(0.1);
+            j["analysis"]["checkpoint"] = serde_json::json!({ "every_steps": 5, "keep": 100 });
+            j["output"] = serde_json::json!({ "vtk": vtk, "interval": 1 });
+        }
+    };
+    let case = case_file(&dir, "cantilever_mpm_dynamic", edit(false));
+    let full = dir.join("full");
+    assert!(run(&case, &full, &[]).status.success());
+    assert!(!full.join("cantilever_mpm_dynamic.pvd").exists() && !full.join("body.pvd").exists());
+    let resumed = dir.join("resumed");
+    std::fs::create_dir_all(&resumed).unwrap();
+    std::fs::copy(full.join("monitors.csv"), resumed.join("monitors.csv")).unwrap();
+    let checkpoint = loam::checkpoint::path_of(&full, 5);
+    let case = case_file(&dir, "cantilever_mpm_dynamic", edit(true));
+    let out = run(&case, &resumed, &["--resume", checkpoint.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let monitors = |d: &Path| std::fs::read_to_string(d.join("monitors.csv")).unwrap();
+    assert_eq!(monitors(&full), monitors(&resumed), "monitors.csv of the resumed run");
+    let vtu: Vec<String> = std::fs::read_dir(&resumed)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".vtu"))
+        .collect();
+    // rows: the header, the initial state, then one per step
+    let steps = monitors(&full).lines().count() - 2;
+    println!("resumed after step 5 of {steps} with VTK on: {} .vtu files", vtu.len());
+    let mut written: Vec<usize> =
+        vtu.iter().map(|n| n.trim_end_matches(".vtu").rsplit('_').next().unwrap().parse().unwrap()).collect();
+    written.sort_unstable();
+    assert_eq!(written, (6..=steps).collect::<Vec<_>>(), "the steps after the checkpoint: {vtu:?}");
+    // output.times shortens steps: a checkpoint of the case without it is refused
+    let timed = case_file(&dir, "cantilever_mpm_dynamic", |j| {
+        edit(true)(j);
+        j["output"]["times"] = serde_json::json!([0.05]);
+    });
+    let out = run(&timed, &dir.join("timed"), &["--resume", checkpoint.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    println!("with output.times: exit {:?}: {stderr}", out.status.code());
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr.contains("another case"), "{stderr}");
+}
+
 /// A checkpoint that does not fit is refused with one line naming the file and why, exit 2:
 /// truncated, corrupt, of another format version, of another case, not a checkpoint at all,
 /// and `--resume` with no checkpoint in the results directory.

@@ -208,9 +208,13 @@ fn run_case(
         Err(e) => return bad_input(&e),
     };
     let out = out.unwrap_or_else(|| default_out_dir(&sim.case.name));
-    let fingerprint = std::fs::read_to_string(case).map(|t| checkpoint::fingerprint(&t)).unwrap_or(0);
-    let mut options =
-        RunOptions { progress: !quiet, case_fingerprint: fingerprint, resume: None, interrupt: interrupt_handler() };
+    let fingerprints = std::fs::read_to_string(case).map(|t| checkpoint::fingerprints(&t)).unwrap_or([0, 0]);
+    let mut options = RunOptions {
+        progress: !quiet,
+        case_fingerprint: fingerprints[0],
+        resume: None,
+        interrupt: interrupt_handler(),
+    };
     if let Some(given) = resume {
         let path = match given.or_else(|| checkpoint::list(&out).pop()) {
             Some(p) => p,
@@ -219,7 +223,7 @@ fn run_case(
                 return ExitCode::from(2);
             }
         };
-        let restored = checkpoint::read(&path, fingerprint).map_err(|e| e.to_string()).and_then(|c| {
+        let restored = checkpoint::read(&path, fingerprints).map_err(|e| e.to_string()).and_then(|c| {
             sim.restore_state(c.simulation, c.model)
                 .map_err(|e| format!("{}: does not fit this case: {e}", path.display()))
                 .map(|()| c.writer)
