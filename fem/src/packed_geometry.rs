@@ -36,17 +36,6 @@ pub struct PackedPoints<'a> {
 const SHAPE: usize = 2;
 
 impl PackedGeometry {
-    /// An empty store for points of `nodes` nodes (at most [`MAX_NODES`]).
-    pub fn new(nodes: usize) -> Self {
-        assert!(nodes <= MAX_NODES, "a block has at most {MAX_NODES} nodes, asked for {nodes}");
-        Self { nodes, data: Vec::new() }
-    }
-
-    /// Nodes per point.
-    pub fn nodes(&self) -> usize {
-        self.nodes
-    }
-
     /// Values per point's record.
     pub fn stride(&self) -> usize {
         SHAPE + 4 * self.nodes
@@ -131,38 +120,30 @@ impl Geometries for PackedPoints<'_> {
     fn point<'a>(&'a self, k: usize, scratch: &'a mut PointGeometry) -> &'a PointGeometry {
         let stride = SHAPE + 4 * self.nodes;
         let record = &self.data[k * stride..(k + 1) * stride];
-        // the block sizes of the grids unrolled (a point's kernel is a few hundred
-        // nanoseconds: a call to copy its 18 values would show)
+        // the block sizes of the grids as constants, so that the copy is unrolled (a point's
+        // kernel is a few hundred nanoseconds: a call to copy its 18 values would show)
         match self.nodes {
-            3 => unpack::<3>(record, scratch),
-            4 => unpack::<4>(record, scratch),
-            8 => unpack::<8>(record, scratch),
-            9 => unpack::<9>(record, scratch),
-            27 => unpack::<27>(record, scratch),
-            n => {
-                scratch.weight = record[0];
-                scratch.radius = record[1];
-                let (shape, gradient) = record[SHAPE..].split_at(n);
-                scratch.shape[..n].copy_from_slice(shape);
-                for (dst, src) in scratch.gradient[..n].iter_mut().zip(gradient.chunks_exact(3)) {
-                    dst.copy_from_slice(src);
-                }
-            }
+            3 => unpack(record, 3, scratch),
+            4 => unpack(record, 4, scratch),
+            8 => unpack(record, 8, scratch),
+            9 => unpack(record, 9, scratch),
+            27 => unpack(record, 27, scratch),
+            n => unpack(record, n, scratch),
         }
         scratch
     }
 }
 
-/// Writes a record of `N` nodes into `g` (weight, radius, `shape[..N]`, `gradient[..N]`).
+/// Writes a record of `n` nodes into `g` (weight, radius, `shape[..n]`, `gradient[..n]`).
 #[inline(always)]
-fn unpack<const N: usize>(record: &[f64], g: &mut PointGeometry) {
-    let record = &record[..SHAPE + 4 * N];
+fn unpack(record: &[f64], n: usize, g: &mut PointGeometry) {
+    let record = &record[..SHAPE + 4 * n];
     g.weight = record[0];
     g.radius = record[1];
-    for a in 0..N {
+    for a in 0..n {
         g.shape[a] = record[SHAPE + a];
         for i in 0..3 {
-            g.gradient[a][i] = record[SHAPE + N + 3 * a + i];
+            g.gradient[a][i] = record[SHAPE + n + 3 * a + i];
         }
     }
 }
@@ -180,7 +161,7 @@ mod tests {
             g.gradient[a] = [a as f64, -(a as f64), 0.5 * a as f64];
         }
         (g.weight, g.radius) = (2.5, 0.75);
-        let mut store = PackedGeometry::new(4);
+        let mut store = PackedGeometry::default();
         store.resize(4, 3);
         assert_eq!((store.len(), store.stride()), (3, 18));
         PackedGeometry::pack(&mut store.data[18..36], &g);
