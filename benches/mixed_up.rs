@@ -12,7 +12,8 @@
 //!
 //! Prints the per-step phase split (Markdown tables) and the ratio of the u–p step to the
 //! displacement step. Threads from `LOAM_BENCH_THREADS` (default 1), steps from
-//! `LOAM_BENCH_STEPS` (default 10). Run: `cargo bench --bench mixed_up`. Nothing is
+//! `LOAM_BENCH_STEPS` (default 10), parts from `LOAM_BENCH_PARTS` (comma-separated among
+//! `footing`, `bui`, `solvers`; default all). Run: `cargo bench --bench mixed_up`. Nothing is
 //! asserted about times.
 
 mod common;
@@ -65,8 +66,23 @@ fn main() {
     let threads: usize = std::env::var("LOAM_BENCH_THREADS").ok().and_then(|v| v.parse().ok()).unwrap_or(1);
     let steps: usize = std::env::var("LOAM_BENCH_STEPS").ok().and_then(|v| v.parse().ok()).unwrap_or(10);
     let headers = ["equations", "LU / factorisations"];
+    let parts = std::env::var("LOAM_BENCH_PARTS").unwrap_or_else(|_| "footing,bui,solvers".into());
+    let run = |part: &str| parts.split(',').any(|p| p.trim() == part);
 
     // benchmark 11: the footing
+    if run("footing") {
+        footing(threads, steps, &headers);
+    }
+    if run("bui") {
+        bui(threads, steps, &headers);
+    }
+    if run("solvers") {
+        solvers(threads, steps, &headers);
+    }
+}
+
+/// Benchmark 11, u–p against displacement.
+fn footing(threads: usize, steps: usize, headers: &[&str]) {
     let start = 0.2;
     let footing = vec![
         timed(
@@ -78,10 +94,12 @@ fn main() {
         ),
         timed(build(case_json("footing_undrained_mpm_u.json")), "footing, displacement", start, threads, steps),
     ];
-    print_table(&footing, &headers);
+    print_table(&footing, headers);
     ratio("footing", &footing[0], &footing[1]);
+}
 
-    // benchmark 8: the Bui column, fixed steps of 1 ms from 0.1 s
+/// Benchmark 8, the Bui column: fixed steps of 1 ms from 0.1 s, u–p against displacement.
+fn bui(threads: usize, steps: usize, headers: &[&str]) {
     let (dt, start) = (1e-3, 0.1);
     let column = |name: &str| {
         let mut v = case_json(name);
@@ -96,10 +114,12 @@ fn main() {
         timed(column("collapse_bui2008_quad_up.json"), "Bui column, u–p", start, threads, steps),
         timed(column("collapse_bui2008_quad.json"), "Bui column, displacement", start, threads, steps),
     ];
-    print_table(&bui, &headers);
+    print_table(&bui, headers);
     ratio("Bui column", &bui[0], &bui[1]);
+}
 
-    // the linear solvers of the saddle point
+/// The linear solvers of the saddle point.
+fn solvers(threads: usize, steps: usize, headers: &[&str]) {
     let mut solvers = Vec::new();
     for solver in ["lu", "ldlt", "lblt"] {
         let mut v = case_json("footing_undrained_mpm_up.json");
@@ -111,5 +131,5 @@ fn main() {
         v["solver"]["linear_solver"] = json!(solver);
         solvers.push(timed(build(v), &format!("Cook's membrane (Kratos' mesh), {solver}"), 0.0, threads, 1));
     }
-    print_table(&solvers, &headers);
+    print_table(&solvers, headers);
 }

@@ -786,12 +786,37 @@ fn footing_on_undrained_soil_fem() {
     assert!(u > 1.15 * up, "the displacement element locks above the mixed one");
 }
 
+/// Solver path of the u–p saddle point (issue 30; a consistency check of the solver, not a
+/// validation): the Bui column's Mohr–Coulomb u–p tangent is factorised by the LU on its
+/// symmetric pattern at every Newton iteration of the first 0.02 s, and its symmetric
+/// tangents by `L B Lᵀ`, without a pivot failure or an inaccurate solve. Before the orphan
+/// pressures' equations were scaled to unit rows and the pivot test made relative to its
+/// column, a front of orphan rows (1 beside `(μ/h)² = 4·10¹⁵`) failed the first LU and sent
+/// the rest of the pattern to faer's LU, and 10 of the 82 factorisations of `L B Lᵀ` failed.
+#[test]
+fn bui_saddle_point_factorises_on_its_symmetric_pattern() {
+    let case = variant(
+        "collapse_bui2008_quad_up.json",
+        &[("/analysis/end_time", json!(0.02)), ("/output", json!({ "vtk": false }))],
+    );
+    let (sim, _) = run(case);
+    let s = sim.model.solver_timings();
+    println!(
+        "factorisations {}, of which saddle-point LU {}; LU on the symmetric pattern failed {} times, L B Lᵀ {} times",
+        s.factorisations, s.saddle_point_lu, s.pattern_lu_failures, s.ldlt_failures
+    );
+    assert!(s.factorisations > 50, "the run factorises ({})", s.factorisations);
+    assert_eq!(s.pattern_lu_failures, 0, "the LU on the symmetric pattern holds the saddle point");
+    assert_eq!(s.ldlt_failures, 0, "L B Lᵀ holds the symmetric saddle points");
+}
+
 /// Consistency check beside benchmark 8 with the u–p element (its validation against the
 /// experiment is `mpm_collapse::bui2008_collapse_mixed_up`): the isochoric flow with ψ = 0
 /// must not stiffen or soften the collapse (issue 15), so the u–p runout lies within 5 % of
 /// the displacement run's on the same grid and base, and both come to rest. Both run on
 /// quadratic B-splines with the frictional base of `collapse_bui2008_quad.json` (measured:
-/// displacement 0.4261 m, u–p 0.4146 m, 2.7 % apart). On the linear basis the runout at the
+/// displacement 0.4261 m, u–p 0.4157 m, 2.4 % apart; 0.4146 m before the saddle point went
+/// through the LU on its symmetric pattern, a change of round-off path). On the linear basis the runout at the
 /// experiment's 2 mm threshold follows a sheet one material point thick (docs/validation.md, granular
 /// flow: it moves by −13 / +18 % as the PIC relaxation time is halved / doubled) and the two
 /// elements end 6.2 % (frictional base) and 6.3 % (rough base) apart; on B-splines the sheet

@@ -24,7 +24,7 @@
 //! factorization pivoting methods for sparse symmetric indefinite systems", ETNA 23:158–179),
 //! which keeps the structure. That is stable when the matrix is close to diagonally dominant
 //! within the supernodes — true for stiffness plus mass — and is not guaranteed otherwise: a
-//! pivot below `1e-13` of its block's largest entry fails the factorisation
+//! pivot below `1e-13` of its column's largest entry in the block fails the factorisation
 //! ([`PivotFailure`]), and the caller checks the residual of every solve and falls back to
 //! the general LU ([`crate::linear_solver`]).
 
@@ -36,8 +36,11 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Accum, MatMut, Par, Side};
 
-/// Smallest pivot, relative to the largest entry of its supernode's diagonal block, that
-/// the factorisation accepts.
+/// Smallest pivot, relative to the largest entry of its column in the supernode's diagonal
+/// block at its elimination (the `U` entries above it included), that the factorisation
+/// accepts. Relative to its own column, not to the whole block: a block may hold equations
+/// of very different scales (the unit diagonal of an empty node's pressure, scaled by the
+/// equilibration `(μ/h)²`, beside a displacement's unit diagonal).
 pub const PIVOT_TOLERANCE: f64 = 1e-13;
 
 /// Multiply–adds `width · below²` of a front's update from which it goes to faer's dense
@@ -348,14 +351,9 @@ impl PatternLu {
 /// the row); the first `width` rows beyond the panel are left for the triangular solve.
 /// `Err(k)` if column `k` has no pivot above [`PIVOT_TOLERANCE`].
 fn factor_panel(front: &mut [f64], m: usize, width: usize, pivot: &mut [usize]) -> Result<(), usize> {
-    let mut largest = 0.0f64;
-    for j in 0..width {
-        for &v in &front[j * m..j * m + width] {
-            largest = largest.max(v.abs());
-        }
-    }
     for k in 0..width {
         let column = &front[k * m..(k + 1) * m];
+        let largest = column[..width].iter().fold(0.0f64, |a, v| a.max(v.abs()));
         let (p, best) = (k..width).map(|i| (i, column[i].abs())).fold((k, -1.0), |a, b| if b.1 > a.1 { b } else { a });
         if best <= PIVOT_TOLERANCE * largest || !best.is_finite() {
             return Err(k);
@@ -397,6 +395,56 @@ mod tests {
         for side in [30, 160] {
             solves_on_a_grid(side);
         }
+    }
+
+    /// A grid matrix in which every fifth equation is decoupled in value but not in
+    /// structure and has a diagonal of 10¹⁶ (an empty node's pressure, equilibrated by
+    /// `(μ/h)²`, in the fronts of its neighbours' unit-scale equations): every pivot is
+    /// accepted, the tolerance being relative to each column, not to the block (a
+    /// block-relative one refused it: 4.3 < 10⁻¹³ · 10¹⁶), and the solve is exact to round-off.
+    #[test]
+    fn accepts_equations_of_very_different_scales_in_one_front() {
+        let (side, large) = (20usize, 1e16);
+        let n = side * side;
+        let decoupled = |i: usize| i % 5 == 0;
+        let mut entries = Vec::new();
+        for y in 0..side {
+            for x in 0..side {
+                let i = y * side + x;
+                entries.push(Triplet::new(i, i, if decoupled(i) { large } else { 4.3 }));
+                for (dx, dy, w) in [(1i64, 0i64, -1.3), (-1, 0, -0.7), (0, 1, -1.1), (0, -1, -0.9)] {
+                    let (xn, yn) = (x as i64 + dx, y as i64 + dy);
+                    if (0..side as i64).contains(&xn) && (0..side as i64).contains(&yn) {
+                        let j = (yn as usize) * side + xn as usize;
+                        entries.push(Triplet::new(i, j, if decoupled(i) || decoupled(j) { 0.0 } else { w }));
+                    }
+                }
+            }
+        }
+        let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &entries).unwrap();
+        let mut lu = PatternLu::analyse(a.symbolic()).expect("supernodal analysis");
+        let mixed_fronts = (0..lu.begin.len() - 1)
+            .filter(|&s| {
+                let eqs = &lu.ordering[lu.begin[s]..lu.begin[s + 1]];
+                eqs.iter().any(|&i| decoupled(i)) && eqs.iter().any(|&i| !decoupled(i))
+            })
+            .count();
+        println!("{mixed_fronts} supernodes hold both scales");
+        assert!(mixed_fronts > 0, "the test puts both scales in one front");
+        lu.factorise(a.as_ref()).expect("every pivot accepted");
+        let b: Vec<f64> = (0..n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
+        let mut x = b.clone();
+        lu.solve_in_place(&mut x);
+        let mut residual = b.clone();
+        for j in 0..n {
+            for (i, v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+                residual[i] -= v * x[j];
+            }
+        }
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let relative = norm(&residual) / norm(&b);
+        println!("relative residual {relative:.2e}");
+        assert!(relative < 1e-12, "relative residual {relative:e}");
     }
 
     fn solves_on_a_grid(side: usize) {

@@ -23,7 +23,8 @@
 //! initialisation phase starts the nodal pressures from the mass-weighted projection of the
 //! points' mean Kirchhoff stress, `p_I = Σ_p N_I m_p p_p / Σ_p N_I m_p` (as the velocities).
 //! Like the displacements, the pressures of nodes that no active cell touches keep their
-//! start value (`r = p − p_n`, unit diagonal).
+//! start value (`r = (p − p_n)/s²`: a unit diagonal after the assembler's equilibration by
+//! `s = μ/h`).
 
 use std::ops::Range;
 use std::sync::{Arc, RwLock};
@@ -166,6 +167,9 @@ pub struct MpmDomain {
     blocks: CellBlocks,
     /// Global pressure DOF of every grid node (u–p grids).
     pressure_dofs: Option<Vec<usize>>,
+    /// Diagonal `1/s²` of an orphan node's pressure equation, `s` the assembler's
+    /// equilibration scale of the grid's pressures ([`MpmDomain::set_pressure_dofs`]).
+    orphan_pressure_weight: f64,
     /// How a cell integrates over its points ([`crate::quadrature`]).
     quadrature: PointQuadrature,
     /// Ghost penalty on the faces of the cut cells ([`crate::ghost_penalty`]).
@@ -218,6 +222,7 @@ impl MpmDomain {
             sums: GridSums::default(),
             blocks: CellBlocks { rings: DEFAULT_MPM_PATTERN_RINGS, ..Default::default() },
             pressure_dofs: None,
+            orphan_pressure_weight: 1.0,
             quadrature: PointQuadrature::MaterialPoints,
             ghost: None,
             worst_cell_quality: 1.0,
@@ -264,9 +269,14 @@ impl MpmDomain {
     }
 
     /// Makes the grid a mixed u–p one: grid node `a` carries the global pressure DOF
-    /// `dofs[a]` (see the module doc).
-    pub fn set_pressure_dofs(&mut self, dofs: Vec<usize>) {
+    /// `dofs[a]` (see the module doc), equilibrated by the assembler with the scale `scale`
+    /// (`μ/h`, [`loam_fem::assembler`]). An orphan node's pressure equation is written as
+    /// `r = (p − p_n)/s²` with the diagonal `1/s²`, so that after the equilibration it is a unit
+    /// row like an orphan displacement's, not one of `s²` (about 10¹⁵ on the Bui column)
+    /// beside the unit rows, which no pivot test relative to its block survives.
+    pub fn set_pressure_dofs(&mut self, dofs: Vec<usize>, scale: f64) {
         self.pressure_dofs = Some(dofs);
+        self.orphan_pressure_weight = if scale > 0.0 { 1.0 / (scale * scale) } else { 1.0 };
     }
 
     /// Global pressure DOF of every grid node, if the grid is a u–p one.
@@ -641,6 +651,7 @@ impl MpmDomain {
         let dim = self.dim();
         let nd = self.block_len();
         let pressure_dofs = self.pressure_dofs.as_deref();
+        let orphan_pressure_weight = self.orphan_pressure_weight;
         let (formulation, thickness) = (self.formulation, self.thickness);
         let (grid, node_ids, name, blocks) = (&self.grid, &self.node_ids, &self.name, &self.blocks);
         let attachment = self.attachment.as_ref();
@@ -673,9 +684,9 @@ impl MpmDomain {
                 for (a, &node) in grid.support(blocks.pattern[b]).iter().enumerate() {
                     if blocks.pressure_orphans[b] & (1 << a) != 0 {
                         let dof = pressure_dofs[node];
-                        fv[nu + a] += input.state.u[dof] - input.committed.u[dof];
+                        fv[nu + a] += orphan_pressure_weight * (input.state.u[dof] - input.committed.u[dof]);
                         if input.with_tangent {
-                            km[(nu + a) * nd + nu + a] += 1.0;
+                            km[(nu + a) * nd + nu + a] += orphan_pressure_weight;
                         }
                     }
                 }

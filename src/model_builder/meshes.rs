@@ -1609,7 +1609,7 @@ pub(super) fn assign_pressure_dofs(case: &Case, model: &mut Model, parts: &mut [
                     .fold(0.0, f64::max);
                 let scale = mu / mean_cell_size(&grid.domain.grid().mesh);
                 let dofs = model.add_pressure_dofs(grid.domain.node_ids(), scale);
-                grid.domain.set_pressure_dofs(dofs);
+                grid.domain.set_pressure_dofs(dofs, scale);
             }
             _ => {}
         }
