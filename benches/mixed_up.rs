@@ -10,11 +10,11 @@
 //!   (signed regularisation), `lblt` (Bunch–Kaufman, what `auto` takes on a symmetric saddle
 //!   point).
 //!
-//! Prints the per-step phase split (Markdown tables) and the ratio of the u–p step to the
-//! displacement step. Threads from `LOAM_BENCH_THREADS` (default 1), steps from
-//! `LOAM_BENCH_STEPS` (default 10), parts from `LOAM_BENCH_PARTS` (comma-separated among
-//! `footing`, `bui`, `solvers`; default all). Run: `cargo bench --bench mixed_up`. Nothing is
-//! asserted about times.
+//! Prints the per-step phase split (Markdown tables) with the entries of the last factor, and
+//! the ratio of the u–p step to the displacement step. Threads from `LOAM_BENCH_THREADS`
+//! (default 1), steps from `LOAM_BENCH_STEPS` (default 10), parts from `LOAM_BENCH_PARTS`
+//! (comma-separated among `footing`, `bui`, `solvers`; default all). Run: `cargo bench --bench
+//! mixed_up`. Nothing is asserted about times.
 
 mod common;
 
@@ -47,7 +47,12 @@ fn timed(mut sim: Simulation, label: &str, start: f64, threads: usize, steps: us
     let n = points(&sim);
     let mut row = time_steps(&mut sim, label, n, threads, 0, steps);
     let s = sim.model.solver_timings();
-    row.extra = vec![format!("{}", sim.model.num_equations()), format!("{} / {}", s.saddle_point_lu, s.factorisations)];
+    let entries = sim.model.factor_entries().map_or("—".to_string(), |n| format!("{n}"));
+    row.extra = vec![
+        format!("{}", sim.model.num_equations()),
+        format!("{} / {}", s.saddle_point_lu, s.factorisations),
+        entries,
+    ];
     row
 }
 
@@ -65,7 +70,7 @@ fn main() {
     faer::set_global_parallelism(faer::Par::Seq);
     let threads: usize = std::env::var("LOAM_BENCH_THREADS").ok().and_then(|v| v.parse().ok()).unwrap_or(1);
     let steps: usize = std::env::var("LOAM_BENCH_STEPS").ok().and_then(|v| v.parse().ok()).unwrap_or(10);
-    let headers = ["equations", "LU / factorisations"];
+    let headers = ["equations", "LU / factorisations", "factor entries (L, or L and U)"];
     let parts = std::env::var("LOAM_BENCH_PARTS").unwrap_or_else(|_| "footing,bui,solvers".into());
     let run = |part: &str| parts.split(',').any(|p| p.trim() == part);
 

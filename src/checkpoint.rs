@@ -38,8 +38,9 @@ use serde::{Deserialize, Serialize};
 use crate::output::results::WriterState;
 use crate::simulation::SimulationState;
 
-/// Version of the checkpoint format; a file of another version is refused.
-pub const FORMAT_VERSION: u32 = 1;
+/// Version of the checkpoint format; a file of another version is refused. 2 (6 December
+/// 2026): the linear solver's memory gained the `L B Lᵀ` back-off state.
+pub const FORMAT_VERSION: u32 = 2;
 
 const MAGIC: &[u8; 8] = b"LOAMCKPT";
 const HEADER: usize = 8 + 4 + 4 + 8;

@@ -375,6 +375,13 @@ pub struct SolverMemory {
     /// general LU from then on.
     #[serde(default)]
     pub pattern_lu_failed: bool,
+    /// Length of the last run of LU solves after an `L B Lᵀ` / `L D Lᵀ` failure
+    /// ([`LDLT_BACKOFF`]).
+    #[serde(default)]
+    pub ldlt_backoff: u32,
+    /// Solves left to LU before `L B Lᵀ` / `L D Lᵀ` is tried again.
+    #[serde(default)]
+    pub ldlt_skip: u32,
 }
 
 /// A direct solver bound to one sparsity pattern.
@@ -483,6 +490,8 @@ impl LinearSolver {
             cholesky_failed: self.llt_failed,
             symmetric_part_failed: self.symmetric_part_failed,
             pattern_lu_failed: self.pattern_lu_failed,
+            ldlt_backoff: self.ldlt_backoff,
+            ldlt_skip: self.ldlt_skip,
         }
     }
 
@@ -491,6 +500,8 @@ impl LinearSolver {
         self.llt_failed = memory.cholesky_failed;
         self.symmetric_part_failed = memory.symmetric_part_failed;
         self.pattern_lu_failed = memory.pattern_lu_failed;
+        self.ldlt_backoff = memory.ldlt_backoff;
+        self.ldlt_skip = memory.ldlt_skip;
     }
 
     /// Entries (values) of the factor the last successful solve left if it is Cholesky-type
