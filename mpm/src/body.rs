@@ -298,12 +298,12 @@ impl Body {
         (functions.par_records_mut(), supports.par_iter_mut(), pts.position.par_iter(), pts.initial_volume.par_iter())
             .into_par_iter()
             .with_min_len(1024)
-            .for_each(|(record, support, x, &v0)| {
+            .for_each_init(PointGeometry::default, |g, (record, support, x, &v0)| {
                 let half = 0.5 * point_size(formulation, thickness, v0, x);
-                *support = grid.point_functions(x, [half; 3], formulation, thickness).map(|(s, g)| {
-                    PackedGeometry::pack(record, &g);
-                    s
-                });
+                *support = grid.point_functions_into(x, [half; 3], formulation, thickness, g);
+                if support.is_some() {
+                    PackedGeometry::pack(record, g);
+                }
             });
         // counting sort by support, each support's points by id: order (support, id)
         let num_cells = grid.num_supports();

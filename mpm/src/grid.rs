@@ -23,7 +23,7 @@
 
 use loam_fem::element::{ElementType, GaussPoint, MAX_ELEMENT_NODES, MAX_NODES};
 use loam_fem::formulation::Formulation;
-use loam_fem::kernel::{point_geometry, point_geometry_into, CellMap, KernelError, PointGeometry};
+use loam_fem::kernel::{point_geometry_into, CellMap, KernelError, PointGeometry};
 use loam_fem::mesh::Mesh;
 
 use crate::basis::{Basis, SmoothLattice, SupportValues};
@@ -338,19 +338,38 @@ impl Grid {
         formulation: Formulation,
         thickness: f64,
     ) -> Option<(usize, PointGeometry)> {
+        let mut g = PointGeometry::default();
+        self.point_functions_into(x, half_size, formulation, thickness, &mut g).map(|support| (support, g))
+    }
+
+    /// [`Grid::point_functions`] written into `g` (its support's entries; on the linear basis
+    /// without a copy of the whole record, which point location does for every point of a
+    /// step), returning the support.
+    pub fn point_functions_into(
+        &self,
+        x: &[f64; 3],
+        half_size: [f64; 3],
+        formulation: Formulation,
+        thickness: f64,
+        g: &mut PointGeometry,
+    ) -> Option<usize> {
         if let Some(lattice) = &self.smooth {
-            if !self.has_moved() {
-                return lattice.evaluate(x, half_size, formulation);
-            }
-            let s = self.moved_lattice_coordinates(lattice, x)?;
-            let (support, geometry, _) =
-                self.moved_lattice_functions(lattice, s, lattice.in_cells(half_size), formulation);
-            return Some((support, geometry));
+            let (support, geometry) = if self.has_moved() {
+                let s = self.moved_lattice_coordinates(lattice, x)?;
+                let (support, geometry, _) =
+                    self.moved_lattice_functions(lattice, s, lattice.in_cells(half_size), formulation);
+                (support, geometry)
+            } else {
+                lattice.evaluate(x, half_size, formulation)?
+            };
+            *g = geometry;
+            return Some(support);
         }
         let (cell, xi) = self.locate(x)?;
         let element = self.mesh.element;
         let coords = self.cell_coords(cell);
-        let g = point_geometry(
+        point_geometry_into(
+            g,
             element,
             formulation,
             thickness,
@@ -360,7 +379,7 @@ impl Grid {
             self.cell_map(cell),
         )
         .expect("located points lie in cells that are not inverted");
-        Some((cell, g))
+        Some(cell)
     }
 
     /// The grid functions at `x` (2D) with their first and second derivatives, per node
