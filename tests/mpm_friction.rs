@@ -84,8 +84,10 @@ fn block_on_base(dim: usize) -> Simulation {
 /// at a correction `δu₀`, entry by entry; relative error < 1e-6 of the largest entry. `δu₀`
 /// is a small random field (1e-5 m) under which the base nodes stick, with the base nodes
 /// right of the block's centre moved along the base (2e-4 m, in 3D along a direction
-/// between the axes), which makes them slide in a direction that follows the slip. The
-/// states are set by a first evaluation at `δu₀` and do not change under the perturbations.
+/// between the axes), which makes them slide (Alart–Curnier's `|R_t − r g| > μ N`) in a
+/// direction `m = −q/|q|` between the slip's and the force's, so that the 3D tangent's
+/// `(μ N/|q|)(I − m ⊗ m)` terms are checked. The states are set by a first evaluation at
+/// `δu₀` and do not change under the perturbations.
 #[test]
 fn frictional_boundary_tangent_matches_finite_differences() {
     for dim in [2, 3] {
@@ -108,9 +110,8 @@ fn frictional_boundary_tangent_matches_finite_differences() {
         let (stick, slide) = lin.friction_counts();
         println!("{dim}D: {stick} base nodes stick, {slide} slide at δu₀");
         assert!(stick > 0 && slide > 0, "both states are checked");
-        // the direction m = −R_t/|R_t| of a node that starts to slide with a small force is
-        // strongly curved: the central difference's error goes as h² (3D: 5.5e-4, 5.5e-6,
-        // 5.5e-8 of the largest entry at h = 1e-7, 1e-8, 1e-9), so a small step
+        // the sliding direction m = −q/|q| is curved where |q| is small: the central
+        // difference's error goes as h², so a small step
         let h = 1e-9;
         let fd = residual_differences(&mut lin, &delta0, h, |lin| {
             assert_eq!(lin.friction_counts(), (stick, slide), "states change under a perturbation");

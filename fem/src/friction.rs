@@ -11,32 +11,40 @@
 //!   for granular materials", CMAME 187, doi:10.1016/S0045-7825(99)00338-2, take the normal
 //!   force from the grid's nodal forces the same way);
 //! - the slip `g = ũ_t − ũ_{t,n}` is the node's tangential displacement in the step;
-//! - **stick**: `g = 0` — the tangential equations are replaced by `k g = 0` (`k` the node's
-//!   tangential stiffness, so that the row keeps the system's scale), while the force that
-//!   holds the node, `λ_t = R_t`, lies in the cone `|R_t| ≤ μ N`;
-//! - **slip**: `R_t + μ N m = 0`, `m = g/|g|` the direction of sliding (the boundary's force
-//!   `−μ N m` opposes it).
+//! - the tangential reaction `R_t` (the force with which the boundary holds the node) must lie
+//!   in the disc `|R_t| ≤ μ N`, `g = 0` inside it, and `R_t = −μ N g/|g|` while the node
+//!   slides.
 //!
-//! The stick/slip state is an active set updated at every residual evaluation, as in a
-//! semi-smooth Newton method (Alart & Curnier 1991, "A mixed formulation for frictional
-//! contact problems prone to Newton like solution methods", CMAME 92,
-//! doi:10.1016/0045-7825(91)90022-X; Wriggers 2006, *Computational Contact Mechanics*, §10):
-//! a sliding node keeps sliding while `g · m > 0`; otherwise it sticks if `|R_t| ≤ μ N`, and
-//! starts to slide along `m = −R_t/|R_t|` if not; a node that changes state more than
-//! [`MAX_SWITCHES`] times in a step holds for the rest of it (an active set can cycle at a
-//! node whose force sits on the cone). The tangent is the exact derivative of
-//! the branch taken:
-//! `∂(μ N m)/∂ũ = −μ m ⊗ ∂R_n/∂ũ + μ N (I − m ⊗ m)/|g| ∂g/∂ũ` while the direction follows
-//! the slip, and `−μ m ⊗ ∂R_n/∂ũ − μ N (I − m ⊗ m)/|R_t| ∂R_t/∂ũ` as the node starts to slide
-//! (the second terms vanish in 2D, where `m = ±1`).
-//! The row `∂R_n/∂ũ` of the normal equation is assembled in the element blocks but
-//! eliminated from the system with the constraint, so it is added, scaled by `−μ m`, to the
-//! tangential rows of every block that holds the node before the gather.
+//! These conditions are one equation per tangential DOF, Alart & Curnier's (1991, "A mixed
+//! formulation for frictional contact problems prone to Newton like solution methods",
+//! CMAME 92, doi:10.1016/0045-7825(91)90022-X; Wriggers 2006, *Computational Contact
+//! Mechanics*, §10.4):
+//!
+//! `Φ = R_t − P_{μN}(q) = 0`,  `q = R_t − r g`,
+//!
+//! `P_{μN}` the projection onto the disc of radius `μ N` and `r > 0` an augmentation of the
+//! system's scale (the node's tangential diagonal stiffness at the step's first tangent,
+//! which does not change the solution). Inside the disc (**stick**, `|q| ≤ μ N`) the equation
+//! is `r g = 0`; outside (**slip**) it is `R_t + μ N m = 0` with `m = −q/|q|`, the direction
+//! of sliding at the solution. `Φ` is continuous across the stick–slip switch and
+//! semi-smooth, so Newton's method with this active set converges locally fast where the
+//! earlier form (the direction taken from the slip `g/|g|`, or from `−R_t/|R_t|` as a node
+//! started to slide, with a jump in the residual when a node stopped) stalled in 3D: there the
+//! derivative `μ N/|g|` of a direction grows without bound at a small slip, while here it is
+//! `μ N/|q| < 1` (Wriggers 2006, §10.4). The tangent is the exact derivative of the branch:
+//!
+//! `∂Φ/∂ũ = ∂R_t/∂ũ − μ m ⊗ ∂R_n/∂ũ − (μ N/|q|) (I − m ⊗ m) (∂R_t/∂ũ − r ∂g/∂ũ)` (slip, the
+//! `I − m ⊗ m` terms vanish in 2D, where `m = ±1`), `r ∂g/∂ũ` (stick).
+//!
+//! The rows `∂R/∂ũ` are assembled in the element blocks (the normal row is eliminated from
+//! the system with the constraint), so the slip terms are added to the tangential rows of
+//! every block that holds the node before the gather. The active set is re-decided from the
+//! iterate at every residual; nothing forces a node's state (an earlier form held a node that
+//! switched more than four times in a step, which could leave it stuck where Coulomb's law
+//! has it slide): a node whose state cycles fails the step's Newton iteration, and the step is
+//! cut like any other that does not converge.
 
 use crate::assembly::BlockLayout;
-
-/// Changes between stick and slip that a node may make in one step before it holds.
-const MAX_SWITCHES: u32 = 4;
 
 /// Largest element block the friction rewrites (DOFs): hex8 u–p blocks have 32, the supports
 /// of the smooth MPM bases 27 in 2D u–p and 108 in 3D u–p.
@@ -45,12 +53,11 @@ const MAX_BLOCK_DOFS: usize = crate::mixed_kernel::MAX_MIXED_DOFS;
 /// The stick/slip state of a friction node.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum State {
-    /// The node holds: `g = 0`.
+    /// The node holds: `|q| ≤ μ N`, equation `r g = 0`.
     Stick,
-    /// The node slides along the unit tangential direction `m` (local components 1..dim);
-    /// `follows_slip` when `m = g/|g|` (else `m` was taken from the holding force as the
-    /// node started to slide, and is held fixed in this iteration's tangent).
-    Slip { direction: [f64; 2], follows_slip: bool },
+    /// The node slides along the unit tangential direction `m = −q/|q|` (local components
+    /// 1..dim); `contraction` is `μ N/|q| < 1`, the factor of the direction's derivative.
+    Slip { direction: [f64; 2], contraction: f64 },
 }
 
 /// One frictional slip node.
@@ -72,8 +79,6 @@ struct FrictionNode {
     /// Scale `k` of the stick equations (0 until the first tangent of the step).
     stick_scale: f64,
     state: State,
-    /// Changes between stick and slip in this step.
-    switches: u32,
 }
 
 /// Friction forces and their tangent on the frictional slip nodes of one sparsity pattern
@@ -108,7 +113,6 @@ impl NodalFriction {
                 holding: [0.0; 2],
                 stick_scale: 0.0,
                 state: State::Stick,
-                switches: 0,
             })
             .collect();
         let mut occurrences = Vec::new();
@@ -156,7 +160,6 @@ impl NodalFriction {
             self.step = step;
             for n in &mut self.nodes {
                 n.stick_scale = 0.0;
-                n.switches = 0;
             }
         }
         let dim = self.dim;
@@ -203,25 +206,18 @@ impl NodalFriction {
             let normal_force = (-residual[base]).max(0.0);
             let mut holding = [0.0; 2];
             holding[..tangents].copy_from_slice(&residual[base + 1..base + dim]);
-            let holding_norm = norm(&holding[..tangents]);
-            let slip_norm = norm(&n.slip[..tangents]);
-            let keeps_sliding = match n.state {
-                State::Slip { direction, .. } => dot(&direction[..tangents], &n.slip[..tangents]) > 0.0,
-                State::Stick => false,
-            };
-            let state = if keeps_sliding {
-                State::Slip { direction: n.slip.map(|g| g / slip_norm), follows_slip: true }
-            } else if holding_norm <= n.coefficient * normal_force {
+            // Alart–Curnier's augmented force q = R_t − r g and its projection on the disc
+            let mut augmented = [0.0; 2];
+            for t in 0..tangents {
+                augmented[t] = holding[t] - n.stick_scale * n.slip[t];
+            }
+            let augmented_norm = norm(&augmented[..tangents]);
+            let limit = n.coefficient * normal_force;
+            n.state = if augmented_norm <= limit {
                 State::Stick
             } else {
-                State::Slip { direction: holding.map(|r| -r / holding_norm), follows_slip: false }
+                State::Slip { direction: augmented.map(|q| -q / augmented_norm), contraction: limit / augmented_norm }
             };
-            if (state == State::Stick) != (n.state == State::Stick) {
-                n.switches += 1;
-            }
-            // an active set can cycle at a node whose force sits on the cone: after
-            // MAX_SWITCHES changes in a step the node holds (the dissipative choice)
-            n.state = if n.switches > MAX_SWITCHES { State::Stick } else { state };
             n.normal_force = normal_force;
             n.holding = holding;
             match n.state {
@@ -240,8 +236,8 @@ impl NodalFriction {
     }
 
     /// Writes the friction's tangent into the (rotated) element matrices before the gather:
-    /// stick rows replaced by `k` on the diagonal, slip rows `−μ m ⊗ (normal row)` (where
-    /// `N > 0`) and, in 3D, `μ N (I − m ⊗ m)/|g|`. Call once per assembly, after
+    /// stick rows replaced by `r` on the diagonal, slip rows `−μ m ⊗ (normal row)` (where
+    /// `N > 0`) and, in 3D, `−(μ N/|q|) (I − m ⊗ m) (tangential rows − r I)` (module doc). Call once per assembly, after
     /// [`NodalFriction::apply_to_residual`].
     pub fn apply_to_matrices(&self, matrices: &mut [f64]) {
         if !self.active {
@@ -263,37 +259,30 @@ impl NodalFriction {
                         }
                     }
                 }
-                State::Slip { direction: m, follows_slip } => {
+                State::Slip { direction: m, contraction } => {
                     // the natural rows n, t₁, t₂ before this block's rows change
                     let mut rows = [[0.0; MAX_BLOCK_DOFS]; 3];
                     for (l, row) in rows.iter_mut().enumerate().take(dim) {
                         let r = a * dim + l;
                         row[..nd].copy_from_slice(&block[r * nd..(r + 1) * nd]);
                     }
-                    let holding_norm = norm(&n.holding[..tangents]);
-                    // d(μ N m)/dR_t when m = −R_t/|R_t| (3D; 0 in 2D): −μ N (I − m ⊗ m)/|R_t|
-                    let turning = if follows_slip || holding_norm == 0.0 {
-                        0.0
-                    } else {
-                        n.coefficient * n.normal_force / holding_norm
-                    };
+                    // ∂Φ = ∂R_t − μ m ⊗ ∂R_n − (μN/|q|)(I − m ⊗ m)(∂R_t − r ∂g); in 2D
+                    // I − m ⊗ m = 0
+                    let along_normal = if n.normal_force > 0.0 { n.coefficient } else { 0.0 };
+                    let turning = if tangents > 1 { contraction } else { 0.0 };
                     for t in 0..tangents {
                         let row = a * dim + 1 + t;
-                        let along_normal = if n.normal_force > 0.0 { -n.coefficient * m[t] } else { 0.0 };
                         for c in 0..nd {
-                            let mut d = along_normal * rows[0][c];
-                            if turning != 0.0 {
-                                for s in 0..tangents {
-                                    let identity = if t == s { 1.0 } else { 0.0 };
-                                    d -= turning * (identity - m[t] * m[s]) * rows[1 + s][c];
-                                }
+                            let mut d = -along_normal * m[t] * rows[0][c];
+                            for s in 0..tangents {
+                                let identity = if t == s { 1.0 } else { 0.0 };
+                                d -= turning * (identity - m[t] * m[s]) * rows[1 + s][c];
                             }
                             block[row * nd + c] += d;
                         }
                     }
-                    let slip_norm = norm(&n.slip[..tangents]);
-                    if is_first && follows_slip && tangents > 1 && slip_norm > 0.0 {
-                        let factor = n.coefficient * n.normal_force / slip_norm;
+                    if is_first && turning != 0.0 {
+                        let factor = turning * n.stick_scale;
                         for t in 0..tangents {
                             for s in 0..tangents {
                                 let identity = if t == s { 1.0 } else { 0.0 };
