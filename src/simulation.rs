@@ -440,6 +440,7 @@ impl Simulation {
                     }
                 }
                 Err(source) => {
+                    self.stats.timings += self.model.take_failed_step_timings();
                     // fixed steps: at most `max_step_cuts` halvings; adaptive: down to
                     // `min_time_step`; none where a shorter step cannot help
                     let exhausted = !source.is_retryable()

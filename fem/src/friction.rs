@@ -76,7 +76,8 @@ struct FrictionNode {
     /// Tangential force `R_t` of the last residual before friction: the force the boundary
     /// exerts on the node at equilibrium (its tangential reaction).
     holding: [f64; 2],
-    /// Scale `k` of the stick equations (0 until the first tangent of the step).
+    /// Augmentation `r` (the scale of the stick equations `r g = 0`; 0 until the first tangent
+    /// of the step).
     stick_scale: f64,
     state: State,
 }

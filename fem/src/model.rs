@@ -296,6 +296,9 @@ pub struct Model {
     /// The kernel seconds per domain of the patterns dropped so far
     /// ([`Model::kernel_seconds_by_domain`]).
     retired_kernel_seconds: Vec<f64>,
+    /// Phase timings of the failed step attempts not yet taken by
+    /// [`Model::take_failed_step_timings`] (a failed attempt returns no [`StepReport`]).
+    failed_step_timings: PhaseTimings,
 }
 
 impl Model {
@@ -328,6 +331,7 @@ impl Model {
             assembler: None,
             retired_solver_timings: SolverTimings::default(),
             retired_kernel_seconds: Vec::new(),
+            failed_step_timings: PhaseTimings::default(),
         }
     }
 
@@ -391,6 +395,12 @@ impl Model {
     /// Number of nonzeros of the global matrix (after [`Model::prepare`]).
     pub fn nnz(&self) -> usize {
         self.assembler.as_ref().map_or(0, |a| a.nnz())
+    }
+
+    /// Frictional slip nodes that stick and that slide at the last residual (0, 0 before
+    /// [`Model::prepare`]).
+    pub fn friction_counts(&self) -> (usize, usize) {
+        self.assembler.as_ref().map_or((0, 0), |a| a.friction_counts())
     }
 
     /// Forgets the sparsity pattern (after a change of domains or constraints).
@@ -741,10 +751,17 @@ impl Model {
             report.timings.commit += t.elapsed().as_secs_f64();
         } else {
             self.state.clone_from(&self.committed);
+            self.failed_step_timings += report.timings;
         }
         let result = result.map_err(|e| self.explain_failure(e, &mut assembler, dt, t_new, gravity));
         self.assembler = Some(assembler);
         result.map(|()| report)
+    }
+
+    /// The phase timings of the failed step attempts since the last call (their search,
+    /// assembly, factorisations and solves), so that a run's phases account for them.
+    pub fn take_failed_step_timings(&mut self) -> PhaseTimings {
+        std::mem::take(&mut self.failed_step_timings)
     }
 
     /// What a user needs to know of a failed step (issue 31): a Newton iteration that did

@@ -28,8 +28,9 @@
 //! ```
 //!
 //! `wall_time` is in seconds: the model's phases ([`PhaseTimings`], accumulated over the
-//! converged steps; `symbolic` is part of `factorisation`), `output` the writing of results,
-//! and `other` the rest of `total` (failed Newton attempts, monitors, set-up). `newton` also gives
+//! steps, the failed attempts of cut steps included; `symbolic` is part of `factorisation`),
+//! `output` the writing of results, and `other` the rest of `total` (monitors, set-up, the
+//! explanation of a failure). `newton` also gives
 //! the converged residual norms per block of the monolithic system (soil, interface,
 //! structure: the rows of grid, shared and FEM nodes) of the last step and the largest over
 //! the run.
