@@ -980,7 +980,7 @@ impl Linearisation<'_> {
 
     /// Frictional slip nodes that stick and that slide at the last evaluation.
     pub fn friction_counts(&self) -> (usize, usize) {
-        self.model.assembler.as_ref().expect("prepared").friction_counts()
+        self.model.friction_counts()
     }
 
     /// Residual per equation and the tangent (dense, row-major) at `u = u_pred + δu`, where
