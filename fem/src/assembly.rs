@@ -61,13 +61,13 @@ impl BlockLayout {
 pub struct AssemblyPattern {
     symbolic: SymbolicSparseColMat<usize>,
     /// For nonzero `k`: matrix-buffer entries `src[ptr[k]..ptr[k+1]]` sum into it.
-    matrix_gather_ptr: Vec<usize>,
+    matrix_gather_ptr: Vec<u32>,
     matrix_gather_src: Vec<u32>,
     /// For DOF `g` (constrained or not): vector-buffer entries that sum into it.
     vector_gather_ptr: Vec<usize>,
     vector_gather_src: Vec<u32>,
     /// For nonzero `k` at (i, j): the position of (j, i) (the pattern is symmetric).
-    transpose: Vec<usize>,
+    transpose: Vec<u32>,
 }
 
 impl AssemblyPattern {
@@ -82,17 +82,21 @@ impl AssemblyPattern {
     /// gathers read the selected blocks' entries of the whole element buffers.
     pub fn of_blocks(dofs: &DofMap, layout: &BlockLayout, selected: impl Fn(usize) -> bool) -> Self {
         let n = dofs.num_equations();
+        // u32 gather sources and pointers: the element buffer bounds both
         assert!(layout.matrix_len() < u32::MAX as usize, "element buffer exceeds u32 indexing");
         let blocks: Vec<usize> = (0..layout.num_blocks()).filter(|&b| selected(b)).collect();
-        // the free couplings as (row, source) pairs bucketed by column (a counting sort: two
-        // passes over the blocks), each column's few pairs then sorted by row and source
-        let free_equations = |bd: &[usize]| bd.iter().filter(|&&g| dofs.equation(g) != CONSTRAINED).count();
+        // the free couplings as keys `row << 32 | source` bucketed by column (a counting sort:
+        // two passes over the blocks), each column's few keys then sorted (by row, then source)
+        let mut equations = Vec::new();
+        let block_equations = |b: usize, equations: &mut Vec<usize>| {
+            equations.clear();
+            equations.extend(layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]].iter().map(|&g| dofs.equation(g)));
+        };
         let mut bucket_ptr = vec![0usize; n + 1];
         for &b in &blocks {
-            let bd = &layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]];
-            let rows = free_equations(bd);
-            for &gc in bd {
-                let ec = dofs.equation(gc);
+            block_equations(b, &mut equations);
+            let rows = equations.iter().filter(|&&e| e != CONSTRAINED).count();
+            for &ec in &equations {
                 if ec != CONSTRAINED {
                     bucket_ptr[ec + 1] += rows;
                 }
@@ -101,63 +105,64 @@ impl AssemblyPattern {
         for c in 0..n {
             bucket_ptr[c + 1] += bucket_ptr[c];
         }
-        let mut pairs = vec![(0u32, 0u32); bucket_ptr[n]];
+        let mut keys = vec![0u64; bucket_ptr[n]];
         let mut fill = bucket_ptr.clone();
         for &b in &blocks {
-            let bd = &layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]];
-            let nd = bd.len();
+            block_equations(b, &mut equations);
+            let nd = equations.len();
             let off = layout.matrix_offset[b];
-            for (c, &gc) in bd.iter().enumerate() {
-                let ec = dofs.equation(gc);
+            for (c, &ec) in equations.iter().enumerate() {
                 if ec == CONSTRAINED {
                     continue;
                 }
-                for (r, &gr) in bd.iter().enumerate() {
-                    let er = dofs.equation(gr);
+                let column = &mut keys[fill[ec]..];
+                let mut k = 0;
+                for (r, &er) in equations.iter().enumerate() {
                     if er != CONSTRAINED {
-                        pairs[fill[ec]] = (er as u32, (off + r * nd + c) as u32);
-                        fill[ec] += 1;
+                        column[k] = (er as u64) << 32 | (off + r * nd + c) as u64;
+                        k += 1;
                     }
                 }
+                fill[ec] += k;
             }
         }
-        let mut rest = pairs.as_mut_slice();
+        drop(fill);
+        let mut rest = keys.as_mut_slice();
         for c in 0..n {
             let (column, tail) = rest.split_at_mut(bucket_ptr[c + 1] - bucket_ptr[c]);
             column.sort_unstable();
             rest = tail;
         }
+        // one nonzero per distinct (column, row); every key is a gather source, in key order
         let mut col_ptr = vec![0usize; n + 1];
-        let mut row_idx = Vec::new();
-        let mut matrix_gather_ptr = vec![0usize];
-        let mut matrix_gather_src = Vec::with_capacity(pairs.len());
+        let mut row_idx = Vec::with_capacity(keys.len());
+        let mut matrix_gather_ptr: Vec<u32> = Vec::with_capacity(keys.len() + 1);
         for c in 0..n {
-            let mut last = None;
-            for &(r, s) in &pairs[bucket_ptr[c]..bucket_ptr[c + 1]] {
-                if last != Some(r) {
-                    if !matrix_gather_src.is_empty() {
-                        matrix_gather_ptr.push(matrix_gather_src.len());
-                    }
+            let mut last = u64::MAX;
+            for (i, &key) in keys.iter().enumerate().take(bucket_ptr[c + 1]).skip(bucket_ptr[c]) {
+                let r = key >> 32;
+                if r != last {
+                    matrix_gather_ptr.push(i as u32);
                     row_idx.push(r as usize);
-                    col_ptr[c + 1] += 1;
-                    last = Some(r);
+                    last = r;
                 }
-                matrix_gather_src.push(s);
             }
+            col_ptr[c + 1] = row_idx.len();
         }
-        if !matrix_gather_src.is_empty() {
-            matrix_gather_ptr.push(matrix_gather_src.len());
-        }
-        for c in 0..n {
-            col_ptr[c + 1] += col_ptr[c];
-        }
-        // transpose positions (the block structure makes the pattern symmetric)
-        let mut transpose = vec![0usize; row_idx.len()];
+        matrix_gather_ptr.push(keys.len() as u32);
+        let matrix_gather_src: Vec<u32> = keys.iter().map(|&k| k as u32).collect();
+        drop(keys);
+        // transpose positions: the pattern is symmetric (block structure), so column `r` holds
+        // row `c` exactly when column `c` holds row `r`, and a sweep over the columns in order
+        // meets the rows of column `r` in their stored (ascending) order
+        let mut transpose = vec![0u32; row_idx.len()];
+        let mut next = col_ptr[..n].to_vec();
         for c in 0..n {
             for k in col_ptr[c]..col_ptr[c + 1] {
                 let r = row_idx[k];
-                let col_r = &row_idx[col_ptr[r]..col_ptr[r + 1]];
-                transpose[k] = col_ptr[r] + col_r.binary_search(&c).expect("symmetric block pattern");
+                debug_assert_eq!(row_idx[next[r]], c, "symmetric block pattern");
+                transpose[k] = next[r] as u32;
+                next[r] += 1;
             }
         }
         // vector gather over all DOFs
@@ -227,7 +232,8 @@ impl AssemblyPattern {
     /// Sums the element matrices of `matrix_buffer` into `values` (one per nonzero).
     pub fn gather_matrix(&self, matrix_buffer: &[f64], values: &mut [f64]) {
         values.par_iter_mut().enumerate().with_min_len(4096).for_each(|(k, v)| {
-            let src = &self.matrix_gather_src[self.matrix_gather_ptr[k]..self.matrix_gather_ptr[k + 1]];
+            let src =
+                &self.matrix_gather_src[self.matrix_gather_ptr[k] as usize..self.matrix_gather_ptr[k + 1] as usize];
             *v = src.iter().map(|&s| matrix_buffer[s as usize]).sum();
         });
     }
@@ -248,7 +254,7 @@ impl AssemblyPattern {
         out.par_iter_mut()
             .enumerate()
             .with_min_len(4096)
-            .for_each(|(k, s)| *s = 0.5 * (values[k] + values[self.transpose[k]]));
+            .for_each(|(k, s)| *s = 0.5 * (values[k] + values[self.transpose[k] as usize]));
     }
 
     /// Largest asymmetry `max |a_ij − a_ji|` relative to `max |a_ij|`.
@@ -257,7 +263,7 @@ impl AssemblyPattern {
         let d = values
             .par_iter()
             .zip(self.transpose.par_iter())
-            .fold(|| 0.0f64, |m, (v, &t)| m.max((v - values[t]).abs()))
+            .fold(|| 0.0f64, |m, (v, &t)| m.max((v - values[t as usize]).abs()))
             .reduce(|| 0.0, f64::max);
         if amax > 0.0 {
             d / amax
@@ -272,7 +278,7 @@ impl AssemblyPattern {
         let amax = values.par_iter().with_min_len(4096).fold(|| 0.0f64, |m, v| m.max(v.abs())).reduce(|| 0.0, f64::max);
         let limit = tolerance * amax;
         !(0..values.len()).into_par_iter().with_min_len(4096).any(|k| {
-            let t = self.transpose[k];
+            let t = self.transpose[k] as usize;
             t > k && (values[k] - values[t]).abs() > limit
         })
     }
@@ -281,7 +287,7 @@ impl AssemblyPattern {
     /// column pointers and row indices (the pattern is structurally symmetric) it gives the
     /// compressed-row order of the matrix, row `i`'s entry `(i, j)` at position
     /// `transpose_positions()[k]` of the values.
-    pub fn transpose_positions(&self) -> &[usize] {
+    pub fn transpose_positions(&self) -> &[u32] {
         &self.transpose
     }
 
@@ -325,7 +331,7 @@ mod tests {
         second.gather_vector(&[1.0, 2.0, 3.0, 4.0], &mut r);
         assert_eq!(r, vec![0.0, 3.0, 4.0]);
         assert_eq!(second.reached_dofs(), vec![1, 2]);
-        values[pattern.transpose[1]] += 1e-6;
+        values[pattern.transpose[1] as usize] += 1e-6;
         assert!(!pattern.is_symmetric(&values, 1e-9));
         assert!(pattern.is_symmetric(&values, 1e-6));
     }

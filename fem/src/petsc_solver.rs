@@ -189,7 +189,7 @@ impl PetscSolver {
         self.configure(symmetric)?;
         let transpose = pattern.transpose_positions();
         let assembly = Instant::now();
-        self.krylov.set_values(|k| values[transpose[k]]).map_err(petsc_error)?;
+        self.krylov.set_values(|k| values[transpose[k] as usize]).map_err(petsc_error)?;
         if self.ranks.is_distributed() {
             let (all, off) = self.entries;
             crate::ranks::with_stats(|s| {
