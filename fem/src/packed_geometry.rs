@@ -1,10 +1,10 @@
 //! Integration-point geometries packed to the nodes a block has.
 //!
 //! A [`PointGeometry`] has room for the largest block (27 nodes of a 3D smooth MPM support:
-//! 880 bytes), but a material point of a 2D linear grid uses 4 of its nodes. An MPM body keeps
-//! one geometry per point and streams all of them through every Newton iteration's kernels;
-//! at full size they no longer fit the caches from a few thousand points on, and the
-//! kernels wait on memory. [`PackedGeometry`] keeps per point only
+//! 880 bytes), but a material point of a 2D linear grid or a Gauss point of a four-node
+//! quadrilateral uses 4 of its nodes. An MPM body and an FEM domain keep one geometry per
+//! point and stream all of them through every Newton iteration's kernels; at full size they
+//! no longer fit the caches from a few thousand points on, and the kernels wait on memory. [`PackedGeometry`] keeps per point only
 //!
 //! ```text
 //! [ w, R, N_0 … N_{n−1}, ∂N_0/∂X̃ (3), …, ∂N_{n−1}/∂X̃ (3) ]      (2 + 4n values)
@@ -65,6 +65,13 @@ impl PackedGeometry {
         use rayon::slice::ParallelSliceMut;
         let stride = self.stride();
         self.data.par_chunks_exact_mut(stride)
+    }
+
+    /// The records, one mutable chunk per point, in order (write them with
+    /// [`PackedGeometry::pack`]).
+    pub fn records_mut(&mut self) -> std::slice::ChunksExactMut<'_, f64> {
+        let stride = self.stride();
+        self.data.chunks_exact_mut(stride)
     }
 
     /// Writes `g`'s weight, radius and first `(record.len() − 2) / 4` nodes into `record`.

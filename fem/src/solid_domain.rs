@@ -19,9 +19,10 @@ use crate::assembly::BlockLayout;
 use crate::domain::{AssemblyInput, Domain, DomainError, DomainOutput, Field, NamedOutput, NodalState};
 use crate::element::{ElementType, MAX_NODES};
 use crate::formulation::Formulation;
-use crate::kernel::{point_geometry, solid_element, KernelContext, PointGeometry, PointOutput};
+use crate::kernel::{point_geometry, solid_element, KernelContext, PointOutput};
 use crate::mesh::Mesh;
 use crate::mixed_kernel::mixed_element;
+use crate::packed_geometry::PackedGeometry;
 
 /// What an FEM domain carries from step to step beside the nodal unknowns.
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -42,7 +43,7 @@ pub struct FemDomain {
     node_ids: Vec<usize>,
     law: Arc<dyn ConstitutiveLaw>,
     points_per_element: usize,
-    geometry: Vec<PointGeometry>,
+    geometry: PackedGeometry,
     identity: Vec<Matrix3<f64>>,
     f_prev: Vec<Matrix3<f64>>,
     state_stride: usize,
@@ -117,7 +118,9 @@ impl FemDomain {
         let mass_rule = element.gauss_points_high();
         let ngp = rule.len();
         let ne = mesh.num_cells();
-        let mut geometry = Vec::with_capacity(ne * ngp);
+        let mut geometry = PackedGeometry::default();
+        geometry.resize(nn, ne * ngp);
+        let mut records = geometry.records_mut();
         let mut mass = vec![0.0; ne * nn * nn];
         let rho = law.density();
         for e in 0..ne {
@@ -128,9 +131,9 @@ impl FemDomain {
                 message: format!("{err} (check the node ordering: counter-clockwise in 2D)"),
             };
             for gp in &rule {
-                geometry.push(
-                    point_geometry(element, formulation, thickness, &coords, &gp.xi, gp.weight, None).map_err(fail)?,
-                );
+                let g =
+                    point_geometry(element, formulation, thickness, &coords, &gp.xi, gp.weight, None).map_err(fail)?;
+                PackedGeometry::pack(records.next().expect("one record per point"), &g);
             }
             let me = &mut mass[e * nn * nn..(e + 1) * nn * nn];
             for gp in &mass_rule {
@@ -290,7 +293,7 @@ impl Domain for FemDomain {
                     None
                 };
                 let (geometry, f_prev, committed) =
-                    (&geometry[points.clone()], &f_prev[points], &committed[e * stride..(e + 1) * stride]);
+                    (&geometry.points(points.clone()), &f_prev[points], &committed[e * stride..(e + 1) * stride]);
                 match pressure_dofs {
                     None => solid_element(
                         &ctx,
@@ -376,7 +379,7 @@ impl Domain for FemDomain {
         }
         for (p, (new, old)) in self.trial_out.iter().zip(self.committed_out.iter()).enumerate() {
             let d_f = new.deformation_gradient - old.deformation_gradient;
-            self.work[p] += 0.5 * (new.stress + old.stress).dot(&d_f) * self.geometry[p].weight;
+            self.work[p] += 0.5 * (new.stress + old.stress).dot(&d_f) * self.geometry.weight(p);
             self.f_prev[p] = new.deformation_gradient;
         }
         self.committed_out.copy_from_slice(&self.trial_out);
