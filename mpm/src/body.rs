@@ -331,25 +331,33 @@ impl Body {
             order[start[c]..start[c + 1]].sort_unstable_by_key(|&p| ids[p]);
         }
         let sl = self.law.state_len();
-        if kept != n_before || order.iter().enumerate().any(|(k, &p)| k != p) {
+        let reordered = kept != n_before || order.iter().enumerate().any(|(k, &p)| k != p);
+        if reordered {
             self.points.reorder(&order, sl);
         }
         self.index_of_id.iter_mut().for_each(|i| *i = usize::MAX);
         for (k, &id) in self.points.id.iter().enumerate() {
             self.index_of_id[id] = k;
         }
-        let (supports, functions) = &self.located;
+        let (supports, functions) = &mut self.located;
         self.support_of_point.clear();
         self.support_of_point.extend(order.iter().map(|&p| supports[p].expect("kept points are located")));
-        // the functions in the sorted order, weighted by the points' present volumes
-        self.geometry.resize(nodes, kept);
-        (self.geometry.par_records_mut(), order.par_iter(), self.points.volume.par_iter())
+        // the functions in the sorted order, weighted by the points' present volumes (in
+        // place where the order did not change: the located records become the geometry)
+        if reordered {
+            self.geometry.resize(nodes, kept);
+            (self.geometry.par_records_mut(), order.par_iter()).into_par_iter().with_min_len(1024).for_each(
+                |(record, &p)| {
+                    record.copy_from_slice(functions.record(p));
+                },
+            );
+        } else {
+            std::mem::swap(&mut self.geometry, functions);
+        }
+        (self.geometry.par_records_mut(), self.points.volume.par_iter())
             .into_par_iter()
             .with_min_len(1024)
-            .for_each(|(record, &p, &volume)| {
-                record.copy_from_slice(functions.record(p));
-                record[0] = volume;
-            });
+            .for_each(|(record, &volume)| record[0] = volume);
         self.support_start = start;
         self.trial.state.clone_from(&self.points.state);
         self.trial.out.resize(self.points.len(), PointOutput::default());
