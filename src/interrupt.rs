@@ -74,6 +74,7 @@ impl Interrupt {
         let mut recorded = self.recorded.lock().unwrap_or_else(|e| e.into_inner());
         let Recorded { dir, mut summary, time, end_time } = recorded.take()?;
         summary.status = RunStatus::Interrupted;
+        summary.read_peak_memory();
         summary.end = Some(RunEndReport {
             reason: format!(
                 "interrupted twice: the step after t = {} was abandoned, without a checkpoint; the last converged state is at t = {}",
@@ -115,8 +116,8 @@ mod tests {
         }
     }
 
-    /// A second signal writes the last recorded report as interrupted; after the run's final
-    /// report it writes nothing.
+    /// A second signal writes the last recorded report as interrupted, with the peak memory
+    /// read then; after the run's final report it writes nothing.
     #[test]
     fn abandon_writes_the_recorded_report_until_the_run_finishes() {
         let dir = std::env::temp_dir().join(format!("loam-interrupt-{}", std::process::id()));
@@ -131,6 +132,10 @@ mod tests {
         assert_eq!(written.status, RunStatus::Interrupted);
         let end = written.end.unwrap();
         assert!(end.reason.contains("abandoned") && end.time == 0.25 && written.steps == 3);
+        // the recorded report carries no memory reading; the abandoned one reads it
+        if cfg!(target_os = "linux") {
+            assert!(written.memory.peak_rss_mb.is_some_and(|mb| mb > 0.0), "{:?}", written.memory);
+        }
         interrupt.record(&dir, summary(), 0.5, 1.0);
         interrupt.finish(|| ());
         assert!(interrupt.abandon().is_none(), "the run wrote its final report");

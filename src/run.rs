@@ -51,10 +51,12 @@ pub struct RunOptions {
 /// Runs `sim` to its end time writing into `out_dir` (see the module doc). Returns how the
 /// run ended and its wall time (s).
 pub fn run(sim: &mut Simulation, out_dir: &Path, options: &RunOptions) -> std::io::Result<(RunEnd, f64)> {
-    let start = Instant::now();
+    // the loop's clock starts after the set-up (output files, the first report), which
+    // run_loop restarts it at
+    let mut loop_start = Instant::now();
     let mut output_time = 0.0;
-    let result = run_loop(sim, out_dir, options, &mut output_time);
-    let wall = start.elapsed().as_secs_f64();
+    let result = run_loop(sim, out_dir, options, &mut output_time, &mut loop_start);
+    let wall = loop_start.elapsed().as_secs_f64();
     let mut summary =
         RunSummary::of(sim, RunStatus::Running, WallTimeReport::new(wall, &sim.stats.timings, output_time));
     let (status, reason) = match &result {
@@ -160,12 +162,14 @@ fn rescue(sim: &Simulation, writer: Option<WriterState>, fingerprint: u32, error
 }
 
 /// The steps and the results written after each; `output_time` accumulates the time spent
-/// writing.
+/// writing, and `loop_start` is set when the set-up (the writer's files, the first
+/// `summary.json`) is done and the loop proper starts (`wall_time.total` counts from it).
 fn run_loop(
     sim: &mut Simulation,
     out_dir: &Path,
     options: &RunOptions,
     output_time: &mut f64,
+    loop_start: &mut Instant,
 ) -> std::io::Result<RunEnd> {
     let timed = |output_time: &mut f64, f: &mut dyn FnMut() -> std::io::Result<()>| {
         let t = Instant::now();
@@ -178,14 +182,17 @@ fn run_loop(
         Some(state) => ResultWriter::resume(out_dir, sim, state.clone())?,
         None => ResultWriter::create(out_dir, sim)?,
     };
+    RunSummary::of(sim, RunStatus::Running, WallTimeReport::default()).write(out_dir)?;
     let started = Instant::now();
+    *loop_start = started;
+    // the report a second signal writes, as of each converged state (its peak memory is read
+    // when it is written: `Interrupt::abandon`)
     let record = |sim: &Simulation, output_time: f64| {
         if let Some(interrupt) = &options.interrupt {
             let wall = WallTimeReport::new(started.elapsed().as_secs_f64(), &sim.stats.timings, output_time);
-            interrupt.record(out_dir, RunSummary::of(sim, RunStatus::Running, wall), sim.time(), sim.end_time());
+            interrupt.record(out_dir, RunSummary::snapshot(sim, RunStatus::Running, wall), sim.time(), sim.end_time());
         }
     };
-    RunSummary::of(sim, RunStatus::Running, WallTimeReport::default()).write(out_dir)?;
     record(sim, *output_time);
     if options.resume.is_none() {
         timed(output_time, &mut || writer.write_step(sim, true))?;

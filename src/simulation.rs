@@ -4,7 +4,7 @@
 //! case's step and halving it (up to `analysis.max_step_cuts` times) when Newton fails;
 //! results do not depend on who drives it.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use loam_coupling::interface::InterfaceSummary;
 use loam_fem::amplitude::Amplitude;
@@ -114,6 +114,9 @@ pub struct StepSummary {
 pub struct Simulation {
     /// The case as loaded.
     pub case: Case,
+    /// The case's file, canonical (`None` where it cannot be resolved, e.g. a case not read
+    /// from a file), as `summary.json` reports it.
+    pub case_file: Option<PathBuf>,
     /// The model.
     pub model: Model,
     /// Monitors in case order.
@@ -214,8 +217,10 @@ impl Simulation {
     pub fn new(case: Case) -> Result<Self, CaseError> {
         let built = build_model(&case)?;
         let case_time_step = case.analysis.time_step;
+        let case_file = std::fs::canonicalize(case.directory.join(format!("{}.json", case.name))).ok();
         Ok(Self {
             case,
+            case_file,
             model: built.model,
             monitors: built.monitors,
             step: 0,

@@ -146,10 +146,10 @@ pub struct MemoryReport {
 }
 
 impl MemoryReport {
-    /// The memory of `sim` now.
-    pub fn of(sim: &Simulation) -> Self {
+    /// The memory of `sim` now (the peak resident set read from `/proc` when `read_peak`).
+    pub fn of(sim: &Simulation, read_peak: bool) -> Self {
         Self {
-            peak_rss_mb: peak_rss_mb(),
+            peak_rss_mb: if read_peak { peak_rss_mb() } else { None },
             matrix_nonzeros: sim.model.nnz(),
             factor_entries: sim.model.factor_entries(),
         }
@@ -350,7 +350,24 @@ fn one_rank() -> usize {
 
 impl RunSummary {
     /// The report of `sim` as it stands, with `status` and the wall times measured so far.
-    pub fn of(sim: &Simulation, status: RunStatus, mut wall_time: WallTimeReport) -> Self {
+    pub fn of(sim: &Simulation, status: RunStatus, wall_time: WallTimeReport) -> Self {
+        Self::build(sim, status, wall_time, true)
+    }
+
+    /// [`RunSummary::of`] without the process's peak memory (`memory.peak_rss_mb` absent,
+    /// read by [`RunSummary::read_peak_memory`] when the report is written): the report the
+    /// run loop keeps after every step for a second signal ([`crate::interrupt`]), where a
+    /// read of `/proc/self/status` per step would be most of a small step's fixed cost.
+    pub fn snapshot(sim: &Simulation, status: RunStatus, wall_time: WallTimeReport) -> Self {
+        Self::build(sim, status, wall_time, false)
+    }
+
+    /// Reads the process's peak resident set now into `memory.peak_rss_mb`.
+    pub fn read_peak_memory(&mut self) {
+        self.memory.peak_rss_mb = peak_rss_mb();
+    }
+
+    fn build(sim: &Simulation, status: RunStatus, mut wall_time: WallTimeReport, read_peak: bool) -> Self {
         let solver = sim.model.solver_timings();
         let mut kernels: Vec<(String, f64)> = Vec::new();
         for (d, seconds) in sim.model.domains.iter().zip(sim.model.kernel_seconds_by_domain()) {
@@ -376,7 +393,7 @@ impl RunSummary {
         );
         Self {
             case: sim.case.name.clone(),
-            case_file: std::fs::canonicalize(sim.case.directory.join(format!("{}.json", sim.case.name))).ok(),
+            case_file: sim.case_file.clone(),
             version: env!("CARGO_PKG_VERSION").to_string(),
             threads: rayon::current_num_threads(),
             ranks: sim.model.settings.ranks.size(),
@@ -404,7 +421,7 @@ impl RunSummary {
                 pattern_lu_failures: solver.pattern_lu_failures,
             },
             wall_time,
-            memory: MemoryReport::of(sim),
+            memory: MemoryReport::of(sim, read_peak),
             monitors,
             monitor_units,
             grid_motion: sim
