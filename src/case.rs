@@ -877,6 +877,10 @@ pub enum InitialStressSpec {
 /// Adaptive step control (`analysis.adaptive`): after a converged step with `k` Newton
 /// iterations the next step is `Δt · clamp(√(target_iterations / k), 1/2, growth)`, limited
 /// to `[min_time_step, max_time_step]`; a failed step is halved down to `min_time_step`.
+/// With `error_tolerance` the step's local time-integration error `η` sets the factor
+/// instead and the iterations can only shorten the step: `0.9 (tol/η)^(1/3)`, or the smaller
+/// of it and `√(target_iterations / k)` when `k > target_iterations`, clamped to
+/// `[1/2, growth]` and the step limits.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AdaptiveSpec {
@@ -890,6 +894,13 @@ pub struct AdaptiveSpec {
     /// Largest growth factor from one step to the next (default 1.5).
     #[serde(default = "default_growth")]
     pub growth: f64,
+    /// Local time-integration error aimed at per step (m, root mean square over the moving
+    /// DOFs; Zienkiewicz & Xie's estimate, [`loam_fem::model::TimeError`]). When given, the
+    /// step length follows it (`Δt · 0.9 (tol/η)^(1/3)`) and `target_iterations` only
+    /// shortens steps whose Newton iterations exceed it; when absent (default), the
+    /// iteration count alone sets the step.
+    #[serde(default)]
+    pub error_tolerance: Option<f64>,
 }
 
 fn default_target_iterations() -> usize {

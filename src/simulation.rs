@@ -108,6 +108,8 @@ pub struct StepSummary {
     pub last_time_step: f64,
     /// Converged residual per block (soil, interface, structure) of the last sub-step.
     pub block_residual: BlockNorms,
+    /// Local time-integration error of the last sub-step.
+    pub time_error: loam_fem::model::TimeError,
 }
 
 /// A case being run.
@@ -355,7 +357,21 @@ impl Simulation {
                 // Newton iterations with a new tangent: all of them under full Newton; under
                 // modified Newton the cheap ones with kept factors do not shorten the step
                 let k = summary.last_tangents.max(1) as f64;
-                let mut factor = (adaptive.target_iterations as f64 / k).sqrt().clamp(0.5, adaptive.growth);
+                let by_iterations = (adaptive.target_iterations as f64 / k).sqrt();
+                let mut factor = match adaptive.error_tolerance {
+                    // the local error sets the step (cubic in Δt); the iterations only cap it
+                    Some(tolerance) => {
+                        let error = summary.time_error.rms;
+                        let by_error = if error > 0.0 { 0.9 * (tolerance / error).cbrt() } else { adaptive.growth };
+                        if by_iterations < 1.0 {
+                            by_error.min(by_iterations)
+                        } else {
+                            by_error
+                        }
+                    }
+                    None => by_iterations,
+                }
+                .clamp(0.5, adaptive.growth);
                 // under modified Newton a step of the same length keeps the factors valid into
                 // the next step: changes within ±20 % are not made
                 if self.case.solver.tangent_reuse == TangentReuse::Auto && (0.8..=1.25).contains(&factor) {
@@ -432,6 +448,7 @@ impl Simulation {
                     summary.last_tangents = report.tangents;
                     summary.last_time_step = h;
                     summary.block_residual = report.block_residuals.last().copied().unwrap_or_default();
+                    summary.time_error = report.time_error;
                     self.stats.max_block_residuals = self.stats.max_block_residuals.max(summary.block_residual);
                     self.stats.last_block_residuals = summary.block_residual;
                     self.stats.steps += 1;

@@ -393,6 +393,13 @@ fn named_inputs(dir: &Path, inputs: &mut Vec<Input>) {
         bad("analysis.adaptive.max_time_step"),
     );
     case(
+        "error_tolerance 0",
+        "check",
+        &collapse,
+        &|v| v["analysis"]["adaptive"]["error_tolerance"] = json!(0.0),
+        bad("analysis.adaptive.error_tolerance"),
+    );
+    case(
         "max_step_cuts 10^9",
         "check",
         &fem,

@@ -99,6 +99,9 @@ pub(super) fn check(case: &Case) -> Result<TimeScheme, CaseError> {
         if !(a.growth >= 1.0 && a.growth.is_finite()) {
             return Err(CaseError::new("analysis.adaptive.growth", format!("must be ≥ 1, got {}", a.growth)));
         }
+        if let Some(tolerance) = a.error_tolerance {
+            check_positive("analysis.adaptive.error_tolerance", tolerance)?;
+        }
     }
     if let Some(c) = &case.analysis.checkpoint {
         if c.every_steps.is_none() && c.every_seconds.is_none() {
