@@ -4,9 +4,9 @@
 # then the distributed path: the `petsc` and `mpi` features' tests (tests/petsc.rs; tests/mpi.rs,
 # mpirun -n 2 and -n 4 against the serial run), with PETSc and Open MPI installed from the
 # system's packages when missing (scripts/install_petsc.sh: root and the network).
-#   scripts/test.sh               the default suite (about 16 minutes on 2 cores, then 2.5 for the
-#                                 features' build and tests; a fresh machine adds its builds and
-#                                 about 2 minutes of packages: 21 + 5 measured)
+#   scripts/test.sh               the default suite (14-19 minutes on 2 cores with the features'
+#                                 build and tests, about 2.5 of them; a fresh machine adds its
+#                                 builds and about 2 minutes of packages: 21 + 5 measured)
 #   LOAM_LONG=1 scripts/test.sh   also the long validation runs: every test marked
 #                                 #[ignore = "long ..."] (about 25 minutes in all)
 #   LOAM_MPI=0 scripts/test.sh    without the distributed path; LOAM_MPI=1 fails where its
