@@ -241,7 +241,7 @@ pub struct StepReport {
 /// Taylor's series that Newmark's update does not reproduce), per displacement DOF (m).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct TimeError {
-    /// The largest `|e|` over the free displacement DOFs.
+    /// The largest `|e|` over the displacement DOFs (constrained ones have `a = 0` and add none).
     pub max: f64,
     /// The root mean square of `e` over the displacement DOFs that carry an acceleration
     /// (`a_n` or `a_{n+1}` non-zero: the grid nodes reached by material points, the
