@@ -124,16 +124,10 @@ pub fn kirchhoff_update(
         let q = &spec.vectors;
         // h_L = Qᵀ g_L, g_L the L-th column of G.
         let h = q.transpose() * G;
-        for &col in components {
-            let (k, l) = (col / 3, col % 3);
-            // d b̃ = Qᵀ (e_k g_Lᵀ + g_L e_kᵀ) Q = q_k h_Lᵀ + h_L q_kᵀ, q_k = row k of Q.
-            let db = Matrix3::from_fn(|a, b| q[(k, a)] * h[(b, l)] + h[(a, l)] * q[(k, b)]);
-            let dtau = q * isotropic_differential(&dydx, &theta, &db) * q.transpose();
-            for i in 0..3 {
-                for j in 0..3 {
-                    dtau_df[(idx(i, j), col)] = dtau[(i, j)];
-                }
-            }
+        if components == &crate::law::IN_PLANE[..] && is_in_plane(q) && is_in_plane(&G) {
+            in_plane_tangent(q, &h, &dydx, &theta, dtau_df);
+        } else {
+            general_tangent(q, &h, &dydx, &theta, components, dtau_df);
         }
     }
     Ok(KirchhoffUpdate {
@@ -141,6 +135,79 @@ pub fn kirchhoff_update(
         b_e: spec.compose(r.eps_e.map(|e| (2.0 * e).exp())),
         spectral: spec,
     })
+}
+
+/// Whether `m` has no `xz`, `yz`, `zx`, `zy` components (exactly: as plane strain leaves them).
+#[inline(always)]
+fn is_in_plane(m: &Matrix3<f64>) -> bool {
+    m[(0, 2)] == 0.0 && m[(1, 2)] == 0.0 && m[(2, 0)] == 0.0 && m[(2, 1)] == 0.0
+}
+
+/// Step 6 for the columns `components` of `dτ/dF`, all nine rows of each: for column
+/// `(k, L)`, `d b̃ = q_k h_Lᵀ + h_L q_kᵀ` in the eigenbasis, the isotropic differential there,
+/// rotated back with `Q`.
+#[inline(always)]
+fn general_tangent(
+    q: &Matrix3<f64>,
+    h: &Matrix3<f64>,
+    dydx: &Matrix3<f64>,
+    theta: &Matrix3<f64>,
+    components: &[usize],
+    dtau_df: &mut Tangent,
+) {
+    for &col in components {
+        let (k, l) = (col / 3, col % 3);
+        // d b̃ = Qᵀ (e_k g_Lᵀ + g_L e_kᵀ) Q = q_k h_Lᵀ + h_L q_kᵀ, q_k = row k of Q.
+        let db = Matrix3::from_fn(|a, b| q[(k, a)] * h[(b, l)] + h[(a, l)] * q[(k, b)]);
+        let dtau = q * isotropic_differential(dydx, theta, &db) * q.transpose();
+        for i in 0..3 {
+            for j in 0..3 {
+                dtau_df[(idx(i, j), col)] = dtau[(i, j)];
+            }
+        }
+    }
+}
+
+/// [`general_tangent`] for the in-plane columns ([`crate::law::IN_PLANE`]) when `Q` and `G`
+/// are block diagonal (plane strain): then `d b̃` has only its in-plane block, so the
+/// differential's in-plane block is rotated with the 2×2 block of `Q`, `dτ_zz =
+/// Σ_c ∂y_z/∂x_c d b̃_cc`, and the out-of-plane shear rows are zero — the same nine rows at
+/// a quarter of the products, bit for bit the same.
+#[inline(always)]
+fn in_plane_tangent(
+    q: &Matrix3<f64>,
+    h: &Matrix3<f64>,
+    dydx: &Matrix3<f64>,
+    theta: &Matrix3<f64>,
+    dtau_df: &mut Tangent,
+) {
+    let (c, s) = (q[(0, 0)], q[(1, 0)]);
+    let (q01, q11) = (q[(0, 1)], q[(1, 1)]);
+    for &col in &crate::law::IN_PLANE {
+        let (k, l) = (col / 3, col % 3);
+        let (qk0, qk1) = (q[(k, 0)], q[(k, 1)]);
+        let (h0, h1) = (h[(0, l)], h[(1, l)]);
+        // d b̃ in the eigenbasis: diagonal (d00, d11), shear d01; d22 = 0
+        let d00 = qk0 * h0 + h0 * qk0;
+        let d11 = qk1 * h1 + h1 * qk1;
+        let d01 = qk0 * h1 + h0 * qk1;
+        let y00 = dydx[(0, 0)] * d00 + dydx[(0, 1)] * d11;
+        let y11 = dydx[(1, 0)] * d00 + dydx[(1, 1)] * d11;
+        let y22 = dydx[(2, 0)] * d00 + dydx[(2, 1)] * d11;
+        // θ_01 and θ_10 agree only to rounding where the pair coalesces (their limit forms
+        // sum in different orders): each where the general product reads it
+        let (y01, y10) = (theta[(0, 1)] * d01, theta[(1, 0)] * d01);
+        // dτ = (Q dỸ) Qᵀ on the in-plane block, in the general product's order of operations
+        // (its other terms are exact zeros), so that both paths agree bit for bit
+        let (p00, p01) = (c * y00 + q01 * y10, c * y01 + q01 * y11);
+        let (p10, p11) = (s * y00 + q11 * y10, s * y01 + q11 * y11);
+        let (t00, t01) = (p00 * c + p01 * q01, p00 * s + p01 * q11);
+        let (t10, t11) = (p10 * c + p11 * q01, p10 * s + p11 * q11);
+        let column = [t00, t01, 0.0, t10, t11, 0.0, 0.0, 0.0, y22];
+        for (row, v) in column.into_iter().enumerate() {
+            dtau_df[(row, col)] = v;
+        }
+    }
 }
 
 /// Inverse of `F` with the inversion check used by every law.
@@ -317,3 +384,44 @@ macro_rules! impl_principal_law {
     };
 }
 pub(crate) use impl_principal_law;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mohr_coulomb::MohrCoulomb;
+
+    /// The plane-strain shortcut of step 6 ([`in_plane_tangent`]) against the general loop
+    /// ([`general_tangent`]) on a Mohr–Coulomb state that yields at an in-plane `F` and a
+    /// plastic `Cp⁻¹` (distinct eigenvalues and a coalesced pair): the nine rows of the four
+    /// in-plane columns agree bit for bit (results do not move with the shortcut).
+    #[test]
+    fn in_plane_tangent_equals_the_general_loop() {
+        let law = MohrCoulomb::new(2650.0, 8.4e5, 0.3, 19.8f64.to_radians(), 0.0, 0.0);
+        let cases = [
+            (Matrix3::new(1.02, 0.15, 0.0, -0.04, 0.93, 0.0, 0.0, 0.0, 1.0), Matrix3::new(1.01, 0.02, 0.0, 0.02, 0.98, 0.0, 0.0, 0.0, 1.0)),
+            (Matrix3::new(0.97, 0.0, 0.0, 0.0, 0.97, 0.0, 0.0, 0.0, 1.0), Matrix3::identity()),
+            (Matrix3::new(1.3, -0.4, 0.0, 0.2, 0.7, 0.0, 0.0, 0.0, 1.0), Matrix3::new(0.9, -0.05, 0.0, -0.05, 1.1, 0.0, 0.0, 0.0, 1.02)),
+        ];
+        for (F, cp_inv) in cases {
+            let b_tr = F * cp_inv * F.transpose();
+            let spec = Spectral::of(&(0.5 * (b_tr + b_tr.transpose()))).expect("finite");
+            let x = spec.values;
+            let eps_tr = x.map(|v| 0.5 * v.ln());
+            let mut internal = vec![0.0; law.internal_len()];
+            law.initialise_internal(&mut internal);
+            let mut trial = internal.clone();
+            let r = law.principal_update(eps_tr, 0.0, &internal, &mut trial).expect("return");
+            let dydx = Matrix3::from_fn(|a, c| r.dtau_deps[(a, c)] / (2.0 * x[c]));
+            let theta = isotropic_theta(x, r.tau, &dydx);
+            let q = &spec.vectors;
+            let h = q.transpose() * (F * cp_inv);
+            assert!(is_in_plane(q) && is_in_plane(&(F * cp_inv)));
+            let (mut fast, mut general) = (Tangent::zeros(), Tangent::zeros());
+            in_plane_tangent(q, &h, &dydx, &theta, &mut fast);
+            general_tangent(q, &h, &dydx, &theta, &crate::law::IN_PLANE, &mut general);
+            let err = (fast - general).amax() / general.amax();
+            println!("F = {F:?}: in-plane vs general tangent, relative difference {err:.1e} (yielded: {})", trial[2]);
+            assert!(fast == general, "relative difference {err}");
+        }
+    }
+}
