@@ -26,7 +26,7 @@ use crate::dofs::{DofTie, NodeRole};
 use crate::domain::{AssemblyInput, Domain, DomainError, NamedOutput, NodalState};
 use crate::linear_solver::{LinearSolverError, PetscOptions, SolverMemory, SolverTimings};
 pub use crate::newton::NewtonSettings;
-use crate::newton::{assembly_input, NewtonStrategy, StepProblem};
+use crate::newton::{assembly_input, NewtonStrategy, Predictor, StepProblem};
 use crate::rigid_modes::{free_rigid_motion, short, FreeMotion};
 use crate::scheme::TimeScheme;
 use crate::slip::Slip;
@@ -619,14 +619,18 @@ impl Model {
         Ok(())
     }
 
-    /// The predictor of a step to `t`: `u = u_n` with the prescribed values at `t`, and the
-    /// time scheme's `v`, `a` for it. A structure node's prescribed displacement is its total
+    /// The predictor of a step to `t`: `u = u_n` (or, with [`Predictor::ConstantAcceleration`]
+    /// in a dynamic step, the last motion continued) with the prescribed values at `t`, and
+    /// the time scheme's `v`, `a` for it. A structure node's prescribed displacement is its total
     /// displacement `ū(t)`; a grid node starts every step where the grid was placed, so its
     /// prescribed displacement moves it by the increment `ū(t) − ū(t_n)` from there (a
     /// boundary of the grid follows the prescribed trajectory; `ū(t_n)` is what the committed
     /// state applied, 0 at the start, so a constant value is applied in the first step).
     fn predict(&mut self, t: f64, dt: f64) {
         self.state.clone_from(&self.committed);
+        if self.settings.predictor == Predictor::ConstantAcceleration && self.scheme.is_dynamic() {
+            self.predict_constant_acceleration(dt);
+        }
         self.applied_factors.resize(self.constraints.len(), 0.0);
         for (c, &f_n) in self.constraints.iter().zip(&self.applied_factors) {
             let f = c.amplitude.at(t);
@@ -640,6 +644,34 @@ impl Model {
         }
         let dofs = self.displacement_dofs();
         self.scheme.update_kinematics(dt, &mut self.state, &self.committed, dofs);
+    }
+
+    /// [`Predictor::ConstantAcceleration`]: `u = u_n + Δt v_n + ½ Δt² a_n` on the free
+    /// displacement DOFs. A slip node's increment loses its normal component (the
+    /// constraint `ũ_n = 0` holds corrections only), and the nodes of a tie start at `u_n`
+    /// (their shared equation carries one correction for two nodes whose `v_n` differ).
+    fn predict_constant_acceleration(&mut self, dt: f64) {
+        let dim = self.dim;
+        let dofs = self.displacement_dofs();
+        let (c, u) = (&self.committed, &mut self.state.u);
+        for g in 0..dofs {
+            u[g] = c.u[g] + dt * c.v[g] + 0.5 * dt * dt * c.a[g];
+        }
+        for s in &self.slips {
+            let len = s.normal[..dim].iter().map(|x| x * x).sum::<f64>().sqrt();
+            let n = s.normal.map(|x| x / len);
+            let first = s.node * dim;
+            let along: f64 = (0..dim).map(|i| (u[first + i] - c.u[first + i]) * n[i]).sum();
+            for i in 0..dim {
+                u[first + i] -= along * n[i];
+            }
+        }
+        for tie in &self.ties {
+            for d in [tie.leader, tie.follower] {
+                let first = d / dim * dim;
+                u[first..first + dim].copy_from_slice(&c.u[first..first + dim]);
+            }
+        }
     }
 
     /// Consistent initial acceleration for a dynamic analysis: solves

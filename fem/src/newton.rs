@@ -77,6 +77,9 @@ pub struct NewtonSettings {
     /// `Model::hold_grid_boundaries`). `false` keeps the projected values, as Kratos' MPM
     /// does: `loam import kratos` sets it so that imported dynamic cases reproduce Kratos.
     pub hold_grid_boundaries: bool,
+    /// The first iterate of a dynamic step (default `constant_displacement`; see
+    /// [`Predictor`]).
+    pub predictor: Predictor,
     /// Print every iteration's residual and correction norms on stderr (not a case key:
     /// `loam run --trace-newton` sets it).
     #[serde(skip)]
@@ -99,6 +102,23 @@ pub enum TangentReuse {
     /// the kept factors of the last tangent of this pattern and step length serve while
     /// `‖R_k‖/‖R_{k−1}‖ ≤` [`REUSE_CONTRACTION`], in the first half of the iteration budget.
     Auto,
+}
+
+/// The first iterate of a dynamic step: the case file's `solver.predictor`. Prescribed
+/// DOFs take their prescribed values either way, and a static step always starts from
+/// `u_n`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Predictor {
+    /// `u = u_n`: the step starts where the last one ended (a grid node: where the grid was
+    /// placed), with the time scheme's `v`, `a` for no motion.
+    #[default]
+    ConstantDisplacement,
+    /// `u = u_n + Δt v_n + ½ Δt² a_n`: the motion continues with the last acceleration
+    /// (the time scheme then gives `a = a_n`, `v = v_n + Δt a_n` at the predictor), as
+    /// Kratos' Newmark and Bossak schemes predict. Newton starts `β Δt² |a_{n+1} − a_n|`
+    /// from the solution instead of the step's whole motion `|Δu|`.
+    ConstantAcceleration,
 }
 
 /// Largest contraction `‖R_k‖/‖R_{k−1}‖` of the last iteration under which the next one may
@@ -126,6 +146,7 @@ impl Default for NewtonSettings {
             mpm_pattern_rings: DEFAULT_MPM_PATTERN_RINGS,
             tangent_reuse: TangentReuse::Off,
             hold_grid_boundaries: true,
+            predictor: Predictor::ConstantDisplacement,
             trace: false,
             ranks: Ranks::single(),
         }
@@ -258,7 +279,14 @@ impl NewtonStrategy {
         }
         let n = problem.state.u.len();
         let mut inertial = vec![0.0; n];
+        // the step's increment `Δu = u − u_n`: from the predictor's motion where it has one,
+        // so that the displacement criterion compares a correction with the step's motion
         let mut du_step = vec![0.0; n];
+        if settings.predictor == Predictor::ConstantAcceleration && problem.scheme.is_dynamic() {
+            for ((d, u), un) in du_step.iter_mut().zip(&problem.state.u).zip(&problem.committed.u) {
+                *d = u - un;
+            }
+        }
         let mut last_du = f64::INFINITY;
         let mut previous_du = f64::INFINITY;
         let reuse_allowed = settings.tangent_reuse == TangentReuse::Auto;
