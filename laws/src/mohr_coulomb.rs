@@ -71,23 +71,43 @@ pub trait StrengthEvolution: Send + Sync + std::fmt::Debug + Clone {
     fn at<T: Real>(&self, kappa: T) -> Strength<T>;
     /// Whether the strength depends on κ at all.
     fn evolves(&self) -> bool;
+    /// [`mohr_coulomb_coefficients`] of the strength at κ.
+    fn coefficients<T: Real>(&self, kappa: T) -> (T, T, T) {
+        mohr_coulomb_coefficients(&self.at(kappa))
+    }
 }
 
-/// Constant strength: perfect Mohr–Coulomb plasticity.
+/// Constant strength: perfect Mohr–Coulomb plasticity. Its coefficients `(k, σ_c, m)` are
+/// computed once (the same operations as [`mohr_coulomb_coefficients`], so the same values):
+/// every point's yield check needed two sines and a cosine.
 #[derive(Debug, Clone, Copy)]
-pub struct ConstantStrength(pub Strength<f64>);
+pub struct ConstantStrength {
+    strength: Strength<f64>,
+    coefficients: (f64, f64, f64),
+}
+
+impl ConstantStrength {
+    /// The constant strength `strength`.
+    pub fn new(strength: Strength<f64>) -> Self {
+        Self { strength, coefficients: mohr_coulomb_coefficients(&strength) }
+    }
+}
 
 impl StrengthEvolution for ConstantStrength {
     const NAME: &'static str = "mohr_coulomb";
     fn at<T: Real>(&self, _kappa: T) -> Strength<T> {
         Strength {
-            friction_angle: T::cst(self.0.friction_angle),
-            cohesion: T::cst(self.0.cohesion),
-            dilatancy_angle: T::cst(self.0.dilatancy_angle),
+            friction_angle: T::cst(self.strength.friction_angle),
+            cohesion: T::cst(self.strength.cohesion),
+            dilatancy_angle: T::cst(self.strength.dilatancy_angle),
         }
     }
     fn evolves(&self) -> bool {
         false
+    }
+    fn coefficients<T: Real>(&self, _kappa: T) -> (T, T, T) {
+        let (k, sc, m) = self.coefficients;
+        (T::cst(k), T::cst(sc), T::cst(m))
     }
 }
 
@@ -118,7 +138,7 @@ impl MohrCoulomb {
         dilatancy_angle: f64,
     ) -> Self {
         let (lambda, mu) = crate::material::lame(young_modulus, poisson_ratio);
-        Self { density, lambda, mu, strength: ConstantStrength(Strength { friction_angle, cohesion, dilatancy_angle }) }
+        Self { density, lambda, mu, strength: ConstantStrength::new(Strength { friction_angle, cohesion, dilatancy_angle }) }
     }
 }
 
@@ -217,7 +237,7 @@ impl<S: StrengthEvolution> MohrCoulombLaw<S> {
     /// Yield function `f = k τ₁ − τ₃ − σ_c` (Pa) at principal Kirchhoff stresses `tau`
     /// (any order) and accumulated plastic deviatoric strain `kappa`.
     pub fn yield_function(&self, tau: [f64; 3], kappa: f64) -> f64 {
-        let (k, sc, _) = mohr_coulomb_coefficients(&self.strength.at(kappa));
+        let (k, sc, _) = self.strength.coefficients(kappa);
         let max = tau.iter().cloned().fold(f64::MIN, f64::max);
         let min = tau.iter().cloned().fold(f64::MAX, f64::min);
         k * max - min - sc
@@ -239,7 +259,7 @@ impl<S: StrengthEvolution> MohrCoulombLaw<S> {
 
     fn plastic_evaluation(&self, eps_tr: [f64; 3], kappa: f64) -> Result<PlasticEvaluation, LawError> {
         let eps: [Dual<4>; 3] = [Dual::seed(eps_tr[0], 0), Dual::seed(eps_tr[1], 1), Dual::seed(eps_tr[2], 2)];
-        let (k, sc, m) = mohr_coulomb_coefficients(&self.strength.at(Dual::seed(kappa, 3)));
+        let (k, sc, m) = self.strength.coefficients(Dual::seed(kappa, 3));
         let tau_b = hencky_stress(self.lambda, self.mu, eps);
         let mut perm = [0usize, 1, 2];
         perm.sort_by(|&a, &b| tau_b[b].v.partial_cmp(&tau_b[a].v).unwrap_or(std::cmp::Ordering::Equal));
@@ -329,7 +349,7 @@ impl<S: StrengthEvolution> MohrCoulombLaw<S> {
     /// The elastic volumetric strain at the apex, `θ_apex = p_apex/K`, `p_apex = σ_c/(k − 1)`
     /// (`+∞` without an apex: φ = 0).
     fn apex_strain(&self) -> f64 {
-        let (k, sc, _) = mohr_coulomb_coefficients(&self.strength.at(0.0_f64));
+        let (k, sc, _) = self.strength.coefficients(0.0_f64);
         if k - 1.0 > 1e-12 {
             sc / (k - 1.0) / (self.lambda + 2.0 * self.mu / 3.0)
         } else {
@@ -339,7 +359,7 @@ impl<S: StrengthEvolution> MohrCoulombLaw<S> {
 
     /// The u–p return (module doc) at trial principal log strains `eps` and pressure `p`.
     fn mixed_return<T: Real>(&self, eps: [T; 3], p: T) -> Result<([T; 3], Region), LawError> {
-        let (k, sc, m) = mohr_coulomb_coefficients(&self.strength.at(T::cst(0.0)));
+        let (k, sc, m) = self.strength.coefficients(T::cst(0.0));
         let tau_b = crate::mixed::deviator(eps).map(|e| e * (2.0 * self.mu) + p);
         let values = tau_b.map(|t| t.re());
         if self.yield_function(values, 0.0) <= self.yield_tolerance(values) {
