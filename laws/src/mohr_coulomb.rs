@@ -138,7 +138,12 @@ impl MohrCoulomb {
         dilatancy_angle: f64,
     ) -> Self {
         let (lambda, mu) = crate::material::lame(young_modulus, poisson_ratio);
-        Self { density, lambda, mu, strength: ConstantStrength::new(Strength { friction_angle, cohesion, dilatancy_angle }) }
+        Self {
+            density,
+            lambda,
+            mu,
+            strength: ConstantStrength::new(Strength { friction_angle, cohesion, dilatancy_angle }),
+        }
     }
 }
 
