@@ -200,7 +200,6 @@ fn run_loop(
     let spec = sim.case.analysis.checkpoint;
     let keep = spec.map_or(2, |s| s.keep);
     let mut clock = CheckpointClock { spec, last_step: sim.step, last_time: Instant::now() };
-    let interrupted = || options.interrupt.as_ref().is_some_and(|i| i.is_requested());
     // fixed steps: progress in planned steps; adaptive steps: in per mille of the end time
     let adaptive = sim.case.analysis.adaptive.is_some();
     let length = if adaptive { 1000 } else { sim.total_steps() as u64 };
@@ -215,7 +214,7 @@ fn run_loop(
         if sim.finished() {
             break RunEnd::Finished;
         }
-        if interrupted() {
+        if interrupted_on_any_rank(sim, options) {
             let path = write_checkpoint(sim, &mut writer, out_dir, fingerprint, keep)?;
             break RunEnd::Interrupted(path);
         }
@@ -269,6 +268,13 @@ fn run_loop(
     }
     bar.finish_and_clear();
     Ok(end)
+}
+
+/// Whether a signal asked to stop (a collective in a distributed run: every rank stops before
+/// the same step if any rank received it; every rank's loop asks once before each step).
+pub fn interrupted_on_any_rank(sim: &Simulation, options: &RunOptions) -> bool {
+    let here = options.interrupt.as_ref().is_some_and(|i| i.is_requested());
+    !sim.case.solver.ranks.all(!here)
 }
 
 /// Default output directory `out/<case name>`.

@@ -307,6 +307,16 @@ fn checkpoint_on_2_ranks_resumes_bit_for_bit(path: &str, edit: impl Fn(&mut Valu
     let resumed = std::fs::read_to_string(out.join("monitors.csv")).unwrap();
     println!("{name}: monitors.csv of the resumed run: {} rows", resumed.lines().count() - 1);
     assert_eq!(resumed, whole, "resumed on 2 ranks = uninterrupted on 2 ranks");
+    // the resumed series name .pvtu files whose 2 pieces are all there
+    for entry in std::fs::read_dir(&out).unwrap() {
+        let pvd = entry.unwrap().path();
+        if pvd.extension().is_some_and(|e| e == "pvd") {
+            for file in series_files(&pvd) {
+                assert!(file.ends_with(".pvtu"), "{}: {file}", pvd.display());
+                assert_eq!(cells_flattened(&out.join(&file)).1, 2, "{file}: both pieces read");
+            }
+        }
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -349,6 +359,102 @@ fn a_plastic_mpm_checkpoint_on_2_ranks_resumes_on_2_ranks() {
             diff / scale
         );
         assert!(diff <= RANK_AGREEMENT * scale, "{} differs by {diff:e}", whole.0[k]);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// One output of a `.vtu` file or of the pieces of a `.pvtu`, cell by cell in file order:
+/// per cell its nodes' coordinates and point fields and its cell fields, flattened (a point
+/// cloud's cells are its vertices), and the number of pieces read.
+fn cells_flattened(path: &Path) -> (Vec<f64>, usize) {
+    use vtkio::model::{Attribute, DataSet, IOBuffer, VertexNumbers, Vtk};
+    let mut vtk = Vtk::import(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    vtk.load_all_pieces().unwrap_or_else(|e| panic!("{}: pieces: {e}", path.display()));
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else { panic!("{}: not a grid", path.display()) };
+    let count = pieces.len();
+    let f64s = |b: &IOBuffer| match b {
+        IOBuffer::F64(v) => v.clone(),
+        other => panic!("not Float64: {other:?}"),
+    };
+    let mut flat = Vec::new();
+    for piece in pieces {
+        let p = piece.into_loaded_piece_data(None).unwrap();
+        let x = f64s(&p.points);
+        let fields = |a: &[Attribute]| -> Vec<(usize, Vec<f64>)> {
+            a.iter()
+                .map(|a| match a {
+                    Attribute::DataArray(d) => (d.num_comp(), f64s(&d.data)),
+                    Attribute::Field { .. } => panic!("no field data"),
+                })
+                .collect()
+        };
+        let (point, cell) = (fields(&p.data.point), fields(&p.data.cell));
+        let VertexNumbers::XML { connectivity, offsets } = &p.cells.cell_verts else { panic!("XML cells") };
+        let mut start = 0usize;
+        for (c, &end) in offsets.iter().enumerate() {
+            for &a in &connectivity[start..end as usize] {
+                let a = a as usize;
+                flat.extend_from_slice(&x[3 * a..3 * a + 3]);
+                for (n, v) in &point {
+                    flat.extend_from_slice(&v[n * a..n * (a + 1)]);
+                }
+            }
+            for (n, v) in &cell {
+                flat.extend_from_slice(&v[n * c..n * (c + 1)]);
+            }
+            start = end as usize;
+        }
+    }
+    (flat, count)
+}
+
+/// The data sets (file names) of a `.pvd` series.
+fn series_files(pvd: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(pvd).unwrap_or_else(|e| panic!("{}: {e}", pvd.display()));
+    text.lines().filter_map(|l| l.split("file=\"").nth(1)).map(|f| f.split('"').next().unwrap().to_string()).collect()
+}
+
+/// Distributed output (item 4): on 2 and 3 ranks the coupled split beam (material points, the
+/// FEM beam's mesh, the background grid with `output.grid`) writes one `.pvtu` per output and
+/// step, naming one `.vtu` piece per rank, and `.pvd` series of the `.pvtu` files with the
+/// serial run's names and times; each output step's pieces, read back with vtkio through the
+/// `.pvtu`, hold the serial PETSc run's cells with their points' coordinates and fields,
+/// within [`RANK_AGREEMENT`].
+#[test]
+fn a_distributed_run_writes_a_pvtu_series_of_pieces_that_equal_the_serial_output() {
+    let dir = temp_dir("pvtu");
+    let mut case: Value =
+        serde_json::from_str(&std::fs::read_to_string(root().join("cases/coupled_beam_split.json")).unwrap()).unwrap();
+    case["solver"]["linear_solver"] = json!("petsc");
+    let path = dir.join("beam.json");
+    std::fs::write(&path, case.to_string()).unwrap();
+    let serial = dir.join("serial");
+    loam_run(&path, &serial, None);
+    let mut series: Vec<String> = std::fs::read_dir(&serial)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .filter(|n| n.ends_with(".pvd"))
+        .collect();
+    series.sort();
+    assert!(series.len() >= 4, "points, beam, grid and the case's series: {series:?}");
+    for ranks in [2, 3] {
+        let out = dir.join(format!("ranks{ranks}"));
+        loam_run(&path, &out, Some(ranks));
+        for name in &series {
+            let (expected, written) = (series_files(&serial.join(name)), series_files(&out.join(name)));
+            assert_eq!(written.len(), expected.len(), "{name} on {ranks} ranks: as many data sets");
+            for (s, p) in expected.iter().zip(&written) {
+                assert_eq!(p, &s.replace(".vtu", ".pvtu"), "{name}: the series names the .pvtu files");
+                let (want, _) = cells_flattened(&serial.join(s));
+                let (got, pieces) = cells_flattened(&out.join(p));
+                assert_eq!(pieces, ranks, "{p}: one piece per rank");
+                assert_eq!(got.len(), want.len(), "{p}: the serial output's cells and fields");
+                let scale = want.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
+                let diff = got.iter().zip(&want).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+                assert!(diff <= RANK_AGREEMENT * scale, "{p} on {ranks} ranks differs by {diff:e} (scale {scale:e})");
+            }
+            println!("{name} on {ranks} ranks: {} data sets of {ranks} pieces equal the serial output", written.len());
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

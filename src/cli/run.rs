@@ -11,6 +11,7 @@ use super::bad_input;
 use crate::case::CaseError;
 use crate::checkpoint;
 use crate::interrupt::Interrupt;
+use crate::output::results::ResultWriter;
 use crate::run::{default_out_dir, run, RunEnd, RunOptions};
 use crate::simulation::Simulation;
 
@@ -243,7 +244,7 @@ fn run_case(
         }
     }
     if ranks.rank() != 0 {
-        let code = run_without_output(&mut sim);
+        let code = run_other_rank(&mut sim, &out, &options);
         loam_fem::ranks::DistributedStats::of_every_rank(ranks);
         return code;
     }
@@ -330,12 +331,44 @@ fn run_case(
 }
 
 /// The steps of a rank other than 0 in a distributed run: the same steps as rank 0's run loop
-/// ([`run`]), whose collective operations they meet, without output (exit code 1 if a step
-/// fails, as on rank 0).
-fn run_without_output(sim: &mut Simulation) -> ExitCode {
+/// ([`run`]), whose collective operations they meet (an interruption on any rank stops all
+/// of them before the same step), writing this rank's pieces of the VTK output at the steps
+/// rank 0 writes them ([`ResultWriter::pieces`]). A failure to write a piece is reported and
+/// the run goes on (rank 0 waits for this rank's collectives). Exit code 1 if a step fails,
+/// as on rank 0.
+fn run_other_rank(sim: &mut Simulation, out: &Path, options: &RunOptions) -> ExitCode {
+    let rank = sim.case.solver.ranks.rank();
+    let report =
+        |e: std::io::Error| eprintln!("warning: rank {rank}: writing its output pieces to {}: {e}", out.display());
+    let mut writer = match ResultWriter::pieces(out, sim, options.resume.as_ref()) {
+        Ok(w) => Some(w),
+        Err(e) => {
+            report(e);
+            None
+        }
+    };
+    let write = |sim: &Simulation, force: bool, writer: &mut Option<ResultWriter>| {
+        if let Some(Err(e)) = writer.as_mut().map(|w| w.write_step(sim, force)) {
+            report(e);
+            *writer = None;
+        }
+    };
     while !sim.finished() {
-        if sim.step_observed(&mut |_| {}).is_err() {
-            return ExitCode::from(1);
+        if crate::run::interrupted_on_any_rank(sim, options) {
+            return ExitCode::from(INTERRUPTED);
+        }
+        let result = sim.step_observed(&mut |sim| write(sim, true, &mut writer));
+        match result {
+            Ok(_) => {
+                let last = sim.finished();
+                write(sim, last, &mut writer);
+            }
+            Err(_) => {
+                if let Some(Err(e)) = writer.as_mut().map(|w| w.write_final_state(sim)) {
+                    report(e);
+                }
+                return ExitCode::from(1);
+            }
         }
     }
     ExitCode::SUCCESS

@@ -137,7 +137,7 @@ fn data_set_line((time, file, part): &DataSet) -> String {
 }
 
 /// Escape the five XML special characters for an attribute value.
-fn escape(s: &str) -> String {
+pub(super) fn escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
         match c {

@@ -1,5 +1,7 @@
 //! Everything a run writes: `monitors.csv` (a row per step, flushed as it goes) and, per
 //! domain, a `.vtu` per output step with a `.pvd` series that stays valid if the run stops.
+//! In a distributed run rank 0 writes all of it and the other ranks their pieces of the VTK
+//! output only ([`ResultWriter::pieces`]), at the same steps.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -26,7 +28,8 @@ pub struct WriterState {
 /// Writer of a run's results.
 pub struct ResultWriter {
     dir: PathBuf,
-    monitors: BufWriter<File>,
+    /// `None` on a rank other than 0 of a distributed run, which writes VTK pieces only.
+    monitors: Option<BufWriter<File>>,
     vtk: Option<super::vtk_output::VtkSeries>,
     interval: usize,
     time_interval: Option<f64>,
@@ -52,7 +55,7 @@ impl ResultWriter {
         let vtk = if sim.case.output.vtk { Some(super::vtk_output::VtkSeries::new(dir)) } else { None };
         Ok(Self {
             dir: dir.to_path_buf(),
-            monitors,
+            monitors: Some(monitors),
             vtk,
             interval: sim.case.output.interval,
             time_interval: sim.case.output.time_interval,
@@ -61,6 +64,31 @@ impl ResultWriter {
             rows_step: 0,
             complete_length: 0,
         })
+    }
+
+    /// The writer of a rank other than 0 in a distributed run: its pieces of the VTK output
+    /// at the steps rank 0 writes them ([`super::pvtu`]), continuing `resume` (the
+    /// checkpoint's writer state, which every rank reads) if given; no monitors, no series.
+    pub fn pieces(dir: &Path, sim: &Simulation, resume: Option<&WriterState>) -> std::io::Result<Self> {
+        std::fs::create_dir_all(dir)?;
+        let vtk = if sim.case.output.vtk { Some(super::vtk_output::VtkSeries::new(dir)) } else { None };
+        let mut writer = Self {
+            dir: dir.to_path_buf(),
+            monitors: None,
+            vtk,
+            interval: sim.case.output.interval,
+            time_interval: sim.case.output.time_interval,
+            last_vtk_step: resume.and_then(|s| s.last_vtk_step),
+            last_vtk_slot: resume.map_or(0, |s| s.last_vtk_slot),
+            rows_step: resume.map_or(0, |s| s.rows_step),
+            complete_length: 0,
+        };
+        match resume {
+            None => writer.write_step(sim, true)?,
+            Some(state) if state.rows_step < sim.step => writer.write_step(sim, false)?,
+            Some(_) => {}
+        }
+        Ok(writer)
     }
 
     /// The state after the last complete [`ResultWriter::write_step`] (what survives a
@@ -77,9 +105,15 @@ impl ResultWriter {
 
     /// What has been written so far (after a flush).
     pub fn state(&mut self) -> std::io::Result<WriterState> {
-        self.monitors.flush()?;
+        let monitors_length = match &mut self.monitors {
+            Some(m) => {
+                m.flush()?;
+                m.get_ref().metadata()?.len()
+            }
+            None => 0,
+        };
         Ok(WriterState {
-            monitors_length: self.monitors.get_ref().metadata()?.len(),
+            monitors_length,
             rows_step: self.rows_step,
             last_vtk_step: self.last_vtk_step,
             last_vtk_slot: self.last_vtk_slot,
@@ -116,7 +150,7 @@ impl ResultWriter {
         };
         let mut writer = Self {
             dir: dir.to_path_buf(),
-            monitors: BufWriter::new(file),
+            monitors: Some(BufWriter::new(file)),
             vtk,
             interval: sim.case.output.interval,
             time_interval: sim.case.output.time_interval,
@@ -139,12 +173,14 @@ impl ResultWriter {
     /// Writes the monitors row of the committed state, and VTK files if the step is on the
     /// output interval (or `force`).
     pub fn write_step(&mut self, sim: &Simulation, force: bool) -> std::io::Result<()> {
-        write!(self.monitors, "{}", sim.time())?;
-        for v in sim.monitor_values() {
-            write!(self.monitors, ",{v}")?;
+        if let Some(monitors) = &mut self.monitors {
+            write!(monitors, "{}", sim.time())?;
+            for v in sim.monitor_values() {
+                write!(monitors, ",{v}")?;
+            }
+            writeln!(monitors)?;
+            monitors.flush()?;
         }
-        writeln!(self.monitors)?;
-        self.monitors.flush()?;
         let on_interval = match self.time_interval {
             Some(dt) => {
                 let slot = (sim.time() / dt * (1.0 + 1e-9)).floor() as i64;
@@ -163,7 +199,9 @@ impl ResultWriter {
             self.last_vtk_step = Some(sim.step);
         }
         self.rows_step = sim.step;
-        self.complete_length = self.monitors.get_ref().metadata()?.len();
+        if let Some(monitors) = &self.monitors {
+            self.complete_length = monitors.get_ref().metadata()?.len();
+        }
         Ok(())
     }
 

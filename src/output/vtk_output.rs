@@ -4,12 +4,17 @@
 //! their times; with more than one output (e.g. the soil and the structure of a coupled
 //! case), also `<case>.pvd` listing all of them at each time as parts of one series, which
 //! ParaView opens as one.
+//!
+//! In a distributed run every rank writes its piece of each output
+//! (`<name>_<step>_r<rank>.vtu`, [`super::pvtu`]) and rank 0 also `<name>_<step>.pvtu`, which
+//! the `.pvd` series name instead of the `.vtu` files.
 
 use std::path::{Path, PathBuf};
 
-use loam_fem::domain::Field;
+use loam_fem::domain::{DomainOutput, Field};
 
 use super::pvd::{DataSet, PvdSeries};
+use super::pvtu;
 use super::vtk::{write_vtu, VtuCells, VtuField};
 use crate::simulation::Simulation;
 
@@ -31,6 +36,15 @@ pub struct VtkSeries {
 
 fn fields(f: &[Field]) -> Vec<VtuField<'_>> {
     f.iter().map(|f| VtuField { name: &f.name, components: f.components, values: &f.values }).collect()
+}
+
+/// Writes `out` as a `.vtu` file at `path`.
+pub(crate) fn write_output(path: &Path, out: &DomainOutput) -> Result<(), super::vtk::OutputError> {
+    let cells = match &out.cells {
+        Some((element, connectivity)) => VtuCells::Mesh { element: *element, connectivity },
+        None => VtuCells::Vertices,
+    };
+    write_vtu(path, &out.points, &cells, &fields(&out.point_fields), &fields(&out.cell_fields))
 }
 
 impl VtkSeries {
@@ -69,21 +83,25 @@ impl VtkSeries {
         if outputs.len() > 1 && self.all.is_none() && outputs.iter().all(|o| o.name != sim.case.name) {
             self.all = Some(PvdSeries::new(self.dir.join(format!("{}.pvd", sim.case.name))));
         }
+        let ranks = sim.case.solver.ranks;
         for named in outputs {
             let out = &named.output;
-            let file = format!("{}_{:06}.vtu", named.name, sim.step);
-            let cells = match &out.cells {
-                Some((element, connectivity)) => VtuCells::Mesh { element: *element, connectivity },
-                None => VtuCells::Vertices,
+            let file = if ranks.is_distributed() {
+                let sources: Vec<String> =
+                    (0..ranks.size()).map(|r| pvtu::piece_file(&named.name, sim.step, r)).collect();
+                let piece = pvtu::piece(out, ranks.rank(), ranks.size());
+                write_output(&self.dir.join(&sources[ranks.rank()]), &piece).map_err(std::io::Error::other)?;
+                if ranks.rank() != 0 {
+                    continue;
+                }
+                let file = pvtu::parallel_file(&named.name, sim.step);
+                pvtu::write_pvtu(&self.dir.join(&file), out, &sources).map_err(std::io::Error::other)?;
+                file
+            } else {
+                let file = format!("{}_{:06}.vtu", named.name, sim.step);
+                write_output(&self.dir.join(&file), out).map_err(std::io::Error::other)?;
+                file
             };
-            write_vtu(
-                &self.dir.join(&file),
-                &out.points,
-                &cells,
-                &fields(&out.point_fields),
-                &fields(&out.cell_fields),
-            )
-            .map_err(std::io::Error::other)?;
             let k = match self.series.iter().position(|(n, _)| *n == named.name) {
                 Some(k) => k,
                 None => {
