@@ -458,3 +458,74 @@ fn a_distributed_run_writes_a_pvtu_series_of_pieces_that_equal_the_serial_output
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// An interruption that reaches one rank only (SIGINT to rank processes other than the first,
+/// not to `mpirun`) stops every rank before the same step: rank 0 writes the checkpoint and
+/// every process exits instead of waiting in the next step's collectives; the checkpoint then
+/// resumes on 2 ranks to the end. The 3D column (8 000 points) in 1 ms steps to 30 ms (about
+/// 0.2 s per step on 2 ranks; the signal goes after the third step).
+#[test]
+fn an_interruption_of_one_rank_stops_every_rank_with_a_checkpoint() {
+    use std::time::{Duration, Instant};
+    let dir = temp_dir("interrupt");
+    let mut case: Value =
+        serde_json::from_str(&std::fs::read_to_string(root().join("benches/scale/collapse_3d_column.json")).unwrap())
+            .unwrap();
+    case["analysis"]["time_step"] = json!(0.001);
+    case["analysis"]["end_time"] = json!(0.03);
+    case["analysis"].as_object_mut().unwrap().remove("adaptive");
+    case["output"] = json!({ "vtk": false });
+    let path = dir.join("column.json");
+    std::fs::write(&path, case.to_string()).unwrap();
+    let out = dir.join("out");
+    let mut mpirun = Command::new("mpirun")
+        .args(["-n", "2", "--oversubscribe", env!("CARGO_BIN_EXE_loam"), "run"])
+        .arg(&path)
+        .arg("--out")
+        .arg(&out)
+        .arg("--quiet")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("mpirun");
+    // a few steps written: the ranks are stepping
+    let start = Instant::now();
+    while std::fs::read_to_string(out.join("monitors.csv")).map_or(0, |t| t.lines().count()) < 4 {
+        assert!(start.elapsed() < Duration::from_secs(120), "no steps after 2 minutes");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    // the rank processes are mpirun's children; signal all but the lowest pid
+    let children = Command::new("pgrep").arg("-P").arg(mpirun.id().to_string()).output().expect("pgrep");
+    let mut pids: Vec<u32> =
+        String::from_utf8_lossy(&children.stdout).split_whitespace().filter_map(|p| p.parse().ok()).collect();
+    pids.sort_unstable();
+    assert_eq!(pids.len(), 2, "two rank processes: {pids:?}");
+    let killed = Command::new("kill").args(["-INT", &pids[1].to_string()]).status().expect("kill");
+    assert!(killed.success());
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = mpirun.try_wait().unwrap() {
+            break s;
+        }
+        if start.elapsed() > Duration::from_secs(60) {
+            let _ = mpirun.kill();
+            panic!("the ranks did not stop within 60 s of the interruption (waiting in a collective)");
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let output = mpirun.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    println!("mpirun exited ({status}) {:.1} s after SIGINT to one rank:\n{stderr}", start.elapsed().as_secs_f64());
+    assert!(stderr.contains("loam: interrupted at t ="), "rank 0 reports the interruption: {stderr}");
+    let checkpoints: Vec<_> = std::fs::read_dir(out.join("checkpoints")).expect("checkpoints written").collect();
+    assert_eq!(checkpoints.len(), 1, "one checkpoint, by rank 0");
+    let rows = monitors(&out).1.len();
+    assert!(rows < 31, "stopped before the end ({rows} rows)");
+    loam_run_with(&path, &out, Some(2), &["--resume"]);
+    let (_, resumed) = monitors(&out);
+    assert_eq!(resumed.len(), 31, "resumed to the end: the start and 30 steps");
+    assert!((resumed.last().unwrap()[0] - 0.03).abs() < 1e-12);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -244,8 +244,12 @@ fn run_case(
         }
     }
     if ranks.rank() != 0 {
-        let code = run_other_rank(&mut sim, &out, &options);
-        loam_fem::ranks::DistributedStats::of_every_rank(ranks);
+        let (code, interrupted) = run_other_rank(&mut sim, &out, &options);
+        // rank 0 gathers every rank's measurements unless the run was interrupted (it then
+        // writes the checkpoint and stops): the same collective on every rank, or none
+        if !interrupted {
+            loam_fem::ranks::DistributedStats::of_every_rank(ranks);
+        }
         return code;
     }
     match run(&mut sim, &out, &options) {
@@ -335,8 +339,8 @@ fn run_case(
 /// of them before the same step), writing this rank's pieces of the VTK output at the steps
 /// rank 0 writes them ([`ResultWriter::pieces`]). A failure to write a piece is reported and
 /// the run goes on (rank 0 waits for this rank's collectives). Exit code 1 if a step fails,
-/// as on rank 0.
-fn run_other_rank(sim: &mut Simulation, out: &Path, options: &RunOptions) -> ExitCode {
+/// as on rank 0; and whether the run was interrupted.
+fn run_other_rank(sim: &mut Simulation, out: &Path, options: &RunOptions) -> (ExitCode, bool) {
     let rank = sim.case.solver.ranks.rank();
     let report =
         |e: std::io::Error| eprintln!("warning: rank {rank}: writing its output pieces to {}: {e}", out.display());
@@ -355,7 +359,7 @@ fn run_other_rank(sim: &mut Simulation, out: &Path, options: &RunOptions) -> Exi
     };
     while !sim.finished() {
         if crate::run::interrupted_on_any_rank(sim, options) {
-            return ExitCode::from(INTERRUPTED);
+            return (ExitCode::from(INTERRUPTED), true);
         }
         let result = sim.step_observed(&mut |sim| write(sim, true, &mut writer));
         match result {
@@ -367,9 +371,9 @@ fn run_other_rank(sim: &mut Simulation, out: &Path, options: &RunOptions) -> Exi
                 if let Some(Err(e)) = writer.as_mut().map(|w| w.write_final_state(sim)) {
                     report(e);
                 }
-                return ExitCode::from(1);
+                return (ExitCode::from(1), false);
             }
         }
     }
-    ExitCode::SUCCESS
+    (ExitCode::SUCCESS, false)
 }
