@@ -35,6 +35,7 @@ use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbol
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Accum, MatMut, Par, Side};
+use rayon::prelude::*;
 
 /// Smallest pivot, relative to the largest entry of its column in the supernode's diagonal
 /// block at its elimination (the `U` entries above it included), that the factorisation
@@ -80,11 +81,274 @@ pub struct PatternLu {
     factor: Vec<f64>,
     /// Row `k` of a supernode's block was swapped with its row `pivot[begin + k]`.
     pivot: Vec<usize>,
+    /// The workspace of the elimination in one thread (the serial part's).
+    main: Workspace,
+    /// Position of each supernode in `postorder`, and of the first supernode of its subtree
+    /// (a subtree is a contiguous range of a postorder).
+    position: Vec<usize>,
+    subtree_first: Vec<usize>,
+    /// Estimated multiply–adds of each supernode's elimination ([`front_work`]).
+    work_of: Vec<f64>,
+    /// The subtrees eliminated in parallel, for the number of threads it was made for.
+    schedule: Option<Schedule>,
+    work: Vec<f64>,
+}
+
+/// Where one thread eliminates its fronts: the front, and the updates `C_s` waiting for
+/// their parent with where each starts and its supernode (a stack in postorder).
+#[derive(Default)]
+struct Workspace {
     front: Vec<f64>,
-    /// Updates `C_s` waiting for their parent, and where each starts with its supernode.
     updates: Vec<f64>,
     pending: Vec<(usize, usize)>,
-    work: Vec<f64>,
+}
+
+/// Subtrees of the supernodal elimination tree assigned to threads (subtree-to-thread
+/// mapping, Geist & Ng 1989, "Task scheduling for parallel sparse Cholesky factorization",
+/// Int. J. Parallel Programming 18:291–314): the subtrees of different threads share no
+/// supernode and no update, so each thread eliminates its own in postorder with its own
+/// workspace, and the supernodes above them (the serial part) follow in one thread, taking
+/// each subtree root's update where the sequential postorder would have made it. Every
+/// front sees the same operations in the same order as in one thread, so the factors are
+/// bit for bit those of the sequential elimination.
+struct Schedule {
+    threads: usize,
+    /// Per thread: its workspace (fronts up to its subtrees' largest).
+    workspaces: Vec<Workspace>,
+    /// Every subtree as (its first supernode, root, thread), ascending: the supernodes
+    /// `first..=root` in the numbering, which is a postorder.
+    subtrees: Vec<(usize, usize, usize)>,
+}
+
+/// Least estimated work ([`front_work`]) of a factorisation that is split among threads:
+/// below it (about 0.2 ms) the threads' start costs more than they save.
+const PARALLEL_WORK: f64 = 4e5;
+
+/// Least speed-up of the schedule's estimated makespan over one thread for it to be used.
+const PARALLEL_GAIN: f64 = 1.15;
+
+impl Schedule {
+    /// The subtree-to-thread mapping of `lu` for `threads` threads, `None` if it would not
+    /// pay ([`PARALLEL_WORK`], [`PARALLEL_GAIN`]). Starting from the roots, the heaviest
+    /// subtree is split (its root joins the serial part, its children become subtrees) as
+    /// long as that lowers the estimated makespan — the serial part plus the largest load
+    /// of a longest-processing-time assignment of the subtrees to the threads — for a
+    /// bounded number of splits; the best assignment seen is kept.
+    fn new(lu: &PatternLu, threads: usize) -> Option<Self> {
+        let supernodes = lu.postorder.len();
+        let total: f64 = lu.work_of.iter().sum();
+        if total < PARALLEL_WORK {
+            return None;
+        }
+        let mut parent_of = vec![usize::MAX; supernodes];
+        let mut kids: Vec<Vec<usize>> = vec![Vec::new(); supernodes];
+        for s in 0..supernodes {
+            let rows = &lu.pattern[lu.pattern_ptr[s]..lu.pattern_ptr[s + 1]];
+            if let Some(&i) = rows.first() {
+                let p = lu.begin.partition_point(|&b| b <= i) - 1;
+                parent_of[s] = p;
+                kids[p].push(s);
+            }
+        }
+        // subtree work, children before parents in the postorder
+        let mut subtree = lu.work_of.clone();
+        for &s in &lu.postorder {
+            if parent_of[s] != usize::MAX {
+                subtree[parent_of[s]] += subtree[s];
+            }
+        }
+        let assign = |candidates: &[usize]| -> (f64, Vec<Vec<usize>>) {
+            let mut sorted = candidates.to_vec();
+            sorted.sort_by(|a, b| subtree[*b].total_cmp(&subtree[*a]).then(a.cmp(b)));
+            let mut loads = vec![0.0f64; threads];
+            let mut groups = vec![Vec::new(); threads];
+            for r in sorted {
+                let t = (0..threads).min_by(|&a, &b| loads[a].total_cmp(&loads[b])).expect("threads");
+                loads[t] += subtree[r];
+                groups[t].push(r);
+            }
+            (loads.iter().fold(0.0, |m: f64, &l| m.max(l)), groups)
+        };
+        let mut candidates: Vec<usize> = (0..supernodes).filter(|&s| parent_of[s] == usize::MAX).collect();
+        let mut serial = 0.0;
+        let mut best: Option<(f64, Vec<Vec<usize>>)> = None;
+        for _ in 0..4 * supernodes.min(256) {
+            let (load, groups) = assign(&candidates);
+            if best.as_ref().is_none_or(|b| serial + load < b.0) {
+                best = Some((serial + load, groups));
+            }
+            let Some(k) = (0..candidates.len()).max_by(|&a, &b| subtree[candidates[a]].total_cmp(&subtree[candidates[b]]))
+            else {
+                break;
+            };
+            let r = candidates.swap_remove(k);
+            serial += lu.work_of[r];
+            candidates.extend_from_slice(&kids[r]);
+        }
+        let (makespan, mut groups) = best?;
+        if total / makespan < PARALLEL_GAIN {
+            return None;
+        }
+        let mut subtrees = Vec::new();
+        let mut workspaces = Vec::with_capacity(threads);
+        for (t, roots) in groups.iter_mut().enumerate() {
+            roots.sort_by_key(|&r| lu.position[r]);
+            let mut largest = 0;
+            for &r in roots.iter() {
+                // a subtree must be the supernodes first..=r in the numbering (faer numbers
+                // them in a postorder) for its factors to be one contiguous range
+                let members = &lu.postorder[lu.subtree_first[r]..=lu.position[r]];
+                let first = r + 1 - members.len();
+                if members.iter().enumerate().any(|(k, &s)| s != first + k) {
+                    return None;
+                }
+                subtrees.push((first, r, t));
+                for &s in members {
+                    let m = lu.begin[s + 1] - lu.begin[s] + lu.pattern_ptr[s + 1] - lu.pattern_ptr[s];
+                    largest = largest.max(m * m);
+                }
+            }
+            workspaces.push(Workspace { front: vec![0.0; largest], ..Default::default() });
+        }
+        subtrees.sort_unstable();
+        Some(Self { threads, workspaces, subtrees })
+    }
+}
+
+/// Estimated multiply–adds of eliminating a supernode of `width` columns with `below` rows
+/// under it: the panel, `U12`, the update `C = F22 − L21 U12` and the extend-add.
+fn front_work(width: usize, below: usize) -> f64 {
+    let (w, b) = (width as f64, below as f64);
+    w * w * (w + b) + w * w * b + 2.0 * w * b * b + (w + b) * (w + b)
+}
+
+/// The pattern and the values an elimination reads, shared by the threads.
+struct Structure<'a> {
+    begin: &'a [usize],
+    pattern_ptr: &'a [usize],
+    children: &'a [usize],
+    position_in_parent: &'a [u32],
+    front_entries_ptr: &'a [usize],
+    front_entries: &'a [(u32, u32)],
+    factor_ptr: &'a [usize],
+    values: &'a [f64],
+}
+
+/// A contiguous range of supernodes (a subtree, numbered in postorder, or one supernode)
+/// with their factors and pivots: `factor` starts at the factor offset of supernode
+/// `supernodes.start`, `pivot` at its first column.
+struct Part<'f> {
+    supernodes: std::ops::Range<usize>,
+    factor: &'f mut [f64],
+    pivot: &'f mut [usize],
+}
+
+/// Eliminates the supernodes of `parts` (each in ascending order: a postorder) with
+/// workspace `ws`, inside pulp's instruction-set dispatch ([`PatternLu::factorise`]).
+fn dispatch(structure: &Structure<'_>, parts: &mut [Part<'_>], ws: &mut Workspace) -> Result<(), PivotFailure> {
+    struct Eliminate<'s, 'a, 'p, 'f> {
+        structure: &'s Structure<'a>,
+        parts: &'p mut [Part<'f>],
+        ws: &'s mut Workspace,
+    }
+    impl pulp::WithSimd for Eliminate<'_, '_, '_, '_> {
+        type Output = Result<(), PivotFailure>;
+        #[inline(always)]
+        fn with_simd<S: pulp::Simd>(self, _simd: S) -> Self::Output {
+            let st = self.structure;
+            let mut result = Ok(());
+            'parts: for part in self.parts.iter_mut() {
+                let (f0, c0) = (st.factor_ptr[part.supernodes.start], st.begin[part.supernodes.start]);
+                for s in part.supernodes.clone() {
+                    let factor = &mut part.factor[st.factor_ptr[s] - f0..st.factor_ptr[s + 1] - f0];
+                    let pivot = &mut part.pivot[st.begin[s] - c0..st.begin[s + 1] - c0];
+                    result = eliminate(st, s, self.ws, factor, pivot);
+                    if result.is_err() {
+                        break 'parts;
+                    }
+                }
+            }
+            crate::simd_state::clear_upper_state();
+            result
+        }
+    }
+    pulp::Arch::new().dispatch(Eliminate { structure, parts, ws })
+}
+
+/// The elimination of supernode `s` (see the module doc): its front assembled from `A` and
+/// its children's pending updates, the panel factorised with restricted pivoting, `U12` and
+/// the update `C_s` formed, the factors written to `factor` (the supernode's range) and
+/// `pivot` (its columns'), and `C_s` pushed for the parent.
+#[inline(always)]
+fn eliminate(
+    st: &Structure<'_>,
+    s: usize,
+    ws: &mut Workspace,
+    factor: &mut [f64],
+    pivot: &mut [usize],
+) -> Result<(), PivotFailure> {
+    let (b0, b1) = (st.begin[s], st.begin[s + 1]);
+    let width = b1 - b0;
+    let (p0, p1) = (st.pattern_ptr[s], st.pattern_ptr[s + 1]);
+    let below = p1 - p0;
+    let m = width + below;
+    let front = &mut ws.front[..m * m];
+    front.fill(0.0);
+    for &(k, at) in &st.front_entries[st.front_entries_ptr[s]..st.front_entries_ptr[s + 1]] {
+        front[at as usize] += st.values[k as usize];
+    }
+    // extend-add the children's updates: the last `children[s]` pending ones
+    for _ in 0..st.children[s] {
+        let (c, start) = ws.pending.pop().expect("a child's update is pending");
+        let positions = &st.position_in_parent[st.pattern_ptr[c]..st.pattern_ptr[c + 1]];
+        let mc = positions.len();
+        let update = &ws.updates[start..start + mc * mc];
+        for (column, &pj) in update.chunks_exact(mc).zip(positions) {
+            let target = &mut front[pj as usize * m..(pj as usize + 1) * m];
+            for (&value, &pi) in column.iter().zip(positions) {
+                target[pi as usize] += value;
+            }
+        }
+        ws.updates.truncate(start);
+    }
+    factor_panel(front, m, width, pivot).map_err(|k| PivotFailure(b0 + k))?;
+    if below > 0 && width * below * below < LARGE_UPDATE {
+        // small fronts: U12 = L11⁻¹ F12 and C −= L21 U12 column by column, a column
+        // of `[F12; F22]` eliminated against the panel's `width` columns
+        let (panel, rest) = front.split_at_mut(m * width);
+        for column in rest.chunks_exact_mut(m) {
+            for k in 0..width {
+                let u = column[k];
+                if u != 0.0 {
+                    let l = &panel[k * m..(k + 1) * m];
+                    for i in k + 1..m {
+                        column[i] -= l[i] * u;
+                    }
+                }
+            }
+        }
+    } else if below > 0 {
+        let mut f = MatMut::from_column_major_slice_mut(front, m, m);
+        let (top, bottom) = f.rb_mut().split_at_row_mut(width);
+        let (l11, mut u12) = top.split_at_col_mut(width);
+        solve_unit_lower_triangular_in_place(l11.rb(), u12.rb_mut(), Par::Seq);
+        let (l21, c) = bottom.split_at_col_mut(width);
+        matmul(c, Accum::Add, l21.rb(), u12.rb(), -1.0, Par::Seq);
+    }
+    let (panel, u12) = factor.split_at_mut(m * width);
+    panel.copy_from_slice(&front[..m * width]);
+    for (j, dst) in u12.chunks_exact_mut(width.max(1)).enumerate().take(below) {
+        let column = (width + j) * m;
+        dst.copy_from_slice(&front[column..column + width]);
+    }
+    if below > 0 {
+        let start = ws.updates.len();
+        for j in width..m {
+            ws.updates.extend_from_slice(&front[j * m + width..(j + 1) * m]);
+        }
+        ws.pending.push((s, start));
+    }
+    Ok(())
 }
 
 impl std::fmt::Debug for PatternLu {
@@ -183,6 +447,14 @@ impl PatternLu {
             front_entries.extend(list);
             front_entries_ptr.push(front_entries.len());
         }
+        let mut position = vec![0usize; supernodes];
+        let mut subtree_first = vec![0usize; supernodes];
+        for (i, &s) in postorder.iter().enumerate() {
+            position[s] = i;
+            subtree_first[s] = kids[s].iter().map(|&c| subtree_first[c]).min().unwrap_or(i);
+        }
+        let work_of: Vec<f64> =
+            (0..supernodes).map(|s| front_work(begin[s + 1] - begin[s], pattern_ptr[s + 1] - pattern_ptr[s])).collect();
         let mut factor_ptr = vec![0usize];
         let mut largest_front = 0;
         for s in 0..supernodes {
@@ -204,9 +476,11 @@ impl PatternLu {
             front_entries,
             factor_ptr,
             pivot: vec![0; n],
-            front: vec![0.0; largest_front],
-            updates: Vec::new(),
-            pending: Vec::new(),
+            main: Workspace { front: vec![0.0; largest_front], ..Default::default() },
+            position,
+            subtree_first,
+            work_of,
+            schedule: None,
             work: vec![0.0; n],
         })
     }
@@ -220,93 +494,89 @@ impl PatternLu {
     /// fronts, the extend-add and the panels are compiled for AVX2 as well and chosen at run
     /// time (`pulp`'s dispatch, safe; the baseline x86-64 build has 128-bit SSE2 only): the same
     /// operations in the same order, so the factors are bit for bit those of the SSE2 build
-    /// (Rust does not fuse `a * b + c`), in about 15 % less time on the Bui collapse.
+    /// (Rust does not fuse `a * b + c`), in about 15 % less time on the Bui collapse. With more
+    /// than one rayon thread, independent subtrees of the elimination tree are eliminated in
+    /// parallel ([`Schedule`]); the factors are the same bit for bit.
     pub fn factorise(&mut self, a: SparseColMatRef<'_, usize, f64>) -> Result<(), PivotFailure> {
-        /// [`PatternLu::factorise_body`] inside pulp's instruction-set dispatch.
-        struct Factorise<'l, 'a> {
-            lu: &'l mut PatternLu,
-            a: SparseColMatRef<'a, usize, f64>,
+        let threads = rayon::current_num_threads();
+        if threads > 1 && self.schedule.as_ref().is_none_or(|s| s.threads != threads) {
+            self.schedule = Schedule::new(self, threads);
         }
-        impl pulp::WithSimd for Factorise<'_, '_> {
-            type Output = Result<(), PivotFailure>;
-            #[inline(always)]
-            fn with_simd<S: pulp::Simd>(self, _simd: S) -> Self::Output {
-                self.lu.factorise_body(self.a)
+        let structure = Structure {
+            begin: &self.begin,
+            pattern_ptr: &self.pattern_ptr,
+            children: &self.children,
+            position_in_parent: &self.position_in_parent,
+            front_entries_ptr: &self.front_entries_ptr,
+            front_entries: &self.front_entries,
+            factor_ptr: &self.factor_ptr,
+            values: a.val(),
+        };
+        let schedule = if threads > 1 { self.schedule.as_mut() } else { None };
+        // the schedule's subtrees, each thread its own, their factors and pivots split off
+        let (subtrees, workspaces): (&[(usize, usize, usize)], &[Workspace]) = match schedule {
+            Some(schedule) => {
+                let mut parts: Vec<Vec<Part<'_>>> = (0..schedule.threads).map(|_| Vec::new()).collect();
+                let (mut factor, mut pivot): (&mut [f64], &mut [usize]) = (&mut self.factor, &mut self.pivot);
+                let (mut factor_at, mut pivot_at) = (0, 0);
+                for &(first, root, thread) in &schedule.subtrees {
+                    let (f0, f1) = (self.factor_ptr[first], self.factor_ptr[root + 1]);
+                    let (c0, c1) = (self.begin[first], self.begin[root + 1]);
+                    let (mine, rest) = std::mem::take(&mut factor)[f0 - factor_at..].split_at_mut(f1 - f0);
+                    let (mine_pivot, rest_pivot) = std::mem::take(&mut pivot)[c0 - pivot_at..].split_at_mut(c1 - c0);
+                    (factor, pivot, factor_at, pivot_at) = (rest, rest_pivot, f1, c1);
+                    parts[thread].push(Part { supernodes: first..root + 1, factor: mine, pivot: mine_pivot });
+                }
+                let failure = parts
+                    .par_iter_mut()
+                    .zip(schedule.workspaces.par_iter_mut())
+                    .map(|(parts, ws)| {
+                        ws.updates.clear();
+                        ws.pending.clear();
+                        dispatch(&structure, parts, ws).err()
+                    })
+                    .collect::<Vec<_>>()
+                    .into_iter()
+                    .flatten()
+                    .next();
+                if let Some(failure) = failure {
+                    return Err(failure);
+                }
+                let schedule: &Schedule = schedule;
+                (&schedule.subtrees, &schedule.workspaces)
             }
-        }
-        pulp::Arch::new().dispatch(Factorise { lu: self, a })
-    }
-
-    #[inline(always)]
-    fn factorise_body(&mut self, a: SparseColMatRef<'_, usize, f64>) -> Result<(), PivotFailure> {
-        let values = a.val();
-        self.updates.clear();
-        self.pending.clear();
-        for &s in &self.postorder {
-            let (b0, b1) = (self.begin[s], self.begin[s + 1]);
-            let width = b1 - b0;
-            let (p0, p1) = (self.pattern_ptr[s], self.pattern_ptr[s + 1]);
-            let below = p1 - p0;
-            let m = width + below;
-            let front = &mut self.front[..m * m];
-            front.fill(0.0);
-            for &(k, at) in &self.front_entries[self.front_entries_ptr[s]..self.front_entries_ptr[s + 1]] {
-                front[at as usize] += values[k as usize];
-            }
-            // extend-add the children's updates: the last `children[s]` pending ones
-            for _ in 0..self.children[s] {
-                let (c, start) = self.pending.pop().expect("a child's update is pending");
-                let positions = &self.position_in_parent[self.pattern_ptr[c]..self.pattern_ptr[c + 1]];
-                let mc = positions.len();
-                let update = &self.updates[start..start + mc * mc];
-                for (column, &pj) in update.chunks_exact(mc).zip(positions) {
-                    let target = &mut front[pj as usize * m..(pj as usize + 1) * m];
-                    for (&value, &pi) in column.iter().zip(positions) {
-                        target[pi as usize] += value;
+            None => (&[], &[]),
+        };
+        // the serial part: every supernode outside the subtrees, in postorder; a subtree's root
+        // update joins the stack where the sequential elimination would have made it
+        let main = &mut self.main;
+        main.updates.clear();
+        main.pending.clear();
+        let (mut i, mut next) = (0, 0);
+        while i < self.postorder.len() {
+            let s = self.postorder[i];
+            match subtrees.get(next) {
+                Some(&(first, root, thread)) if first == s => {
+                    let ws = &workspaces[thread];
+                    if let Some(&(_, at)) = ws.pending.iter().find(|&&(r, _)| r == root) {
+                        let mc = self.pattern_ptr[root + 1] - self.pattern_ptr[root];
+                        main.pending.push((root, main.updates.len()));
+                        main.updates.extend_from_slice(&ws.updates[at..at + mc * mc]);
                     }
+                    i += root + 1 - first;
+                    next += 1;
                 }
-                self.updates.truncate(start);
-            }
-            factor_panel(front, m, width, &mut self.pivot[b0..b1]).map_err(|k| PivotFailure(b0 + k))?;
-            if below > 0 && width * below * below < LARGE_UPDATE {
-                // small fronts: U12 = L11⁻¹ F12 and C −= L21 U12 column by column, a column
-                // of `[F12; F22]` eliminated against the panel's `width` columns
-                let (panel, rest) = front.split_at_mut(m * width);
-                for column in rest.chunks_exact_mut(m) {
-                    for k in 0..width {
-                        let u = column[k];
-                        if u != 0.0 {
-                            let l = &panel[k * m..(k + 1) * m];
-                            for i in k + 1..m {
-                                column[i] -= l[i] * u;
-                            }
-                        }
-                    }
+                _ => {
+                    let part = Part {
+                        supernodes: s..s + 1,
+                        factor: &mut self.factor[self.factor_ptr[s]..self.factor_ptr[s + 1]],
+                        pivot: &mut self.pivot[self.begin[s]..self.begin[s + 1]],
+                    };
+                    dispatch(&structure, &mut [part], main)?;
+                    i += 1;
                 }
-            } else if below > 0 {
-                let mut f = MatMut::from_column_major_slice_mut(front, m, m);
-                let (top, bottom) = f.rb_mut().split_at_row_mut(width);
-                let (l11, mut u12) = top.split_at_col_mut(width);
-                solve_unit_lower_triangular_in_place(l11.rb(), u12.rb_mut(), Par::Seq);
-                let (l21, c) = bottom.split_at_col_mut(width);
-                matmul(c, Accum::Add, l21.rb(), u12.rb(), -1.0, Par::Seq);
-            }
-            let out = &mut self.factor[self.factor_ptr[s]..self.factor_ptr[s + 1]];
-            let (panel, u12) = out.split_at_mut(m * width);
-            panel.copy_from_slice(&front[..m * width]);
-            for (j, dst) in u12.chunks_exact_mut(width.max(1)).enumerate().take(below) {
-                let column = (width + j) * m;
-                dst.copy_from_slice(&front[column..column + width]);
-            }
-            if below > 0 {
-                let start = self.updates.len();
-                for j in width..m {
-                    self.updates.extend_from_slice(&front[j * m + width..(j + 1) * m]);
-                }
-                self.pending.push((s, start));
             }
         }
-        crate::simd_state::clear_upper_state();
         Ok(())
     }
 
@@ -476,8 +746,56 @@ mod tests {
         norm(&residual) / norm(&b)
     }
 
-    fn solves_on_a_grid(side: usize) {
-        let n = side * side;
+    /// The tree-parallel elimination ([`Schedule`]) gives the sequential factors bit for bit:
+    /// the 80 × 80 grid matrix of [`solves_on_a_grid`] factorised in pools of 1, 2, 3 and 4
+    /// threads (the parallel ones split into subtrees), identical factors and pivots, and the
+    /// solve exact to round-off; a pivot failure inside a subtree is reported as in one thread.
+    #[test]
+    fn parallel_subtrees_give_the_sequential_factors_bit_for_bit() {
+        let a = grid_matrix(80);
+        let factorise_in = |threads: usize, a: &SparseColMat<usize, f64>| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let mut lu = PatternLu::analyse(a.symbolic()).expect("supernodal analysis");
+            let result = pool.install(|| lu.factorise(a.as_ref()));
+            (lu, result)
+        };
+        let (sequential, result) = factorise_in(1, &a);
+        result.expect("factorisation");
+        assert!(sequential.schedule.is_none());
+        for threads in [2, 3, 4] {
+            let (mut lu, result) = factorise_in(threads, &a);
+            result.expect("factorisation");
+            let schedule = lu.schedule.as_ref().expect("the elimination was split among the threads");
+            let serial: f64 = (0..lu.postorder.len())
+                .filter(|&s| !schedule.subtrees.iter().any(|&(first, root, _)| (first..=root).contains(&s)))
+                .map(|s| lu.work_of[s])
+                .sum();
+            println!(
+                "{threads} threads: {} subtrees, serial part {:.1} % of the work",
+                schedule.subtrees.len(),
+                100.0 * serial / lu.work_of.iter().sum::<f64>()
+            );
+            assert!(lu.factor == sequential.factor && lu.pivot == sequential.pivot, "{threads} threads: factors differ");
+            let relative = solve_residual(&mut lu, &a);
+            assert!(relative < 1e-12, "relative residual {relative:e}");
+        }
+        // a zero row and column inside a subtree: refused in parallel as in one thread
+        let (lu, _) = factorise_in(2, &a);
+        let schedule = lu.schedule.as_ref().unwrap();
+        let (first, _, _) = schedule.subtrees[0];
+        let equation = lu.ordering[lu.begin[first]];
+        let zero: Vec<_> = triplets(80)
+            .into_iter()
+            .map(|t| Triplet::new(t.row, t.col, if t.row == equation || t.col == equation { 0.0 } else { t.val }))
+            .collect();
+        let singular = SparseColMat::<usize, f64>::try_new_from_triplets(a.nrows(), a.ncols(), &zero).unwrap();
+        let (_, one) = factorise_in(1, &singular);
+        let (_, two) = factorise_in(2, &singular);
+        assert!(one.is_err() && two.is_err(), "{one:?} {two:?}");
+    }
+
+    /// The entries of the grid matrix of [`solves_on_a_grid`].
+    fn triplets(side: usize) -> Vec<Triplet<usize, usize, f64>> {
         let mut entries = Vec::new();
         for y in 0..side {
             for x in 0..side {
@@ -492,7 +810,17 @@ mod tests {
                 }
             }
         }
-        let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &entries).unwrap();
+        entries
+    }
+
+    fn grid_matrix(side: usize) -> SparseColMat<usize, f64> {
+        SparseColMat::<usize, f64>::try_new_from_triplets(side * side, side * side, &triplets(side)).unwrap()
+    }
+
+    fn solves_on_a_grid(side: usize) {
+        let n = side * side;
+        let entries = triplets(side);
+        let a = grid_matrix(side);
         let mut lu = PatternLu::analyse(a.symbolic()).expect("supernodal analysis");
         let large = (0..lu.begin.len() - 1)
             .filter(|&s| {
