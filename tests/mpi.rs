@@ -43,19 +43,21 @@ fn loam_run(case: &Path, out: &Path, ranks: Option<usize>) {
     loam_run_with(case, out, ranks, &[]);
 }
 
+/// `mpirun -n ranks --oversubscribe loam`, allowed to run as root.
+fn mpirun_loam(ranks: usize) -> Command {
+    let mut c = Command::new("mpirun");
+    c.args(["-n", &ranks.to_string(), "--oversubscribe", env!("CARGO_BIN_EXE_loam")]);
+    // Open MPI refuses to run as root without these (containers, CI)
+    c.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+    c
+}
+
 /// [`loam_run`] with further arguments of `loam run`.
 fn loam_run_with(case: &Path, out: &Path, ranks: Option<usize>, extra: &[&str]) {
-    let loam = env!("CARGO_BIN_EXE_loam");
     let mut cmd = match ranks {
-        None => Command::new(loam),
-        Some(p) => {
-            let mut c = Command::new("mpirun");
-            c.args(["-n", &p.to_string(), "--oversubscribe", loam]);
-            c
-        }
+        None => Command::new(env!("CARGO_BIN_EXE_loam")),
+        Some(p) => mpirun_loam(p),
     };
-    // Open MPI refuses to run as root without these (containers, CI)
-    cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
     let output = cmd
         .arg("run")
         .arg(case)
@@ -268,15 +270,7 @@ fn a_direct_solver_on_ranks_is_refused_naming_the_key() {
     case["solver"]["linear_solver"] = json!("lu");
     let path = dir.join("cantilever_lu.json");
     std::fs::write(&path, case.to_string()).unwrap();
-    let output = Command::new("mpirun")
-        .args(["-n", "2", "--oversubscribe", env!("CARGO_BIN_EXE_loam"), "run"])
-        .arg(&path)
-        .arg("--out")
-        .arg(dir.join("out"))
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .output()
-        .expect("mpirun");
+    let output = mpirun_loam(2).arg("run").arg(&path).arg("--out").arg(dir.join("out")).output().expect("mpirun");
     let stderr = String::from_utf8_lossy(&output.stderr);
     let first = stderr.lines().next().unwrap_or_default();
     println!("{first}");
@@ -478,14 +472,12 @@ fn an_interruption_of_one_rank_stops_every_rank_with_a_checkpoint() {
     let path = dir.join("column.json");
     std::fs::write(&path, case.to_string()).unwrap();
     let out = dir.join("out");
-    let mut mpirun = Command::new("mpirun")
-        .args(["-n", "2", "--oversubscribe", env!("CARGO_BIN_EXE_loam"), "run"])
+    let mut mpirun = mpirun_loam(2)
+        .arg("run")
         .arg(&path)
         .arg("--out")
         .arg(&out)
         .arg("--quiet")
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
         .spawn()

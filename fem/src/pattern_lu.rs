@@ -177,7 +177,8 @@ impl Schedule {
             if best.as_ref().is_none_or(|b| serial + load < b.0) {
                 best = Some((serial + load, groups));
             }
-            let Some(k) = (0..candidates.len()).max_by(|&a, &b| subtree[candidates[a]].total_cmp(&subtree[candidates[b]]))
+            let Some(k) =
+                (0..candidates.len()).max_by(|&a, &b| subtree[candidates[a]].total_cmp(&subtree[candidates[b]]))
             else {
                 break;
             };
@@ -775,7 +776,10 @@ mod tests {
                 schedule.subtrees.len(),
                 100.0 * serial / lu.work_of.iter().sum::<f64>()
             );
-            assert!(lu.factor == sequential.factor && lu.pivot == sequential.pivot, "{threads} threads: factors differ");
+            assert!(
+                lu.factor == sequential.factor && lu.pivot == sequential.pivot,
+                "{threads} threads: factors differ"
+            );
             let relative = solve_residual(&mut lu, &a);
             assert!(relative < 1e-12, "relative residual {relative:e}");
         }
