@@ -52,6 +52,16 @@ fn mpirun_loam(ranks: usize) -> Command {
     c
 }
 
+/// The case at `path` (from the repository's root) edited by `edit`, written to `dir/name`.
+fn edited_case(path: &str, dir: &Path, name: &str, edit: impl Fn(&mut Value)) -> std::path::PathBuf {
+    let mut case: Value =
+        serde_json::from_str(&std::fs::read_to_string(root().join(path)).unwrap()).expect("case JSON");
+    edit(&mut case);
+    let written = dir.join(name);
+    std::fs::write(&written, case.to_string()).unwrap();
+    written
+}
+
 /// [`loam_run`] with further arguments of `loam run`.
 fn loam_run_with(case: &Path, out: &Path, ranks: Option<usize>, extra: &[&str]) {
     let mut cmd = match ranks {
@@ -265,11 +275,9 @@ fn a_settling_column_rebalances_on_2_and_4_ranks_and_equals_the_serial_run() {
 #[test]
 fn a_direct_solver_on_ranks_is_refused_naming_the_key() {
     let dir = temp_dir("direct");
-    let mut case: Value =
-        serde_json::from_str(&std::fs::read_to_string(root().join("cases/cantilever_fem.json")).unwrap()).unwrap();
-    case["solver"]["linear_solver"] = json!("lu");
-    let path = dir.join("cantilever_lu.json");
-    std::fs::write(&path, case.to_string()).unwrap();
+    let path = edited_case("cases/cantilever_fem.json", &dir, "cantilever_lu.json", |case| {
+        case["solver"]["linear_solver"] = json!("lu");
+    });
     let output = mpirun_loam(2).arg("run").arg(&path).arg("--out").arg(dir.join("out")).output().expect("mpirun");
     let stderr = String::from_utf8_lossy(&output.stderr);
     let first = stderr.lines().next().unwrap_or_default();
@@ -417,11 +425,9 @@ fn series_files(pvd: &Path) -> Vec<String> {
 #[test]
 fn a_distributed_run_writes_a_pvtu_series_of_pieces_that_equal_the_serial_output() {
     let dir = temp_dir("pvtu");
-    let mut case: Value =
-        serde_json::from_str(&std::fs::read_to_string(root().join("cases/coupled_beam_split.json")).unwrap()).unwrap();
-    case["solver"]["linear_solver"] = json!("petsc");
-    let path = dir.join("beam.json");
-    std::fs::write(&path, case.to_string()).unwrap();
+    let path = edited_case("cases/coupled_beam_split.json", &dir, "beam.json", |case| {
+        case["solver"]["linear_solver"] = json!("petsc");
+    });
     let serial = dir.join("serial");
     loam_run(&path, &serial, None);
     let mut series: Vec<String> = std::fs::read_dir(&serial)
@@ -462,15 +468,12 @@ fn a_distributed_run_writes_a_pvtu_series_of_pieces_that_equal_the_serial_output
 fn an_interruption_of_one_rank_stops_every_rank_with_a_checkpoint() {
     use std::time::{Duration, Instant};
     let dir = temp_dir("interrupt");
-    let mut case: Value =
-        serde_json::from_str(&std::fs::read_to_string(root().join("benches/scale/collapse_3d_column.json")).unwrap())
-            .unwrap();
-    case["analysis"]["time_step"] = json!(0.001);
-    case["analysis"]["end_time"] = json!(0.03);
-    case["analysis"].as_object_mut().unwrap().remove("adaptive");
-    case["output"] = json!({ "vtk": false });
-    let path = dir.join("column.json");
-    std::fs::write(&path, case.to_string()).unwrap();
+    let path = edited_case("benches/scale/collapse_3d_column.json", &dir, "column.json", |case| {
+        case["analysis"]["time_step"] = json!(0.001);
+        case["analysis"]["end_time"] = json!(0.03);
+        case["analysis"].as_object_mut().unwrap().remove("adaptive");
+        case["output"] = json!({ "vtk": false });
+    });
     let out = dir.join("out");
     let mut mpirun = mpirun_loam(2)
         .arg("run")
