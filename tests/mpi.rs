@@ -421,7 +421,7 @@ fn series_files(pvd: &Path) -> Vec<String> {
 /// step, naming one `.vtu` piece per rank, and `.pvd` series of the `.pvtu` files with the
 /// serial run's names and times; each output step's pieces, read back with vtkio through the
 /// `.pvtu`, hold the serial PETSc run's cells with their points' coordinates and fields,
-/// within [`RANK_AGREEMENT`].
+/// within [`RANK_AGREEMENT`]; `loam plot` draws the series.
 #[test]
 fn a_distributed_run_writes_a_pvtu_series_of_pieces_that_equal_the_serial_output() {
     let dir = temp_dir("pvtu");
@@ -455,6 +455,15 @@ fn a_distributed_run_writes_a_pvtu_series_of_pieces_that_equal_the_serial_output
             }
             println!("{name} on {ranks} ranks: {} data sets of {ranks} pieces equal the serial output", written.len());
         }
+        // `loam plot` reads the .pvtu series (its pieces joined) and draws the last output
+        let plot = Command::new(env!("CARGO_BIN_EXE_loam"))
+            .args(["plot", out.to_str().unwrap(), "--last", "--no-monitors"])
+            .output()
+            .expect("loam plot");
+        assert!(plot.status.success(), "loam plot: {}", String::from_utf8_lossy(&plot.stderr));
+        let pictures = std::fs::read_dir(out.join("plots")).expect("plots written").count();
+        println!("loam plot on the {ranks}-rank output: {pictures} file(s) in plots/");
+        assert!(pictures > 0);
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -209,20 +209,60 @@ fn fields(attributes: Vec<Attribute>, count: usize, file: &Path) -> Result<Vec<F
 }
 
 /// Reads a `.vtu` unstructured grid of one cell type (vertices, triangles, quads, tetrahedra
-/// or hexahedra) with its fields.
+/// or hexahedra) with its fields — or a `.pvtu` (a distributed run's output: one `.vtu` piece
+/// per rank, docs/distributed.md), its pieces joined into one: points back to back, cells
+/// renumbered, fields joined (the pieces must share their cell shape and fields).
 pub fn read_vtu(path: &Path) -> Result<Piece, PlotError> {
     let bad = |reason: String| PlotError::Read { file: path.to_path_buf(), reason };
-    let vtk = vtkio::Vtk::import(path).map_err(|e| bad(e.to_string().lines().next().unwrap_or("").to_string()))?;
-    let DataSet::UnstructuredGrid { mut pieces, .. } = vtk.data else {
+    let first_line = |e: &dyn std::fmt::Display| e.to_string().lines().next().unwrap_or("").to_string();
+    let mut vtk = vtkio::Vtk::import(path).map_err(|e| bad(first_line(&e)))?;
+    vtk.load_all_pieces().map_err(|e| bad(format!("its pieces: {}", first_line(&e))))?;
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
         return Err(bad("not an unstructured grid".into()));
     };
-    if pieces.len() != 1 {
-        return Err(bad(format!("{} pieces; expected one", pieces.len())));
+    let mut joined: Option<Piece> = None;
+    for piece in pieces {
+        let VtkPiece::Inline(piece) = piece else { return Err(bad("piece not inline".into())) };
+        let piece = read_piece(*piece, path)?;
+        joined = Some(match joined {
+            None => piece,
+            Some(whole) => whole.join(piece).map_err(bad)?,
+        });
     }
-    let piece = match pieces.remove(0) {
-        VtkPiece::Inline(p) => *p,
-        _ => return Err(bad("piece not inline".into())),
-    };
+    joined.ok_or_else(|| bad("no piece".into()))
+}
+
+impl Piece {
+    /// `self` followed by `next` (the next piece of a `.pvtu`): `next`'s cells renumbered
+    /// past `self`'s points; an error naming what differs if the two do not match.
+    fn join(mut self, next: Piece) -> Result<Piece, String> {
+        let offset = self.points.len();
+        match (&mut self.cells, next.cells) {
+            (Cells::Vertices, Cells::Vertices) => {}
+            (Cells::Mesh { shape, connectivity }, Cells::Mesh { shape: s, connectivity: c }) if *shape == s => {
+                connectivity.extend(c.into_iter().map(|a| a + offset));
+            }
+            _ => return Err("its pieces have different cell shapes".into()),
+        }
+        self.points.extend(next.points);
+        let join_fields = |a: &mut Vec<FieldData>, b: Vec<FieldData>, on: &str| {
+            if a.len() != b.len() || a.iter().zip(&b).any(|(x, y)| x.name != y.name || x.components != y.components) {
+                return Err(format!("its pieces have different {on} fields"));
+            }
+            for (x, y) in a.iter_mut().zip(b) {
+                x.values.extend(y.values);
+            }
+            Ok(())
+        };
+        join_fields(&mut self.point_fields, next.point_fields, "point")?;
+        join_fields(&mut self.cell_fields, next.cell_fields, "cell")?;
+        Ok(self)
+    }
+}
+
+/// One inline piece of a `.vtu` (or of a `.pvtu`'s piece files) read from `path`.
+fn read_piece(piece: vtkio::model::UnstructuredGridPiece, path: &Path) -> Result<Piece, PlotError> {
+    let bad = |reason: String| PlotError::Read { file: path.to_path_buf(), reason };
     let coords: Vec<f64> = piece.points.cast_into().ok_or_else(|| bad("points are not numeric".into()))?;
     if coords.len() % 3 != 0 {
         return Err(bad("point coordinates are not triples".into()));
@@ -291,6 +331,54 @@ mod tests {
         assert_eq!(s.steps, vec![(0.0, dir.join("soil_000000.vtu")), (0.015, dir.join("a&b.vtu"))]);
         std::fs::write(&path, "<DataSet file=\"x.vtu\"/>").unwrap();
         assert!(read_pvd(&path).unwrap_err().to_string().contains("no timestep"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A `.pvtu` of a distributed run reads as one piece: a mesh of three quads in two pieces
+    /// (the shared edge's points in both) and a cloud of seven points in three.
+    #[test]
+    fn a_pvtu_reads_as_its_pieces_joined() {
+        use crate::output::pvtu::{parallel_file, piece, piece_file, write_pvtu};
+        use crate::output::vtk_output::write_output;
+        use loam_fem::domain::{DomainOutput, Field};
+        use loam_fem::element::ElementType;
+        let dir = std::env::temp_dir().join(format!("loam-plot-pvtu-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let field = |name: &str, components, values| Field { name: name.into(), components, values };
+        let mesh_points: Vec<[f64; 3]> = (0..8).map(|a| [(a / 2) as f64, (a % 2) as f64, 0.0]).collect();
+        let mesh = DomainOutput {
+            point_fields: vec![field("u", 3, mesh_points.iter().flat_map(|x| [x[0], x[1], 0.0]).collect())],
+            points: mesh_points,
+            cells: Some((ElementType::Quad4, vec![0, 2, 3, 1, 2, 4, 5, 3, 4, 6, 7, 5])),
+            cell_fields: vec![field("pressure", 1, vec![1.0, 2.0, 3.0])],
+        };
+        let cloud = DomainOutput {
+            points: (0..7).map(|i| [i as f64, 0.5, 0.0]).collect(),
+            cells: None,
+            point_fields: vec![field("volume", 1, (0..7).map(f64::from).collect())],
+            cell_fields: vec![],
+        };
+        for (name, output, ranks) in [("plate", &mesh, 2), ("soil", &cloud, 3)] {
+            let sources: Vec<String> = (0..ranks).map(|r| piece_file(name, 4, r)).collect();
+            for (r, file) in sources.iter().enumerate() {
+                write_output(&dir.join(file), &piece(output, r, ranks)).unwrap();
+            }
+            write_pvtu(&dir.join(parallel_file(name, 4)), output, &sources).unwrap();
+        }
+        let plate = read_vtu(&dir.join(parallel_file("plate", 4))).unwrap();
+        let Cells::Mesh { shape, connectivity } = &plate.cells else { panic!("a mesh") };
+        assert_eq!((*shape, connectivity.len(), plate.points.len()), (Shape::Quad, 12, 10));
+        for (c, cell) in connectivity.chunks_exact(4).enumerate() {
+            let x: Vec<[f64; 3]> = cell.iter().map(|&a| plate.points[a]).collect();
+            let want: Vec<[f64; 3]> =
+                mesh.cells.as_ref().unwrap().1[4 * c..4 * c + 4].iter().map(|&a| mesh.points[a]).collect();
+            assert_eq!(x, want, "cell {c}'s corners");
+        }
+        assert_eq!(plate.field("pressure").unwrap().0.values, vec![1.0, 2.0, 3.0]);
+        let soil = read_vtu(&dir.join(parallel_file("soil", 4))).unwrap();
+        assert_eq!(soil.points, cloud.points);
+        assert_eq!(soil.kind(false), SeriesKind::MaterialPoints);
+        assert_eq!(soil.field("volume").unwrap().0.values, cloud.point_fields[0].values);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
