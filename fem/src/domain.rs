@@ -109,6 +109,68 @@ pub struct DomainOutput {
     pub cell_fields: Vec<Field>,
 }
 
+/// The `k`-th of `parts` contiguous ranges of `0..n`, as equal as integers allow: the share of
+/// rank `k` of `parts` in an output's points or cells ([`DomainOutput::piece`]).
+pub fn share(n: usize, k: usize, parts: usize) -> std::ops::Range<usize> {
+    (n * k / parts)..(n * (k + 1) / parts)
+}
+
+impl Field {
+    /// Entities `range` of the field.
+    pub fn restrict(&self, range: std::ops::Range<usize>) -> Field {
+        let c = self.components;
+        Field { name: self.name.clone(), components: c, values: self.values[range.start * c..range.end * c].to_vec() }
+    }
+
+    /// Entities `ids` (ascending) of the field.
+    pub fn select(&self, ids: &[usize]) -> Field {
+        let c = self.components;
+        let mut values = Vec::with_capacity(ids.len() * c);
+        for &i in ids {
+            values.extend_from_slice(&self.values[i * c..(i + 1) * c]);
+        }
+        Field { name: self.name.clone(), components: c, values }
+    }
+}
+
+impl DomainOutput {
+    /// Piece `rank` of `size` of the output, what that rank writes in a distributed run
+    /// (docs/distributed.md, "Output"): for a point cloud its points in the rank's [`share`]
+    /// of the storage order; for a mesh its cells in the rank's share and the points they
+    /// use, renumbered in ascending order (a point shared by cells of two pieces is in both).
+    pub fn piece(&self, rank: usize, size: usize) -> DomainOutput {
+        match &self.cells {
+            None => {
+                let range = share(self.points.len(), rank, size);
+                DomainOutput {
+                    points: self.points[range.clone()].to_vec(),
+                    cells: None,
+                    point_fields: self.point_fields.iter().map(|f| f.restrict(range.clone())).collect(),
+                    cell_fields: self.cell_fields.iter().map(|f| f.restrict(range.clone())).collect(),
+                }
+            }
+            Some((element, connectivity)) => {
+                let nn = element.num_nodes();
+                let cells = share(connectivity.len() / nn, rank, size);
+                let own = &connectivity[cells.start * nn..cells.end * nn];
+                let mut used: Vec<usize> = own.to_vec();
+                used.sort_unstable();
+                used.dedup();
+                let mut local = vec![usize::MAX; self.points.len()];
+                for (k, &a) in used.iter().enumerate() {
+                    local[a] = k;
+                }
+                DomainOutput {
+                    points: used.iter().map(|&a| self.points[a]).collect(),
+                    cells: Some((*element, own.iter().map(|&a| local[a]).collect())),
+                    point_fields: self.point_fields.iter().map(|f| f.select(&used)).collect(),
+                    cell_fields: self.cell_fields.iter().map(|f| f.restrict(cells.clone())).collect(),
+                }
+            }
+        }
+    }
+}
+
 /// Where a tracked point's material lies: its current position and two sizes, the sides of
 /// the squares (2D, per unit thickness or per radian-ring length) or cubes (3D) of its
 /// current volume `V = J V₀` and of its initial volume `V₀`.
@@ -359,4 +421,14 @@ pub trait Domain: Send + Sync {
     /// the material points of each body, the points of each penalty wall and, with
     /// `with_grid`, the background grid of a particle domain.
     fn outputs(&self, committed: &NodalState, with_grid: bool) -> Vec<NamedOutput>;
+
+    /// Piece `rank` of `size` of each of [`Domain::outputs`] ([`DomainOutput::piece`]), what
+    /// a rank writes in a distributed run. By default the whole outputs are built and split;
+    /// a domain with many points builds only its piece.
+    fn output_pieces(&self, committed: &NodalState, with_grid: bool, rank: usize, size: usize) -> Vec<NamedOutput> {
+        self.outputs(committed, with_grid)
+            .into_iter()
+            .map(|o| NamedOutput { name: o.name, output: o.output.piece(rank, size) })
+            .collect()
+    }
 }

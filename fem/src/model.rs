@@ -989,6 +989,11 @@ impl Model {
         self.domains.iter().flat_map(|d| d.outputs(&self.committed, with_grid)).collect()
     }
 
+    /// Piece `rank` of `size` of every output ([`Domain::output_pieces`]).
+    pub fn output_pieces(&self, with_grid: bool, rank: usize, size: usize) -> Vec<NamedOutput> {
+        self.domains.iter().flat_map(|d| d.output_pieces(&self.committed, with_grid, rank, size)).collect()
+    }
+
     /// The output named `name` (a domain, body or wall) at the committed state.
     pub fn output(&self, name: &str) -> Option<crate::domain::DomainOutput> {
         self.outputs(false).into_iter().find(|o| o.name == name).map(|o| o.output)

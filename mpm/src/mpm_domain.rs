@@ -885,41 +885,44 @@ impl MpmDomain {
         }
     }
 
-    /// The points of `body` with their fields and the law's state variables.
-    fn body_output(&self, body: &Body) -> DomainOutput {
+    /// The points `range` of `body` (all of them for the output, a rank's share for its
+    /// piece) with their fields and the law's state variables.
+    fn body_output(&self, body: &Body, range: std::ops::Range<usize>) -> DomainOutput {
         let pts = &body.points;
-        let n = pts.len();
-        let vec3 = |v: &[[f64; 3]]| v.iter().flatten().copied().collect::<Vec<f64>>();
-        let tensor =
-            |v: &[Matrix3<f64>]| v.iter().flat_map(|m| m.transpose().iter().copied().collect::<Vec<_>>()).collect();
+        let n = range.len();
+        let vec3 = |v: &[[f64; 3]]| v[range.clone()].iter().flatten().copied().collect::<Vec<f64>>();
+        let tensor = |v: &[Matrix3<f64>]| {
+            v[range.clone()].iter().flat_map(|m| m.transpose().iter().copied().collect::<Vec<_>>()).collect()
+        };
         let law = body.law();
         let names = law.state_variables();
         let sl = law.state_len();
         let mut states = vec![vec![0.0; n]; names.len()];
         let mut tmp = vec![0.0; names.len()];
-        for p in 0..n {
+        for (q, p) in range.clone().enumerate() {
             law.state_output(&pts.state[p * sl..(p + 1) * sl], &mut tmp);
             for (k, v) in tmp.iter().enumerate() {
-                states[k][p] = *v;
+                states[k][q] = *v;
             }
         }
+        let cauchy = &pts.cauchy[range.clone()];
         let mut point_fields = vec![
             Field { name: "displacement".into(), components: 3, values: vec3(&pts.displacement) },
             Field { name: "velocity".into(), components: 3, values: vec3(&pts.velocity) },
             Field { name: "acceleration".into(), components: 3, values: vec3(&pts.acceleration) },
-            Field { name: "mass".into(), components: 1, values: pts.mass.clone() },
-            Field { name: "volume".into(), components: 1, values: pts.volume.clone() },
+            Field { name: "mass".into(), components: 1, values: pts.mass[range.clone()].to_vec() },
+            Field { name: "volume".into(), components: 1, values: pts.volume[range.clone()].to_vec() },
             Field { name: "cauchy_stress".into(), components: 9, values: tensor(&pts.cauchy) },
             Field { name: "deformation_gradient".into(), components: 9, values: tensor(&pts.deformation_gradient) },
             Field {
                 name: "von_mises_stress".into(),
                 components: 1,
-                values: pts.cauchy.iter().map(loam_fem::von_mises).collect(),
+                values: cauchy.iter().map(loam_fem::von_mises).collect(),
             },
             Field {
                 name: "id".into(),
                 components: 1,
-                values: pts.id.iter().map(|&i| (i + body.id_offset) as f64).collect(),
+                values: pts.id[range.clone()].iter().map(|&i| (i + body.id_offset) as f64).collect(),
             },
         ];
         for (k, name) in names.iter().enumerate() {
@@ -927,11 +930,33 @@ impl MpmDomain {
         }
         if self.pressure_dofs.is_some() {
             // the mean Kirchhoff stress interpolated from the nodal pressures at convergence
-            let values =
-                pts.cauchy.iter().zip(&pts.deformation_gradient).map(|(s, f)| f.determinant() * s.trace() / 3.0);
+            let values = cauchy
+                .iter()
+                .zip(&pts.deformation_gradient[range.clone()])
+                .map(|(s, f)| f.determinant() * s.trace() / 3.0);
             point_fields.push(Field { name: "pressure".into(), components: 1, values: values.collect() });
         }
-        DomainOutput { points: pts.position.clone(), cells: None, point_fields, cell_fields: Vec::new() }
+        DomainOutput { points: pts.position[range].to_vec(), cells: None, point_fields, cell_fields: Vec::new() }
+    }
+
+    /// The outputs ([`Domain::outputs`]): each body's points `range(body)`, then the walls
+    /// and, with `with_grid`, the grid.
+    fn outputs_of(
+        &self,
+        committed: &NodalState,
+        with_grid: bool,
+        range: impl Fn(&Body) -> std::ops::Range<usize>,
+    ) -> Vec<NamedOutput> {
+        let mut out: Vec<NamedOutput> = self
+            .bodies
+            .iter()
+            .map(|b| NamedOutput { name: b.name.clone(), output: self.body_output(b, range(b)) })
+            .collect();
+        out.extend(self.walls.iter().map(|w| NamedOutput { name: w.name().to_string(), output: w.output() }));
+        if with_grid {
+            out.push(NamedOutput { name: format!("{}_grid", self.name), output: self.grid_output(committed) });
+        }
+        out
     }
 
     fn at(&self) -> GridNodes<'_> {
@@ -1206,11 +1231,16 @@ impl Domain for MpmDomain {
     }
 
     fn outputs(&self, committed: &NodalState, with_grid: bool) -> Vec<NamedOutput> {
-        let mut out: Vec<NamedOutput> =
-            self.bodies.iter().map(|b| NamedOutput { name: b.name.clone(), output: self.body_output(b) }).collect();
-        out.extend(self.walls.iter().map(|w| NamedOutput { name: w.name().to_string(), output: w.output() }));
-        if with_grid {
-            out.push(NamedOutput { name: format!("{}_grid", self.name), output: self.grid_output(committed) });
+        self.outputs_of(committed, with_grid, |b| 0..b.points.len())
+    }
+
+    /// The bodies' pieces built from the rank's share of their points only; the walls and the
+    /// grid (small) built whole and split.
+    fn output_pieces(&self, committed: &NodalState, with_grid: bool, rank: usize, size: usize) -> Vec<NamedOutput> {
+        let bodies = self.bodies.len();
+        let mut out = self.outputs_of(committed, with_grid, |b| loam_fem::domain::share(b.points.len(), rank, size));
+        for o in &mut out[bodies..] {
+            o.output = o.output.piece(rank, size);
         }
         out
     }

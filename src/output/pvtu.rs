@@ -15,7 +15,7 @@
 //! </VTKFile>
 //! ```
 //!
-//! What a rank writes is [`piece`]: a point cloud split into contiguous ranges of its points,
+//! What a rank writes is [`DomainOutput::piece`]: a point cloud split into contiguous ranges of its points,
 //! a mesh into contiguous ranges of its cells with the points they use (a point shared by
 //! cells of two pieces is written in both, as VTK's pieces do; `GhostLevel` 0). The model is
 //! replicated on every rank (stage 2), so any split writes each point once; ranges of the
@@ -37,62 +37,6 @@ pub fn piece_file(name: &str, step: usize, rank: usize) -> String {
 /// The `.pvtu` file name of output `name` at `step`.
 pub fn parallel_file(name: &str, step: usize) -> String {
     format!("{name}_{step:06}.pvtu")
-}
-
-/// The `k`-th of `parts` contiguous ranges of `0..n`, as equal as integers allow.
-fn share(n: usize, k: usize, parts: usize) -> std::ops::Range<usize> {
-    (n * k / parts)..(n * (k + 1) / parts)
-}
-
-/// Entities `range` of a field with `components` values per entity.
-fn restrict(field: &Field, range: std::ops::Range<usize>) -> Field {
-    let c = field.components;
-    Field { name: field.name.clone(), components: c, values: field.values[range.start * c..range.end * c].to_vec() }
-}
-
-/// Entities `ids` (ascending) of a field.
-fn select(field: &Field, ids: &[usize]) -> Field {
-    let c = field.components;
-    let mut values = Vec::with_capacity(ids.len() * c);
-    for &i in ids {
-        values.extend_from_slice(&field.values[i * c..(i + 1) * c]);
-    }
-    Field { name: field.name.clone(), components: c, values }
-}
-
-/// Piece `rank` of `size` of `output` (see the module doc): for a point cloud its points in
-/// the rank's range of the storage order; for a mesh its cells in the rank's range and the
-/// points they use, renumbered in ascending order.
-pub fn piece(output: &DomainOutput, rank: usize, size: usize) -> DomainOutput {
-    match &output.cells {
-        None => {
-            let range = share(output.points.len(), rank, size);
-            DomainOutput {
-                points: output.points[range.clone()].to_vec(),
-                cells: None,
-                point_fields: output.point_fields.iter().map(|f| restrict(f, range.clone())).collect(),
-                cell_fields: output.cell_fields.iter().map(|f| restrict(f, range.clone())).collect(),
-            }
-        }
-        Some((element, connectivity)) => {
-            let nn = element.num_nodes();
-            let cells = share(connectivity.len() / nn, rank, size);
-            let own = &connectivity[cells.start * nn..cells.end * nn];
-            let mut used: Vec<usize> = own.to_vec();
-            used.sort_unstable();
-            used.dedup();
-            let mut local = vec![usize::MAX; output.points.len()];
-            for (k, &a) in used.iter().enumerate() {
-                local[a] = k;
-            }
-            DomainOutput {
-                points: used.iter().map(|&a| output.points[a]).collect(),
-                cells: Some((*element, own.iter().map(|&a| local[a]).collect())),
-                point_fields: output.point_fields.iter().map(|f| select(f, &used)).collect(),
-                cell_fields: output.cell_fields.iter().map(|f| restrict(f, cells.clone())).collect(),
-            }
-        }
-    }
 }
 
 /// The `<PDataArray …/>` declarations of `fields`, as the pieces' `.vtu` declare them
@@ -158,7 +102,7 @@ mod tests {
     #[test]
     fn pieces_of_a_mesh_cover_its_cells_once_with_their_points() {
         let m = strip();
-        let pieces: Vec<DomainOutput> = (0..2).map(|r| piece(&m, r, 2)).collect();
+        let pieces: Vec<DomainOutput> = (0..2).map(|r| m.piece(r, 2)).collect();
         // cell 0 on rank 0, cells 1 and 2 on rank 1; the points of the shared edge in both
         assert_eq!(pieces[0].cells.as_ref().unwrap().1, vec![0, 2, 3, 1]);
         assert_eq!(pieces[0].points.len(), 4);
@@ -167,7 +111,7 @@ mod tests {
         assert_eq!(pieces[1].cell_fields[0].values, vec![2.0, 3.0]);
         assert_eq!(pieces[1].point_fields[0].values[..3], m.point_fields[0].values[6..9]);
         // more ranks than cells: empty pieces
-        let many: Vec<usize> = (0..5).map(|r| piece(&m, r, 5).cell_fields[0].values.len()).collect();
+        let many: Vec<usize> = (0..5).map(|r| m.piece(r, 5).cell_fields[0].values.len()).collect();
         assert_eq!(many.iter().sum::<usize>(), 3);
     }
 
@@ -179,9 +123,9 @@ mod tests {
             point_fields: vec![field("mass", 1, (0..7).map(f64::from).collect())],
             cell_fields: vec![],
         };
-        let sizes: Vec<usize> = (0..3).map(|r| piece(&cloud, r, 3).points.len()).collect();
+        let sizes: Vec<usize> = (0..3).map(|r| cloud.piece(r, 3).points.len()).collect();
         assert_eq!(sizes, vec![2, 2, 3]);
-        let last = piece(&cloud, 2, 3);
+        let last = cloud.piece(2, 3);
         assert_eq!(last.point_fields[0].values, vec![4.0, 5.0, 6.0]);
     }
 
@@ -193,7 +137,7 @@ mod tests {
         let m = strip();
         let sources: Vec<String> = (0..2).map(|r| piece_file("beam", 3, r)).collect();
         for (r, s) in sources.iter().enumerate() {
-            write_piece(&dir, s, &piece(&m, r, 2));
+            write_piece(&dir, s, &m.piece(r, 2));
         }
         let path = dir.join(parallel_file("beam", 3));
         write_pvtu(&path, &m, &sources).unwrap();

@@ -79,18 +79,22 @@ impl VtkSeries {
 
     /// Writes the committed state of every output of every domain.
     pub fn write(&mut self, sim: &Simulation) -> std::io::Result<()> {
-        let outputs = sim.model.outputs(sim.case.output.grid);
+        let ranks = sim.case.solver.ranks;
+        // a rank builds its own piece of each output only
+        let outputs = if ranks.is_distributed() {
+            sim.model.output_pieces(sim.case.output.grid, ranks.rank(), ranks.size())
+        } else {
+            sim.model.outputs(sim.case.output.grid)
+        };
         if outputs.len() > 1 && self.all.is_none() && outputs.iter().all(|o| o.name != sim.case.name) {
             self.all = Some(PvdSeries::new(self.dir.join(format!("{}.pvd", sim.case.name))));
         }
-        let ranks = sim.case.solver.ranks;
         for named in outputs {
             let out = &named.output;
             let file = if ranks.is_distributed() {
                 let sources: Vec<String> =
                     (0..ranks.size()).map(|r| pvtu::piece_file(&named.name, sim.step, r)).collect();
-                let piece = pvtu::piece(out, ranks.rank(), ranks.size());
-                write_output(&self.dir.join(&sources[ranks.rank()]), &piece).map_err(std::io::Error::other)?;
+                write_output(&self.dir.join(&sources[ranks.rank()]), out).map_err(std::io::Error::other)?;
                 if ranks.rank() != 0 {
                     continue;
                 }

@@ -338,7 +338,7 @@ mod tests {
     /// (the shared edge's points in both) and a cloud of seven points in three.
     #[test]
     fn a_pvtu_reads_as_its_pieces_joined() {
-        use crate::output::pvtu::{parallel_file, piece, piece_file, write_pvtu};
+        use crate::output::pvtu::{parallel_file, piece_file, write_pvtu};
         use crate::output::vtk_output::write_output;
         use loam_fem::domain::{DomainOutput, Field};
         use loam_fem::element::ElementType;
@@ -361,7 +361,7 @@ mod tests {
         for (name, output, ranks) in [("plate", &mesh, 2), ("soil", &cloud, 3)] {
             let sources: Vec<String> = (0..ranks).map(|r| piece_file(name, 4, r)).collect();
             for (r, file) in sources.iter().enumerate() {
-                write_output(&dir.join(file), &piece(output, r, ranks)).unwrap();
+                write_output(&dir.join(file), &output.piece(r, ranks)).unwrap();
             }
             write_pvtu(&dir.join(parallel_file(name, 4)), output, &sources).unwrap();
         }
