@@ -86,6 +86,8 @@ pub struct PatternLu {
     /// Position of each supernode in `postorder`, and of the first supernode of its subtree
     /// (a subtree is a contiguous range of a postorder).
     position: Vec<usize>,
+    /// Parent of each supernode in the elimination tree (`None` for a root).
+    parent: Vec<Option<usize>>,
     subtree_first: Vec<usize>,
     /// Estimated multiply–adds of each supernode's elimination ([`front_work`]).
     work_of: Vec<f64>,
@@ -140,21 +142,13 @@ impl Schedule {
         if total < PARALLEL_WORK {
             return None;
         }
-        let mut parent_of = vec![usize::MAX; supernodes];
         let mut kids: Vec<Vec<usize>> = vec![Vec::new(); supernodes];
-        for s in 0..supernodes {
-            let rows = &lu.pattern[lu.pattern_ptr[s]..lu.pattern_ptr[s + 1]];
-            if let Some(&i) = rows.first() {
-                let p = lu.begin.partition_point(|&b| b <= i) - 1;
-                parent_of[s] = p;
-                kids[p].push(s);
-            }
-        }
         // subtree work, children before parents in the postorder
         let mut subtree = lu.work_of.clone();
         for &s in &lu.postorder {
-            if parent_of[s] != usize::MAX {
-                subtree[parent_of[s]] += subtree[s];
+            if let Some(p) = lu.parent[s] {
+                kids[p].push(s);
+                subtree[p] += subtree[s];
             }
         }
         let assign = |candidates: &[usize]| -> (f64, Vec<Vec<usize>>) {
@@ -169,7 +163,7 @@ impl Schedule {
             }
             (loads.iter().fold(0.0, |m: f64, &l| m.max(l)), groups)
         };
-        let mut candidates: Vec<usize> = (0..supernodes).filter(|&s| parent_of[s] == usize::MAX).collect();
+        let mut candidates: Vec<usize> = (0..supernodes).filter(|&s| lu.parent[s].is_none()).collect();
         let mut serial = 0.0;
         let mut best: Option<(f64, Vec<Vec<usize>>)> = None;
         for _ in 0..4 * supernodes.min(256) {
@@ -479,6 +473,7 @@ impl PatternLu {
             pivot: vec![0; n],
             main: Workspace { front: vec![0.0; largest_front], ..Default::default() },
             position,
+            parent,
             subtree_first,
             work_of,
             schedule: None,
