@@ -76,6 +76,8 @@ for c in collapse_bui2008_quad collapse_bui2008_quad_rough collapse_bui2008_quad
     --overlay "$BUI/surface.csv:experiment, surface" --overlay "$BUI/failure.csv:experiment, failure line"
 done
 monitors collapse_bui2008_quad_runout collapse_bui2008_quad monitors_length.png
+frames collapse_bui2008_slab_3d collapse_bui2008_slab_3d --field $KAPPA --last --range 0,2 --max-stretch 2 --plane xz \
+  --overlay "$BUI/surface.csv:experiment, surface" --overlay "$BUI/failure.csv:experiment, failure line"
 frames collapse_two_layers collapse_two_layers --field $KAPPA --last --range 0,2 --max-stretch 2
 # benchmark 9: cohesive soil
 frames collapse_cohesive collapse_cohesive --field $KAPPA --times 0.6,0.88,1.28,2.0 --range 0,1

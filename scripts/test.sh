@@ -2,7 +2,7 @@
 # Loam's whole test suite: Rust unit, validation and CLI tests, then the Python checks
 # (VTK files read by meshio, FMUs run by fmpy) in a virtual environment it sets up itself,
 # then the distributed path: the `petsc` and `mpi` features' tests (tests/petsc.rs; tests/mpi.rs,
-# mpirun -n 2 and -n 4 against the serial run), with PETSc and Open MPI installed from the
+# mpirun -n 1, 2, 4 and 8 against the serial runs), with PETSc and Open MPI installed from the
 # system's packages when missing (scripts/install_petsc.sh: root and the network).
 #   scripts/test.sh               the default suite (14-19 minutes on 2 cores with the features'
 #                                 build and tests, about 2.5 of them; a fresh machine adds its
@@ -68,7 +68,7 @@ if [ "$mpi" != "0" ]; then
     scripts/install_petsc.sh || true
   fi
   if have_packages; then
-    echo "== Rust: the petsc and mpi features (tests/petsc.rs; tests/mpi.rs: mpirun -n 2 and -n 4)"
+    echo "== Rust: the petsc and mpi features (tests/petsc.rs; tests/mpi.rs: mpirun -n 1, 2, 4 and 8)"
     cargo test --release --features mpi --test mpi --test petsc
     if [ "${LOAM_PETSC:-0}" = "1" ]; then
       cargo test --release --manifest-path petsc/Cargo.toml --target-dir target

@@ -46,7 +46,7 @@ use crate::linear_solver::{
     CholeskyFactorisation, LinearSolver, LinearSolverError, LinearSolverKind, PetscOptions, SolverTimings,
 };
 use crate::ranks::{rcb, with_stats, BlockOwners, RankShare, Ranks};
-use crate::slip::{axis_normal_dofs, Slip, SlipRotations};
+use crate::slip::{axis_slips, Slip, SlipRotations};
 
 /// What decides the equations of a model: nodes, roles, constraints and ties.
 pub struct SystemLayout<'a> {
@@ -155,10 +155,19 @@ impl Assembler {
         for d in rotations.normal_dofs() {
             constrained[d] = true;
         }
-        for d in axis_normal_dofs(dim, system.slips, |d| dirichlet[d]) {
-            constrained[d] = true;
+        // slip nodes with a Dirichlet component: unrotated, the normal's axis held, friction on
+        // the free components
+        let axis = axis_slips(dim, system.slips, |d| dirichlet[d]);
+        let mut frictional = rotations.frictional_nodes();
+        for a in &axis {
+            constrained[a.dof(dim)] = true;
+            if let Some(frame) = a.friction_frame() {
+                frictional.retain(|f| f.0 != a.node);
+                frictional.push((a.node, a.friction, frame));
+            }
         }
-        let friction = NodalFriction::new(dim, &rotations.frictional_nodes(), &layout);
+        frictional.sort_by_key(|f| f.0);
+        let friction = NodalFriction::new(dim, &frictional, &layout);
         let dofs = DofMap::with_roles(dim, &constrained, system.roles, system.pressure_nodes, system.ties);
         let pattern = AssemblyPattern::new(&dofs, &layout);
         let n_eq = dofs.num_equations();

@@ -43,6 +43,14 @@
 //! switched more than four times in a step, which could leave it stuck where Coulomb's law
 //! has it slide): a node whose state cycles fails the step's Newton iteration, and the step is
 //! cut like any other that does not converge.
+//!
+//! A slip node that also carries a Dirichlet condition (a base node on a symmetry plane in 3D,
+//! which holds one tangential component) is not rotated ([`crate::slip`]); where its normal
+//! lies along a global axis, that component is its normal constraint and friction acts on the
+//! tangential components that no condition holds, in the global frame ([`FrictionFrame`]).
+//! The held components' reactions are the plane's, not the base's: they are neither in the
+//! disc nor rewritten. Before, such a node kept no friction: a slab one cell thick between
+//! symmetry planes slid on a frictionless base.
 
 use crate::assembly::BlockLayout;
 
@@ -60,6 +68,42 @@ enum State {
     Slip { direction: [f64; 2], contraction: f64 },
 }
 
+/// Where a frictional node's local axes are among its DOFs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrictionFrame {
+    /// Local basis `Q` (columns; axis 0 the outward normal, then the free tangents).
+    pub basis: [[f64; 3]; 3],
+    /// The node's DOF (`0..dim`) that carries local axis `k`.
+    pub component: [usize; 3],
+    /// Sign of the outward normal along the DOF `component[0]` (the residual there is `±R_n`).
+    pub normal_sign: f64,
+    /// Free tangential axes (`1..=tangents`): `dim − 1`, fewer where a Dirichlet condition
+    /// holds a tangential component.
+    pub tangents: usize,
+}
+
+impl FrictionFrame {
+    /// The frame of a rotated slip node ([`crate::slip::SlipRotations`]): its DOFs are the
+    /// local components.
+    pub fn rotated(dim: usize, basis: [[f64; 3]; 3]) -> Self {
+        Self { basis, component: [0, 1, 2], normal_sign: 1.0, tangents: dim - 1 }
+    }
+
+    /// The frame of an unrotated node whose outward normal is `sign · e_axis` and whose
+    /// components `free` no Dirichlet condition holds (global frame; see the module doc).
+    pub fn along_axis(axis: usize, sign: f64, free: &[usize]) -> Self {
+        debug_assert!(!free.is_empty() && free.len() <= 2 && !free.contains(&axis));
+        let mut basis = [[0.0; 3]; 3];
+        let mut component = [axis, 0, 0];
+        basis[axis][0] = sign;
+        for (t, &c) in free.iter().enumerate() {
+            basis[c][1 + t] = 1.0;
+            component[1 + t] = c;
+        }
+        Self { basis, component, normal_sign: sign, tangents: free.len() }
+    }
+}
+
 /// One frictional slip node.
 #[derive(Debug, Clone)]
 struct FrictionNode {
@@ -67,8 +111,8 @@ struct FrictionNode {
     node: usize,
     /// Coulomb coefficient μ.
     coefficient: f64,
-    /// Local basis `Q` (columns; axis 0 the outward normal), as in [`crate::slip`].
-    basis: [[f64; 3]; 3],
+    /// Its local axes.
+    frame: FrictionFrame,
     /// Tangential slip `g` in the step (local components 1..dim).
     slip: [f64; 2],
     /// Normal force `N` of the last residual.
@@ -101,14 +145,14 @@ pub struct NodalFriction {
 }
 
 impl NodalFriction {
-    /// Friction on `nodes` = (node, μ, local basis) over the blocks of `layout`.
-    pub fn new(dim: usize, nodes: &[(usize, f64, [[f64; 3]; 3])], layout: &BlockLayout) -> Self {
+    /// Friction on `nodes` = (node, μ, frame) over the blocks of `layout`.
+    pub fn new(dim: usize, nodes: &[(usize, f64, FrictionFrame)], layout: &BlockLayout) -> Self {
         let nodes: Vec<FrictionNode> = nodes
             .iter()
-            .map(|&(node, coefficient, basis)| FrictionNode {
+            .map(|&(node, coefficient, frame)| FrictionNode {
                 node,
                 coefficient,
-                basis,
+                frame,
                 slip: [0.0; 2],
                 normal_force: 0.0,
                 holding: [0.0; 2],
@@ -169,8 +213,8 @@ impl NodalFriction {
                 std::array::from_fn(
                     |i| if i < dim { u[n.node * dim + i] - u_committed[n.node * dim + i] } else { 0.0 },
                 );
-            for t in 1..dim {
-                n.slip[t - 1] = (0..dim).map(|i| n.basis[i][t] * d[i]).sum();
+            for t in 1..=n.frame.tangents {
+                n.slip[t - 1] = (0..dim).map(|i| n.frame.basis[i][t] * d[i]).sum();
             }
         }
         let Some(matrices) = matrices else { return };
@@ -180,7 +224,7 @@ impl NodalFriction {
         let mut diagonal = vec![0.0; self.nodes.len()];
         for (&(k, mo, nd, a, _), &b) in self.occurrences.iter().zip(&self.occurrence_blocks) {
             if owners.is_none_or(|o| o.owns(b)) {
-                let r = a * dim + 1;
+                let r = a * dim + self.nodes[k].frame.component[1];
                 diagonal[k] += matrices[mo + r * nd + r];
             }
         }
@@ -201,12 +245,14 @@ impl NodalFriction {
             return;
         }
         let dim = self.dim;
-        let tangents = dim - 1;
         for n in &mut self.nodes {
+            let FrictionFrame { component, normal_sign, tangents, .. } = n.frame;
             let base = n.node * dim;
-            let normal_force = (-residual[base]).max(0.0);
+            let normal_force = (-normal_sign * residual[base + component[0]]).max(0.0);
             let mut holding = [0.0; 2];
-            holding[..tangents].copy_from_slice(&residual[base + 1..base + dim]);
+            for t in 0..tangents {
+                holding[t] = residual[base + component[1 + t]];
+            }
             // Alart–Curnier's augmented force q = R_t − r g and its projection on the disc
             let mut augmented = [0.0; 2];
             for t in 0..tangents {
@@ -224,12 +270,12 @@ impl NodalFriction {
             match n.state {
                 State::Stick => {
                     for t in 0..tangents {
-                        residual[base + 1 + t] = n.stick_scale * n.slip[t];
+                        residual[base + component[1 + t]] = n.stick_scale * n.slip[t];
                     }
                 }
                 State::Slip { direction: m, .. } => {
                     for t in 0..tangents {
-                        residual[base + 1 + t] += n.coefficient * normal_force * m[t];
+                        residual[base + component[1 + t]] += n.coefficient * normal_force * m[t];
                     }
                 }
             }
@@ -245,15 +291,15 @@ impl NodalFriction {
             return;
         }
         let dim = self.dim;
-        let tangents = dim - 1;
         for &(k, mo, nd, a, is_first) in &self.occurrences {
             let n = &self.nodes[k];
+            let FrictionFrame { component, normal_sign, tangents, .. } = n.frame;
             assert!(nd <= MAX_BLOCK_DOFS, "element block of {nd} DOFs beyond the friction's {MAX_BLOCK_DOFS}");
             let block = &mut matrices[mo..mo + nd * nd];
             match n.state {
                 State::Stick => {
-                    for t in 1..dim {
-                        let row = a * dim + t;
+                    for t in 1..=tangents {
+                        let row = a * dim + component[t];
                         block[row * nd..(row + 1) * nd].fill(0.0);
                         if is_first {
                             block[row * nd + row] = n.stick_scale;
@@ -261,18 +307,20 @@ impl NodalFriction {
                     }
                 }
                 State::Slip { direction: m, contraction } => {
-                    // the natural rows n, t₁, t₂ before this block's rows change
+                    // the natural rows n, t₁, t₂ before this block's rows change (the normal's
+                    // as `∂R_n`)
                     let mut rows = [[0.0; MAX_BLOCK_DOFS]; 3];
-                    for (l, row) in rows.iter_mut().enumerate().take(dim) {
-                        let r = a * dim + l;
+                    for (l, row) in rows.iter_mut().enumerate().take(1 + tangents) {
+                        let r = a * dim + component[l];
                         row[..nd].copy_from_slice(&block[r * nd..(r + 1) * nd]);
                     }
-                    // ∂Φ = ∂R_t − μ m ⊗ ∂R_n − (μN/|q|)(I − m ⊗ m)(∂R_t − r ∂g); in 2D
-                    // I − m ⊗ m = 0
+                    rows[0][..nd].iter_mut().for_each(|v| *v *= normal_sign);
+                    // ∂Φ = ∂R_t − μ m ⊗ ∂R_n − (μN/|q|)(I − m ⊗ m)(∂R_t − r ∂g); with one
+                    // free tangent (2D, or a held one) I − m ⊗ m = 0
                     let along_normal = if n.normal_force > 0.0 { n.coefficient } else { 0.0 };
                     let turning = if tangents > 1 { contraction } else { 0.0 };
                     for t in 0..tangents {
-                        let row = a * dim + 1 + t;
+                        let row = a * dim + component[1 + t];
                         for c in 0..nd {
                             let mut d = -along_normal * m[t] * rows[0][c];
                             for s in 0..tangents {
@@ -287,7 +335,7 @@ impl NodalFriction {
                         for t in 0..tangents {
                             for s in 0..tangents {
                                 let identity = if t == s { 1.0 } else { 0.0 };
-                                let (row, col) = (a * dim + 1 + t, a * dim + 1 + s);
+                                let (row, col) = (a * dim + component[1 + t], a * dim + component[1 + s]);
                                 block[row * nd + col] += factor * (identity - m[t] * m[s]);
                             }
                         }
@@ -302,7 +350,9 @@ impl NodalFriction {
     pub fn write_reactions(&self, out: &mut [f64]) {
         let dim = self.dim;
         for n in &self.nodes {
-            out[n.node * dim + 1..n.node * dim + dim].copy_from_slice(&n.holding[..dim - 1]);
+            for t in 0..n.frame.tangents {
+                out[n.node * dim + n.frame.component[1 + t]] = n.holding[t];
+            }
         }
     }
 

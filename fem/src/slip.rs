@@ -29,14 +29,45 @@ pub struct Slip {
     pub friction: f64,
 }
 
-/// The global DOFs that slip conditions hold at nodes that also carry a Dirichlet condition
-/// (which [`SlipRotations::new`] leaves out of the rotations): where such a node's slip normal
-/// lies along a global axis whose component no Dirichlet condition fixes, that component.
-/// Without it the corner node between a wall (`u_x` prescribed) and a slip base (normal `y`)
-/// was free across the base: an undamped vertical mode of one node (docs/granular_scaling.md).
-/// An inclined normal at such a node is left free, as before.
-pub fn axis_normal_dofs(dim: usize, slips: &[Slip], is_dirichlet: impl Fn(usize) -> bool) -> Vec<usize> {
-    let mut dofs = Vec::new();
+/// A slip condition at a node that also carries a Dirichlet condition (which
+/// [`SlipRotations::new`] leaves out of the rotations), whose normal lies along a global axis
+/// whose component no Dirichlet condition fixes: the node stays unrotated and that component
+/// is its normal constraint. Without it the corner node between a wall (`u_x` prescribed) and
+/// a slip base (normal `y`) was free across the base: an undamped vertical mode of one node
+/// (docs/granular_scaling.md). An inclined normal at such a node is left free, as before.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AxisSlip {
+    /// Global node id.
+    pub node: usize,
+    /// The global axis along the normal.
+    pub axis: usize,
+    /// Sign of the (outward, where frictional) normal along the axis.
+    pub sign: f64,
+    /// Coulomb coefficient μ (0: frictionless).
+    pub friction: f64,
+    /// The node's components that neither a Dirichlet condition nor an axis slip holds: the
+    /// directions in which it slides, with friction where `friction > 0`.
+    pub free: Vec<usize>,
+}
+
+impl AxisSlip {
+    /// The constrained global DOF.
+    pub fn dof(&self, dim: usize) -> usize {
+        self.node * dim + self.axis
+    }
+
+    /// The friction's frame at the node, where it has friction and a free component
+    /// ([`crate::friction`]: a base node on a symmetry plane slides along the plane).
+    pub fn friction_frame(&self) -> Option<crate::friction::FrictionFrame> {
+        (self.friction > 0.0 && !self.free.is_empty())
+            .then(|| crate::friction::FrictionFrame::along_axis(self.axis, self.sign, &self.free))
+    }
+}
+
+/// The [`AxisSlip`]s of `slips` at nodes with a Dirichlet component (`is_dirichlet` of a
+/// global DOF), one per node and axis.
+pub fn axis_slips(dim: usize, slips: &[Slip], is_dirichlet: impl Fn(usize) -> bool) -> Vec<AxisSlip> {
+    let mut out: Vec<AxisSlip> = Vec::new();
     for s in slips {
         let node_dofs = s.node * dim..(s.node + 1) * dim;
         if !node_dofs.clone().any(&is_dirichlet) {
@@ -45,11 +76,19 @@ pub fn axis_normal_dofs(dim: usize, slips: &[Slip], is_dirichlet: impl Fn(usize)
         let len = s.normal[..dim].iter().map(|v| v * v).sum::<f64>().sqrt();
         for (i, d) in node_dofs.enumerate() {
             if len > 0.0 && (s.normal[i].abs() / len - 1.0).abs() < 1e-9 && !is_dirichlet(d) {
-                dofs.push(d);
+                out.retain(|a| !(a.node == s.node && a.axis == i));
+                let sign = s.normal[i].signum();
+                out.push(AxisSlip { node: s.node, axis: i, sign, friction: s.friction, free: Vec::new() });
             }
         }
     }
-    dofs
+    let held =
+        |node: usize, c: usize| is_dirichlet(node * dim + c) || out.iter().any(|a| a.node == node && a.axis == c);
+    let free: Vec<Vec<usize>> = out.iter().map(|a| (0..dim).filter(|&c| !held(a.node, c)).collect()).collect();
+    for (a, f) in out.iter_mut().zip(free) {
+        a.free = f;
+    }
+    out
 }
 
 /// Local basis `Q` (columns `q[.][k]`, axis 0 the normal) for a normal in `dim` dimensions.
@@ -133,9 +172,10 @@ impl SlipRotations {
         Self { dim, basis, constrained, friction, occurrences }
     }
 
-    /// The frictional slip nodes: (node, μ, local basis), ascending by node.
-    pub fn frictional_nodes(&self) -> Vec<(usize, f64, [[f64; 3]; 3])> {
-        let mut out: Vec<_> = self.friction.iter().map(|(&n, &mu)| (n, mu, self.basis[&n])).collect();
+    /// The frictional slip nodes: (node, μ, frame), ascending by node.
+    pub fn frictional_nodes(&self) -> Vec<(usize, f64, crate::friction::FrictionFrame)> {
+        let frame = |n: usize| crate::friction::FrictionFrame::rotated(self.dim, self.basis[&n]);
+        let mut out: Vec<_> = self.friction.iter().map(|(&n, &mu)| (n, mu, frame(n))).collect();
         out.sort_unstable_by_key(|e| e.0);
         out
     }
@@ -218,12 +258,25 @@ mod tests {
         let slips =
             [slip(0, [0.0, -2.0, 0.0]), slip(1, [0.0, -1.0, 0.0]), slip(2, [0.6, 0.8, 0.0]), slip(3, [0.0, 1.0, 0.0])];
         let dirichlet = |d: usize| d == 0 || d == 4 || d == 6 || d == 7;
-        assert_eq!(axis_normal_dofs(2, &slips, dirichlet), vec![1]);
+        let corner = axis_slips(2, &slips, dirichlet);
+        assert_eq!(corner.iter().map(|a| a.dof(2)).collect::<Vec<_>>(), vec![1]);
+        // nothing left to slide along: no friction
+        assert!(corner[0].free.is_empty() && corner[0].friction_frame().is_none());
         // 3D: a node with u_x, u_y held on a base of normal z gives u_z
         let slips = [slip(5, [0.0, 0.0, 1.0])];
-        assert_eq!(axis_normal_dofs(3, &slips, |d| d == 15 || d == 16), vec![17]);
+        let held_xy = axis_slips(3, &slips, |d| d == 15 || d == 16);
+        assert_eq!(held_xy.iter().map(|a| a.dof(3)).collect::<Vec<_>>(), vec![17]);
+        assert!(held_xy[0].friction_frame().is_none());
         // the normal's component already held: nothing
-        assert!(axis_normal_dofs(3, &slips, |d| d == 17).is_empty());
+        assert!(axis_slips(3, &slips, |d| d == 17).is_empty());
+        // a base node on a symmetry plane (u_y held, outward normal −z): it slides along x with
+        // friction, in the global frame
+        let slips = [slip(5, [0.0, 0.0, -1.0])];
+        let on_plane = axis_slips(3, &slips, |d| d == 16);
+        assert_eq!(on_plane[0].free, vec![0]);
+        let frame = on_plane[0].friction_frame().expect("frictional");
+        assert_eq!((frame.component, frame.normal_sign, frame.tangents), ([2, 0, 0], -1.0, 1));
+        assert_eq!((frame.basis[2][0], frame.basis[0][1]), (-1.0, 1.0));
     }
 
     #[test]
