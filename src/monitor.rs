@@ -1,6 +1,6 @@
 //! Monitors: named scalar time histories, evaluated on the committed state.
 
-use loam_fem::domain::{PointExtent, PointQuantity, PointTensor};
+use loam_fem::domain::{Domain, PointExtent, PointQuantity, PointTensor};
 use loam_fem::model::Model;
 use loam_mpm::surface::SurfaceProfile;
 
@@ -178,7 +178,8 @@ impl Monitor {
                 }
             }
             MonitorKind::MaterialPoint { domain, id, quantity, component } => {
-                match model.domains[*domain].point_quantity(*id, *quantity) {
+                let d = model.domains[*domain].as_ref();
+                match held_anywhere(d, d.point_quantity(*id, *quantity)) {
                     Some(v) => pick(&v, dim, 0, *component),
                     None => f64::NAN, // the point left the grid and was erased
                 }
@@ -190,8 +191,10 @@ impl Monitor {
             MonitorKind::MaterialPointTensor { points, quantity, component } => {
                 let (mut sum, mut count) = (0.0, 0);
                 for &(domain, id) in points {
-                    if let Some(t) = model.domains[domain].point_tensor(id, *quantity) {
-                        sum += tensor_component(&t, *component);
+                    let d = model.domains[domain].as_ref();
+                    let value = d.point_tensor(id, *quantity).map(|t| [tensor_component(&t, *component), 0.0, 0.0]);
+                    if let Some(v) = held_anywhere(d, value) {
+                        sum += v[0];
                         count += 1;
                     }
                 }
@@ -214,25 +217,25 @@ impl Monitor {
                 }
                 pick(&sum, dim, 0, *component)
             }
-            MonitorKind::MaterialVolume { min, max } => {
-                model.domains.iter().map(|d| d.points_volume_mass(min, max).0).sum()
-            }
-            MonitorKind::MaterialMass { min, max } => {
-                model.domains.iter().map(|d| d.points_volume_mass(min, max).1).sum()
-            }
+            MonitorKind::MaterialVolume { min, max } => model.sum_over_domains(|d| d.points_volume_mass(min, max).0),
+            MonitorKind::MaterialMass { min, max } => model.sum_over_domains(|d| d.points_volume_mass(min, max).1),
             MonitorKind::KineticEnergy { domain: None } => model.kinetic_energy(),
             MonitorKind::StrainEnergy { domain: None } => model.strain_energy(),
             MonitorKind::KineticEnergy { domain: Some((k, name)) } => {
-                model.domains[*k].energies(name, &model.committed.v).map_or(f64::NAN, |e| e.0)
+                let d = model.domains[*k].as_ref();
+                d.energies(name, &model.committed.v).map_or(f64::NAN, |e| summed(d, [e.0])[0])
             }
             MonitorKind::Momentum { domain, component } => {
                 let v = &model.committed.v;
                 let p = match domain {
-                    Some((k, name)) => model.domains[*k].momentum(Some(name), v).unwrap_or([f64::NAN; 3]),
+                    Some((k, name)) => {
+                        let d = model.domains[*k].as_ref();
+                        d.momentum(Some(name), v).map_or([f64::NAN; 3], |p| summed(d, p))
+                    }
                     None => model
                         .domains
                         .iter()
-                        .filter_map(|d| d.momentum(None, v))
+                        .filter_map(|d| d.momentum(None, v).map(|p| summed(d.as_ref(), p)))
                         .fold([0.0; 3], |a, q| std::array::from_fn(|i| a[i] + q[i])),
                 };
                 pick(&p, dim, 0, *component)
@@ -251,29 +254,66 @@ impl Monitor {
                 }
             }
             MonitorKind::StrainEnergy { domain: Some((k, name)) } => {
-                model.domains[*k].energies(name, &model.committed.v).map_or(f64::NAN, |e| e.1)
+                let d = model.domains[*k].as_ref();
+                d.energies(name, &model.committed.v).map_or(f64::NAN, |e| summed(d, [e.1])[0])
             }
         }
     }
+}
+
+/// `local`, a domain's answer for its points, summed over the ranks where its points are
+/// distributed (collective there; docs/distributed.md, stage 3).
+fn summed<const N: usize>(domain: &dyn Domain, local: [f64; N]) -> [f64; N] {
+    let mut v = local;
+    if let Some(ranks) = domain.points_distributed() {
+        ranks.sum_identically(&mut v);
+    }
+    v
+}
+
+/// A point's value from the rank that holds it, where a domain's points are distributed
+/// (collective there); `None` if no rank holds it (erased).
+fn held_anywhere(domain: &dyn Domain, local: Option<[f64; 3]>) -> Option<[f64; 3]> {
+    if domain.points_distributed().is_none() {
+        return local;
+    }
+    let [held, x, y, z] = summed(domain, local.map_or([0.0; 4], |v| [1.0, v[0], v[1], v[2]]));
+    (held > 0.0).then_some([x, y, z])
 }
 
 /// Positions and sizes of the material points of every domain, as the free-surface monitors
 /// see them ([`SurfaceProfile`]: `x` along the runout, the second component up). In 3D, where
 /// `z` is up (gravity along −z), the points are seen from the side: `(x, z)` becomes the
 /// profile's `(x, y)`, so the surface is the top envelope over all `y` and a quarter or half
-/// column against symmetry planes gives its runout along `x`.
+/// column against symmetry planes gives its runout along `x`. Where a domain's points are
+/// distributed, every rank's are gathered (collective).
 pub fn point_extents(model: &Model) -> Vec<PointExtent> {
     let side_view = model.dim == 3;
     model
         .domains
         .iter()
-        .flat_map(|d| d.point_extents())
+        .flat_map(|d| every_rank_extents(d.as_ref()))
         .map(|mut p| {
             if side_view {
                 p.position.swap(1, 2);
             }
             p
         })
+        .collect()
+}
+
+/// A domain's [`Domain::point_extents`], of every rank where its points are distributed
+/// (collective there: five values per point gathered to every rank).
+fn every_rank_extents(domain: &dyn Domain) -> Vec<PointExtent> {
+    let local = domain.point_extents();
+    let Some(ranks) = domain.points_distributed() else { return local };
+    let mine: Vec<f64> =
+        local.iter().flat_map(|p| [p.position[0], p.position[1], p.position[2], p.size, p.initial_size]).collect();
+    ranks
+        .all_gather_varcount(&mine)
+        .iter()
+        .flat_map(|part| part.chunks_exact(5))
+        .map(|r| PointExtent { position: [r[0], r[1], r[2]], size: r[3], initial_size: r[4] })
         .collect()
 }
 

@@ -90,33 +90,55 @@ pub fn run(sim: &mut Simulation, out_dir: &Path, options: &RunOptions) -> std::i
 }
 
 /// When the next checkpoint is due.
-struct CheckpointClock {
+pub(crate) struct CheckpointClock {
     spec: Option<CheckpointSpec>,
     last_step: usize,
     last_time: Instant,
 }
 
 impl CheckpointClock {
+    /// The clock of `sim`'s case, started now at its step.
+    pub(crate) fn new(sim: &Simulation) -> Self {
+        Self { spec: sim.case.analysis.checkpoint, last_step: sim.step, last_time: Instant::now() }
+    }
+
     fn due(&self, step: usize) -> bool {
         let Some(spec) = self.spec else { return false };
         spec.every_steps.is_some_and(|n| step >= self.last_step + n)
             || spec.every_seconds.is_some_and(|s| self.last_time.elapsed().as_secs_f64() >= s)
     }
 
-    fn reset(&mut self, step: usize) {
-        self.last_step = step;
-        self.last_time = Instant::now();
+    /// Whether a checkpoint is due after `sim`'s last step; where the model's points are
+    /// distributed, agreed by the ranks (collective: saving the state gathers every rank's
+    /// points, so every rank must take part; `every_seconds` is measured on each rank, and
+    /// one is enough). The clock restarts when it is due.
+    pub(crate) fn due_on_every_rank(&mut self, sim: &Simulation) -> bool {
+        let mut due = self.due(sim.step);
+        if sim.model.has_distributed_points() {
+            due = sim.case.solver.ranks.any(due);
+        }
+        if due {
+            self.last_step = sim.step;
+            self.last_time = Instant::now();
+        }
+        due
     }
 }
 
-/// The checkpoint of `sim` with the writer's state `writer`.
-fn checkpoint_of(sim: &Simulation, writer: Option<WriterState>, fingerprint: u32) -> Checkpoint {
+/// The checkpoint of `sim` with the model's state `model` (taken first: a collective where the
+/// points are distributed) and the writer's state `writer`.
+fn checkpoint_of(
+    sim: &Simulation,
+    model: loam_fem::model::ModelState,
+    writer: Option<WriterState>,
+    fingerprint: u32,
+) -> Checkpoint {
     Checkpoint {
         loam_version: env!("CARGO_PKG_VERSION").to_string(),
         case_name: sim.case.name.clone(),
         case_fingerprint: fingerprint,
         simulation: sim.save_state(),
-        model: sim.model.save_state(),
+        model,
         writer,
     }
 }
@@ -131,8 +153,9 @@ fn write_checkpoint(
     keep: usize,
 ) -> std::io::Result<PathBuf> {
     let path = checkpoint::path_of(out_dir, sim.step);
+    let model = sim.model.save_state();
     let state = writer.state()?;
-    checkpoint::write(&path, &checkpoint_of(sim, Some(state), fingerprint)).map_err(std::io::Error::other)?;
+    checkpoint::write(&path, &checkpoint_of(sim, model, Some(state), fingerprint)).map_err(std::io::Error::other)?;
     checkpoint::prune(out_dir, keep);
     Ok(path)
 }
@@ -143,7 +166,9 @@ fn write_checkpoint(
 fn rescue(sim: &Simulation, writer: Option<WriterState>, fingerprint: u32, error: std::io::Error) -> std::io::Error {
     let path =
         std::env::temp_dir().join(format!("loam_{}_{}_step_{}.ckpt", sim.case.name, std::process::id(), sim.step));
-    match checkpoint::write(&path, &checkpoint_of(sim, writer, fingerprint)) {
+    // (rank 0 alone: where the points are distributed, the other ranks are not here and the
+    // state gathered would wait for them; docs/distributed.md, stage 3)
+    match checkpoint::write(&path, &checkpoint_of(sim, sim.model.save_state(), writer, fingerprint)) {
         Ok(()) => std::io::Error::new(
             error.kind(),
             format!(
@@ -197,9 +222,8 @@ fn run_loop(
     if options.resume.is_none() {
         timed(output_time, &mut || writer.write_step(sim, true))?;
     }
-    let spec = sim.case.analysis.checkpoint;
-    let keep = spec.map_or(2, |s| s.keep);
-    let mut clock = CheckpointClock { spec, last_step: sim.step, last_time: Instant::now() };
+    let keep = sim.case.analysis.checkpoint.map_or(2, |s| s.keep);
+    let mut clock = CheckpointClock::new(sim);
     // fixed steps: progress in planned steps; adaptive steps: in per mille of the end time
     let adaptive = sim.case.analysis.adaptive.is_some();
     let length = if adaptive { 1000 } else { sim.total_steps() as u64 };
@@ -254,9 +278,8 @@ fn run_loop(
                     bar.finish_and_clear();
                     return Err(rescue(sim, writer.last_complete_state(), fingerprint, e));
                 }
-                if !last && clock.due(sim.step) {
+                if !last && clock.due_on_every_rank(sim) {
                     write_checkpoint(sim, &mut writer, out_dir, fingerprint, keep)?;
-                    clock.reset(sim.step);
                 }
                 record(sim, *output_time);
             }

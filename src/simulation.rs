@@ -149,6 +149,8 @@ pub struct Simulation {
     rest_since: Option<f64>,
     /// Whether `analysis.stop_at_rest` has ended the run.
     pub at_rest: bool,
+    /// The monitors' values of their last evaluation ([`Simulation::monitor_values`]).
+    last_monitor_values: std::sync::Mutex<Vec<f64>>,
 }
 
 /// What a [`Simulation`] carries from step to step beside the model: counters and step
@@ -237,6 +239,7 @@ impl Simulation {
             peak_kinetic_energy: 0.0,
             rest_since: None,
             at_rest: false,
+            last_monitor_values: Default::default(),
         })
     }
 
@@ -332,8 +335,24 @@ impl Simulation {
     }
 
     /// Monitor values at the committed state.
+    ///
+    /// Where the model's points are distributed over ranks this is a collective (every rank
+    /// evaluates the monitors at the same steps: the results writers do).
     pub fn monitor_values(&self) -> Vec<f64> {
-        self.monitors.iter().map(|m| m.evaluate(&self.model)).collect()
+        let values: Vec<f64> = self.monitors.iter().map(|m| m.evaluate(&self.model)).collect();
+        self.last_monitor_values.lock().unwrap_or_else(|e| e.into_inner()).clone_from(&values);
+        values
+    }
+
+    /// The monitors' values for a report: evaluated now, or, where the model's points are
+    /// distributed (evaluating them is then a collective that only the results writers make),
+    /// those of their last evaluation (none before the first).
+    pub fn monitor_values_for_report(&self) -> Vec<f64> {
+        if self.model.has_distributed_points() {
+            self.last_monitor_values.lock().unwrap_or_else(|e| e.into_inner()).clone()
+        } else {
+            self.monitor_values()
+        }
     }
 
     /// One step of length [`Simulation::time_step`] (shortened to land on the end time);

@@ -86,14 +86,15 @@ fn loam_run_with(case: &Path, out: &Path, ranks: Option<usize>, extra: &[&str]) 
 /// Runs the bundled case `name` serially with PETSc and on 2 and 4 ranks; checks the ranks
 /// reported and the monitors' agreement; returns the 4-rank run's monitors.
 fn runs_on_ranks_agree(name: &str) -> (Vec<String>, Vec<Vec<f64>>) {
-    runs_on_ranks_agree_with(&format!("cases/{name}"), &[2, 4], false, |_| {})
+    runs_on_ranks_agree_with(&format!("cases/{name}"), &[2, 4], false, None, |_| {})
 }
 
 /// Issue 26 item 5's validation of the bundled case `name`: on 1, 2, 4 and 8 ranks (8
 /// oversubscribed on this machine), against the serial PETSc run and the serial direct-solver
-/// run; returns the 8-rank run's monitors.
-fn runs_on_1_to_8_ranks_agree(name: &str, edit: impl Fn(&mut Value)) -> (Vec<String>, Vec<Vec<f64>>) {
-    runs_on_ranks_agree_with(&format!("cases/{name}"), &[1, 2, 4, 8], true, edit)
+/// run, its `points` material points distributed over the ranks (0: a replicated model);
+/// returns the 8-rank run's monitors.
+fn runs_on_1_to_8_ranks_agree(name: &str, points: u64, edit: impl Fn(&mut Value)) -> (Vec<String>, Vec<Vec<f64>>) {
+    runs_on_ranks_agree_with(&format!("cases/{name}"), &[1, 2, 4, 8], true, Some(points), edit)
 }
 
 /// The largest difference of every monitor of `rows` from `reference`, relative to the
@@ -113,12 +114,15 @@ fn assert_monitors_agree(what: &str, names: &[String], rows: &[Vec<f64>], refere
 /// (and, if `direct`, with the direct solver) and under `mpirun -n P` for each `P` of `ranks`
 /// (its `linear_solver` as edited: `auto` is `petsc` on ranks): checks the ranks reported,
 /// that the ranks shared the kernels (each evaluated a part of the blocks' cost, the parts
-/// adding up to the whole), and the monitors' agreement with the serial runs; returns the
-/// last rank count's monitors.
+/// adding up to the whole), and the monitors' agreement with the serial runs; with `points`,
+/// that the ranks held that many material points at the end between them (docs/distributed.md,
+/// stage 3: each rank the points of its own supports; 0 where the model stays replicated);
+/// returns the last rank count's monitors.
 fn runs_on_ranks_agree_with(
     path: &str,
     ranks: &[usize],
     direct: bool,
+    points: Option<u64>,
     edit: impl Fn(&mut Value),
 ) -> (Vec<String>, Vec<Vec<f64>>) {
     let name = Path::new(path).file_name().unwrap().to_str().unwrap();
@@ -154,6 +158,20 @@ fn runs_on_ranks_agree_with(
         assert_eq!(summary["ranks"], json!(p), "summary.json reports the ranks");
         if p > 1 {
             kernels_are_shared(&summary, p);
+            if let Some(points) = points {
+                let held: Vec<u64> = summary["distributed"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|s| s["points_held"].as_u64().unwrap())
+                    .collect();
+                println!("{name} on {p} ranks: material points held at the end per rank {held:?}");
+                assert_eq!(held.iter().sum::<u64>(), points, "{name} on {p} ranks: the points held");
+                assert!(
+                    points == 0 || held.iter().all(|&h| h < points),
+                    "{name} on {p} ranks: the points are distributed"
+                );
+            }
         }
         let (n, rows) = monitors(&out);
         assert_eq!(n, names);
@@ -208,7 +226,7 @@ fn fem_2d_cantilever_on_2_and_4_ranks_equals_the_serial_run() {
 /// Issue 26 item 5: on 1, 2, 4 and 8 ranks, against the serial PETSc and direct-solver runs.
 #[test]
 fn mpm_3d_cantilever_on_1_to_8_ranks_equals_the_serial_runs() {
-    let m = runs_on_1_to_8_ranks_agree("cantilever_mpm_3d.json", |_| {});
+    let m = runs_on_1_to_8_ranks_agree("cantilever_mpm_3d.json", 4032, |_| {});
     report("3D MPM cantilever on 8 ranks: tip_uy vs Timoshenko [m]", last_value(&m, "tip_uy"), timoshenko(7.0), 0.05);
     report(
         "3D MPM cantilever on 8 ranks: clamp reaction vs weight [N]",
@@ -225,7 +243,7 @@ fn mpm_3d_cantilever_on_1_to_8_ranks_equals_the_serial_runs() {
 /// Issue 26 item 5: on 1, 2, 4 and 8 ranks, against the serial PETSc and direct-solver runs.
 #[test]
 fn coupled_split_beam_on_1_to_8_ranks_equals_the_serial_runs() {
-    let m = runs_on_1_to_8_ranks_agree("coupled_beam_split.json", |_| {});
+    let m = runs_on_1_to_8_ranks_agree("coupled_beam_split.json", 0, |_| {});
     report("coupled split beam on 8 ranks: tip_uy vs Timoshenko [m]", last_value(&m, "tip_uy"), -0.67806, 0.015);
     report(
         "coupled split beam on 8 ranks: interface force vs weight of the MPM half [N]",
@@ -243,7 +261,7 @@ fn coupled_split_beam_on_1_to_8_ranks_equals_the_serial_runs() {
 /// and the clamp carrying the whole weight ρ g L H = 68 670 N to 1e-9.
 #[test]
 fn mpm_2d_cantilever_on_1_to_8_ranks_equals_the_serial_runs() {
-    let m = runs_on_1_to_8_ranks_agree("cantilever_mpm.json", |_| {});
+    let m = runs_on_1_to_8_ranks_agree("cantilever_mpm.json", 1792, |_| {});
     let x_point = 6.875 + 0.125 * (1.0 + 1.0 / 3f64.sqrt()) / 2.0;
     report(
         "2D MPM cantilever on 8 ranks: tip_uy vs Timoshenko at the point [m]",
@@ -268,7 +286,7 @@ fn mpm_2d_cantilever_on_1_to_8_ranks_equals_the_serial_runs() {
 /// case per metre of depth by `mpm_collapse::bui_slab_3d_is_the_plane_strain_case_per_metre_of_depth`.
 #[test]
 fn bui_slab_3d_on_1_to_8_ranks_equals_the_serial_runs() {
-    let m = runs_on_1_to_8_ranks_agree("collapse_bui2008_slab_3d.json", |case| {
+    let m = runs_on_1_to_8_ranks_agree("collapse_bui2008_slab_3d.json", 6400, |case| {
         plastic_column(case);
         case["output"] = json!({ "vtk": false });
         case["monitors"].as_array_mut().unwrap().push(json!({
@@ -290,7 +308,7 @@ fn bui_slab_3d_on_1_to_8_ranks_equals_the_serial_runs() {
 /// on every rank.
 #[test]
 fn rolling_rigid_disk_on_2_and_4_ranks_equals_the_serial_run() {
-    let m = runs_on_ranks_agree_with("cases/rigid_disk_rolling_on_mpm.json", &[2, 4], false, |case| {
+    let m = runs_on_ranks_agree_with("cases/rigid_disk_rolling_on_mpm.json", &[2, 4], false, None, |case| {
         case["analysis"]["end_time"] = json!(0.1);
         case["domains"][0]["grid"]["cells"] = json!([80, 35]);
         case["domains"][0]["material_points"]["cells"]["mesh"]["rectangle"]["cells"] = json!([80, 10]);
@@ -326,7 +344,8 @@ fn plastic_column(case: &mut Value) {
 /// F) and the owner-computes kernels.
 #[test]
 fn plastic_3d_collapse_on_2_and_4_ranks_equals_the_serial_run() {
-    let m = runs_on_ranks_agree_with("benches/scale/collapse_3d_column.json", &[2, 4], false, plastic_column);
+    let m =
+        runs_on_ranks_agree_with("benches/scale/collapse_3d_column.json", &[2, 4], false, Some(8000), plastic_column);
     assert_eq!(m.1.len(), 5, "4 steps and the start");
     assert!(last_value(&m, "kinetic_energy") > 0.0, "the column moves");
 }
@@ -491,6 +510,116 @@ fn cells_flattened(path: &Path) -> (Vec<f64>, usize) {
         }
     }
     (flat, count)
+}
+
+/// The material points of one output (`.vtu`, or the pieces of a `.pvtu`) by id: per id its
+/// mass and velocity (as written, bit for bit), and how many times the id occurs.
+fn points_by_id(path: &Path) -> std::collections::BTreeMap<u64, (f64, [f64; 3], usize)> {
+    use vtkio::model::{Attribute, DataSet, IOBuffer, Vtk};
+    let mut vtk = Vtk::import(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    vtk.load_all_pieces().unwrap_or_else(|e| panic!("{}: pieces: {e}", path.display()));
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else { panic!("{}: not a grid", path.display()) };
+    let mut points = std::collections::BTreeMap::new();
+    for piece in pieces {
+        let p = piece.into_loaded_piece_data(None).unwrap();
+        let field = |name: &str| -> Vec<f64> {
+            p.data
+                .point
+                .iter()
+                .find_map(|a| match a {
+                    Attribute::DataArray(d) if d.name == name => match &d.data {
+                        IOBuffer::F64(v) => Some(v.clone()),
+                        other => panic!("{name}: not Float64: {other:?}"),
+                    },
+                    _ => None,
+                })
+                .unwrap_or_else(|| panic!("{}: no field {name}", path.display()))
+        };
+        let (id, mass, velocity) = (field("id"), field("mass"), field("velocity"));
+        for (k, &i) in id.iter().enumerate() {
+            let entry = points.entry(i as u64).or_insert((0.0, [0.0; 3], 0));
+            *entry = (mass[k], [velocity[3 * k], velocity[3 * k + 1], velocity[3 * k + 2]], entry.2 + 1);
+        }
+    }
+    points
+}
+
+/// Point migration (issue 26 item 5, docs/distributed.md stage 3): an elastic block (256
+/// points) slides 0.19 m down a frictionless 30° grid boundary (`cases/block_friction_grid_mpm.json`
+/// with μ = 0, to 0.3 s), across the cuts of the bisection, which leaves each of 4 ranks a
+/// slab of the block along x and moves with it only when the pattern is rebuilt. The points
+/// are distributed (each rank holds the points of its supports), so the points crossing a cut
+/// migrate. Asserted: the ranks sent and received points (as many sent as received), every
+/// rank took part, and at the end they hold every point once; the final output's pieces
+/// hold every id once with its mass bit for bit the serial run's (the records move exactly),
+/// and the total momentum of the pieces within 1e-9 of the serial run's; every monitor
+/// (the centre's slide, the total mass and momentum) within 1e-9 of the serial PETSc run's;
+/// the slide within 1 % of the rigid block's `a (t²/2 − t t_r/2 + t_r²/6)`, a = g sin 30°.
+#[test]
+fn a_body_sliding_across_every_rank_boundary_keeps_its_points_mass_and_momentum() {
+    let edit = |case: &mut Value| {
+        case["boundary_conditions"][0]["slip"] = json!({});
+        case["analysis"]["end_time"] = json!(0.3);
+        case["output"] = json!({ "interval": 100 });
+        let monitors = case["monitors"].as_array_mut().unwrap();
+        monitors.retain(|m| m["name"] == "centre_ux");
+        monitors.push(json!({ "name": "mass", "type": "material_mass" }));
+        monitors.push(json!({ "name": "momentum_x", "type": "momentum", "component": "x" }));
+    };
+    let m = runs_on_ranks_agree_with("cases/block_friction_grid_mpm.json", &[4], false, Some(256), edit);
+    let alpha = 30f64.to_radians();
+    let t = m.1.last().unwrap()[0];
+    let ramp = 0.05;
+    let slide = 9.81 * alpha.sin() * (t * t / 2.0 - t * ramp / 2.0 + ramp * ramp / 6.0);
+    report("block sliding across 4 ranks: centre's slide [m]", last_value(&m, "centre_ux"), slide, 0.01);
+    // the same run again, to read its statistics and output (runs_on_ranks_agree_with
+    // removes its directory)
+    let dir = temp_dir("migration");
+    let case = edited_case("cases/block_friction_grid_mpm.json", &dir, "migration.json", edit);
+    let (serial_case, serial) = (
+        edited_case("cases/block_friction_grid_mpm.json", &dir, "serial.json", |c| {
+            edit(c);
+            c["solver"]["linear_solver"] = json!("petsc");
+        }),
+        dir.join("serial"),
+    );
+    loam_run(&serial_case, &serial, None);
+    let out = dir.join("ranks4");
+    loam_run(&case, &out, Some(4));
+    let summary: Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let stats = summary["distributed"].as_array().unwrap();
+    let of = |key: &str| stats.iter().map(|s| s[key].as_u64().unwrap()).collect::<Vec<_>>();
+    let (held, sent, received) = (of("points_held"), of("points_sent"), of("points_received"));
+    println!(
+        "points held at the end per rank {held:?}, sent {sent:?}, received {received:?}, migrations {:?}",
+        of("migrations")
+    );
+    assert_eq!(held.iter().sum::<u64>(), 256, "every point held once at the end");
+    assert_eq!(sent.iter().sum::<u64>(), received.iter().sum::<u64>(), "every point sent arrived");
+    assert!(sent.iter().sum::<u64>() > 0, "points migrated");
+    for r in 0..4 {
+        assert!(sent[r] + received[r] > 0, "rank {r} took part in the migration");
+    }
+    let last = |dir: &Path, ext: &str| {
+        let files = series_files(&dir.join("block.pvd"));
+        let file = files.last().unwrap().clone();
+        assert!(file.ends_with(ext), "{file}");
+        dir.join(file)
+    };
+    let (pieces, whole) = (points_by_id(&last(&out, ".pvtu")), points_by_id(&last(&serial, ".vtu")));
+    assert_eq!(pieces.len(), 256, "every id in the pieces");
+    assert!(pieces.values().all(|p| p.2 == 1), "each id in one piece only");
+    assert_eq!(pieces.keys().collect::<Vec<_>>(), whole.keys().collect::<Vec<_>>(), "the serial run's ids");
+    for (id, p) in &pieces {
+        assert_eq!(p.0.to_bits(), whole[id].0.to_bits(), "point {id}: its mass moved bit for bit");
+    }
+    let momentum = |pts: &std::collections::BTreeMap<u64, (f64, [f64; 3], usize)>| -> f64 {
+        pts.values().map(|p| p.0 * p.1[0]).sum()
+    };
+    let (p4, p1) = (momentum(&pieces), momentum(&whole));
+    println!("momentum of the final points, by id: 4 ranks {p4:.15e}, serial {p1:.15e}");
+    assert!((p4 - p1).abs() <= 1e-9 * p1.abs(), "momentum");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The data sets (file names) of a `.pvd` series.

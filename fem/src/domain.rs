@@ -362,6 +362,15 @@ pub trait Domain: Send + Sync {
     /// every block, as on one process.
     fn own_blocks(&mut self, _owners: Option<crate::ranks::BlockOwners>) {}
 
+    /// In a distributed run, the ranks if this domain's points are distributed over them
+    /// (docs/distributed.md, stage 3): its point queries ([`Domain::kinetic_energy`],
+    /// [`Domain::point_quantity`], …) then answer for this rank's points only, and their sums
+    /// over the ranks are the caller's (`Model::kinetic_energy`, the monitors). `None`: every
+    /// rank holds every point.
+    fn points_distributed(&self) -> Option<crate::ranks::Ranks> {
+        None
+    }
+
     /// Fills the element matrices (row-major) and residual vectors
     /// `r_e = f_int − f_body + M ã` of this domain's blocks.
     fn assemble(

@@ -959,14 +959,37 @@ impl Model {
         self.time = t;
     }
 
-    /// Total kinetic energy of the committed state.
+    /// Total kinetic energy of the committed state (collective where a domain's points are
+    /// distributed: [`Model::sum_over_domains`]).
     pub fn kinetic_energy(&self) -> f64 {
-        self.domains.iter().map(|d| d.kinetic_energy(&self.committed.v)).sum()
+        self.sum_over_domains(|d| d.kinetic_energy(&self.committed.v))
     }
 
-    /// Total stored work of internal forces of the committed state.
+    /// Total stored work of internal forces of the committed state (collective as
+    /// [`Model::kinetic_energy`]).
     pub fn strain_energy(&self) -> f64 {
-        self.domains.iter().map(|d| d.strain_energy()).sum()
+        self.sum_over_domains(|d| d.strain_energy())
+    }
+
+    /// Whether a domain's points are distributed over the ranks ([`Domain::points_distributed`]).
+    pub fn has_distributed_points(&self) -> bool {
+        self.domains.iter().any(|d| d.points_distributed().is_some())
+    }
+
+    /// `Σ_d f(d)` over the domains; the parts of domains whose points are distributed
+    /// ([`Domain::points_distributed`]) summed over the ranks (collective: every rank must
+    /// call it at the same point of the run), the others' taken once.
+    pub fn sum_over_domains(&self, f: impl Fn(&dyn Domain) -> f64) -> f64 {
+        let Some(ranks) = self.domains.iter().find_map(|d| d.points_distributed()) else {
+            return self.domains.iter().map(|d| f(d.as_ref())).sum();
+        };
+        let mut parts = [0.0, 0.0];
+        for d in &self.domains {
+            parts[usize::from(d.points_distributed().is_some())] += f(d.as_ref());
+        }
+        let mut distributed = [parts[1]];
+        ranks.sum_identically(&mut distributed);
+        parts[0] + distributed[0]
     }
 
     /// Starts a step of length `dt` as [`Model::solve_step`] does (initialisation phase and

@@ -13,6 +13,12 @@
 //! model stays replicated. The sums every rank needs (the residual, the reactions, the
 //! soil's forces on the structure) are summed over the ranks.
 //!
+//! **Stage 3** (docs/distributed.md): where an MPM domain can, its material points are held
+//! only by the ranks that own their supports and migrate between them
+//! (`loam_mpm::mpm_domain`); the grid's nodal sums, the points' counts per support and the
+//! queries of the points are then summed over the ranks ([`Ranks::sum_rows_identically`],
+//! `Domain::points_distributed`), and no point state is replicated.
+//!
 //! [`Ranks::world`] exists only in a build with the `mpi` feature, after MPI is
 //! initialised; without it there is one rank ([`Ranks::single`]) and the collectives of
 //! this module are identities.
@@ -174,8 +180,54 @@ impl Ranks {
         }
     }
 
-    /// Every rank's `mine`, in rank order (`MPI_Allgatherv`).
-    fn all_gather_varcount(&self, mine: &[f64]) -> Vec<Vec<f64>> {
+    /// Whether `value` holds on some rank (collective).
+    pub fn any(&self, value: bool) -> bool {
+        !self.all(!value)
+    }
+
+    /// Sums the rows of the dense row-major array `values` (`width` values per row) over the
+    /// ranks, every rank receiving the same bits: each rank sends only the rows it holds a
+    /// non-zero value in (the nodes its points reach), and every rank adds the rows it
+    /// receives in rank order (collective). One process: nothing.
+    pub fn sum_rows_identically(&self, values: &mut [f64], width: usize) {
+        if !self.is_distributed() {
+            return;
+        }
+        let mut mine = Vec::new();
+        for (row, v) in values.chunks_exact(width).enumerate() {
+            if v.iter().any(|&x| x != 0.0) {
+                mine.push(row as f64);
+                mine.extend_from_slice(v);
+            }
+        }
+        let t = std::time::Instant::now();
+        let all = self.all_gather_varcount(&mine);
+        let received: usize = all.iter().enumerate().filter(|(r, _)| *r != self.rank).map(|(_, p)| p.len()).sum();
+        with_stats(|s| {
+            s.exchange_seconds += t.elapsed().as_secs_f64();
+            s.exchange_bytes += 8 * received as u64;
+        });
+        for part in &all {
+            for rec in part.chunks_exact(width + 1) {
+                let row = rec[0] as usize;
+                values[row * width..(row + 1) * width].fill(0.0);
+            }
+        }
+        for part in &all {
+            for rec in part.chunks_exact(width + 1) {
+                let row = rec[0] as usize;
+                for (x, y) in values[row * width..(row + 1) * width].iter_mut().zip(&rec[1..]) {
+                    *x += y;
+                }
+            }
+        }
+    }
+
+    /// Every rank's `mine`, in rank order (`MPI_Allgatherv`; collective).
+    pub fn all_gather_varcount(&self, mine: &[f64]) -> Vec<Vec<f64>> {
+        if !self.is_distributed() {
+            return vec![mine.to_vec()];
+        }
         #[cfg(feature = "mpi")]
         {
             use mpi::collective::CommunicatorCollectives;
@@ -214,7 +266,9 @@ pub struct DistributedStats {
     /// Time of PETSc's matrix assembly, `MatSetValues` with the stash and
     /// `MatAssemblyBegin/End` (s).
     pub matrix_assembly_seconds: f64,
-    /// Time of the exchange of the points' (and Gauss points') updated state (s).
+    /// Time of the exchange of the points' (and Gauss points') updated state (s); where the
+    /// points are distributed, of the migrations, the point counts per support and the nodal
+    /// sums of the projection.
     pub exchange_seconds: f64,
     /// Bytes this rank received in those exchanges.
     pub exchange_bytes: u64,
@@ -244,6 +298,20 @@ pub struct DistributedStats {
     /// were gathered: the work of a rank, whatever else shares the cores.
     #[serde(default)]
     pub cpu_seconds: f64,
+    /// Material points this rank held at the end (domains whose points are distributed:
+    /// docs/distributed.md, stage 3; 0 where the model is replicated).
+    #[serde(default)]
+    pub points_held: u64,
+    /// Material points this rank sent to and received from other ranks as they moved into
+    /// other ranks' supports, and the migrations (exchanges) made.
+    #[serde(default)]
+    pub points_sent: u64,
+    /// See `points_sent`.
+    #[serde(default)]
+    pub points_received: u64,
+    /// See `points_sent`.
+    #[serde(default)]
+    pub migrations: u64,
 }
 
 /// User + system CPU time of this process (s; 0 where `/proc/self/stat` is not readable).
@@ -281,6 +349,10 @@ impl DistributedStats {
             mine.partitions as f64,
             mine.cpu_seconds,
             mine.rebalances as f64,
+            mine.points_held as f64,
+            mine.points_sent as f64,
+            mine.points_received as f64,
+            mine.migrations as f64,
         ];
         ranks
             .all_gather_varcount(&record)
@@ -300,6 +372,10 @@ impl DistributedStats {
                 partitions: r[11] as u64,
                 cpu_seconds: r[12],
                 rebalances: r[13] as u64,
+                points_held: r[14] as u64,
+                points_sent: r[15] as u64,
+                points_received: r[16] as u64,
+                migrations: r[17] as u64,
             })
             .collect()
     }
@@ -321,6 +397,10 @@ pub static STATS: std::sync::Mutex<DistributedStats> = std::sync::Mutex::new(Dis
     partitions: 0,
     rebalances: 0,
     cpu_seconds: 0.0,
+    points_held: 0,
+    points_sent: 0,
+    points_received: 0,
+    migrations: 0,
 });
 
 /// Runs `f` on this process's [`DistributedStats`].

@@ -85,6 +85,20 @@ impl GridSums {
         self.inertia.clear();
         self.inertia.resize(nodes, [0.0; 3]);
     }
+
+    /// The sums of every rank's points, every rank receiving the same bits (a node's seven
+    /// values sent by the ranks whose points reach it; `Ranks::sum_rows_identically`).
+    pub fn sum_over(&mut self, ranks: loam_fem::ranks::Ranks) {
+        let mut rows: Vec<f64> = (0..self.mass.len())
+            .flat_map(|a| std::iter::once(self.mass[a]).chain(self.momentum[a]).chain(self.inertia[a]))
+            .collect();
+        ranks.sum_rows_identically(&mut rows, 7);
+        for (a, row) in rows.chunks_exact(7).enumerate() {
+            self.mass[a] = row[0];
+            self.momentum[a] = [row[1], row[2], row[3]];
+            self.inertia[a] = [row[4], row[5], row[6]];
+        }
+    }
 }
 
 /// The points' trial history and kernel output of the current iterate (committed in the
@@ -388,6 +402,11 @@ impl Body {
     /// Gives back the trial arrays of [`Body::take_trial`].
     pub fn restore_trial(&mut self, trial: Trial) {
         self.trial = trial;
+    }
+
+    /// The support of point `p` (in the order of the last [`Body::locate`]).
+    pub fn support_of(&self, p: usize) -> usize {
+        self.support_of_point[p]
     }
 
     /// Start of each support's points (see [`Body::points_in_support`]).

@@ -62,6 +62,44 @@ impl MaterialPoints {
         self.work.push(0.0);
     }
 
+    /// Values of a point's record ([`MaterialPoints::pack`]) besides its law history.
+    pub const RECORD_LEN: usize = 35;
+
+    /// Appends point `p` as a record of [`MaterialPoints::RECORD_LEN`] `+ stride` values
+    /// (its id, position, displacement, velocity, acceleration, mass, volume, initial volume,
+    /// deformation gradient, Cauchy stress, work and the law's `stride` history values): every
+    /// field a point carries from step to step, copied bit for bit, so that a point sent to
+    /// another rank ([`MaterialPoints::push_record`]) is the same point there.
+    pub fn pack(&self, p: usize, stride: usize, out: &mut Vec<f64>) {
+        out.push(self.id[p] as f64);
+        for v in [&self.position[p], &self.displacement[p], &self.velocity[p], &self.acceleration[p]] {
+            out.extend_from_slice(v);
+        }
+        out.extend_from_slice(&[self.mass[p], self.volume[p], self.initial_volume[p]]);
+        out.extend_from_slice(self.deformation_gradient[p].as_slice());
+        out.extend_from_slice(self.cauchy[p].as_slice());
+        out.push(self.work[p]);
+        out.extend_from_slice(&self.state[p * stride..(p + 1) * stride]);
+    }
+
+    /// Appends the point of a record of [`MaterialPoints::pack`].
+    pub fn push_record(&mut self, record: &[f64], stride: usize) {
+        debug_assert_eq!(record.len(), Self::RECORD_LEN + stride);
+        let vec3 = |k: usize| [record[k], record[k + 1], record[k + 2]];
+        self.id.push(record[0] as usize);
+        self.position.push(vec3(1));
+        self.displacement.push(vec3(4));
+        self.velocity.push(vec3(7));
+        self.acceleration.push(vec3(10));
+        self.mass.push(record[13]);
+        self.volume.push(record[14]);
+        self.initial_volume.push(record[15]);
+        self.deformation_gradient.push(Matrix3::from_column_slice(&record[16..25]));
+        self.cauchy.push(Matrix3::from_column_slice(&record[25..34]));
+        self.work.push(record[34]);
+        self.state.extend_from_slice(&record[Self::RECORD_LEN..]);
+    }
+
     /// Keeps the points `order[k]` in that order (a permutation or a subset); `stride` is
     /// the law's history length.
     pub fn reorder(&mut self, order: &[usize], stride: usize) {
@@ -198,4 +236,39 @@ pub fn from_lattice_2d(
         }
     }
     mp
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A point packed and pushed back is the same point, bit for bit, in every field.
+    #[test]
+    fn a_packed_point_is_pushed_back_bit_for_bit() {
+        let mut pts = MaterialPoints::default();
+        for k in 0..3 {
+            pts.push([0.1 * k as f64, 0.2, -0.3], 1e-3 * (k + 1) as f64, 2650.0);
+        }
+        let stride = 2;
+        pts.state = (0..3 * stride).map(|v| 0.7 * v as f64 - 1.0).collect();
+        pts.velocity[1] = [1.0 / 3.0, -2.0 / 7.0, 5e-17];
+        pts.deformation_gradient[1] = Matrix3::new(1.1, 0.2, 0.0, -0.1, 0.9, 0.3, 0.0, 0.05, 1.0);
+        pts.cauchy[1] = Matrix3::new(-1e3, 12.5, 0.0, 12.5, -2e3, 0.0, 0.0, 0.0, -1.5e3);
+        pts.work[1] = 0.125;
+        pts.id[1] = 41;
+        let mut record = Vec::new();
+        pts.pack(1, stride, &mut record);
+        assert_eq!(record.len(), MaterialPoints::RECORD_LEN + stride);
+        let mut other = MaterialPoints::default();
+        other.push_record(&record, stride);
+        let mut back = Vec::new();
+        other.pack(0, stride, &mut back);
+        assert_eq!(
+            record.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            back.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
+        assert_eq!(other.id, vec![41]);
+        assert_eq!(other.deformation_gradient[0], pts.deformation_gradient[1]);
+        assert_eq!(other.state, pts.state[stride..2 * stride].to_vec());
+    }
 }

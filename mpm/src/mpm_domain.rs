@@ -25,6 +25,12 @@
 //! Like the displacements, the pressures of nodes that no active cell touches keep their
 //! start value (`r = (p − p_n)/s²`: a unit diagonal after the assembler's equilibration by
 //! `s = μ/h`).
+//!
+//! In a **distributed run** (docs/distributed.md) a domain on the linear basis without walls
+//! or interfaces holds, on each rank, only the points of the supports whose blocks the rank
+//! owns ([`Domain::own_blocks`]): the counts of points per support and the projection's nodal
+//! sums are summed over the ranks in the initialisation phase, and points that moved into
+//! another rank's supports migrate to it (`MpmDomain::migrate`).
 
 use std::ops::Range;
 use std::sync::{Arc, RwLock};
@@ -38,6 +44,7 @@ use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
 use loam_fem::kernel::{KernelContext, PointGeometry};
 use loam_fem::newton::DEFAULT_MPM_PATTERN_RINGS;
+use loam_fem::ranks::Ranks;
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 
@@ -151,6 +158,71 @@ struct MpmState {
     widenings: Vec<String>,
 }
 
+/// The material points of a domain held by the ranks that own their supports (a distributed
+/// run, docs/distributed.md, stage 3): each rank holds the points of the supports whose
+/// blocks it evaluates; the grid, the pattern and the nodal sums stay whole on every rank.
+#[derive(Debug, Clone)]
+struct DistributedPoints {
+    ranks: Ranks,
+    /// Points of each body in each support, summed over the ranks at the last
+    /// [`MpmDomain::update_pattern`].
+    counts: Vec<Vec<u32>>,
+    /// Points this rank holds (in every body).
+    held: usize,
+}
+
+impl DistributedPoints {
+    /// Every rank's count of its points per body and support, summed (collective).
+    fn count(&mut self, bodies: &[Body], supports: usize) {
+        let mut mine = Vec::new();
+        for (k, body) in bodies.iter().enumerate() {
+            for s in 0..supports {
+                let n = body.points_in_support(s).len();
+                if n > 0 {
+                    mine.extend_from_slice(&[(k * supports + s) as f64, n as f64]);
+                }
+            }
+        }
+        let t = std::time::Instant::now();
+        let all = self.ranks.all_gather_varcount(&mine);
+        let me = self.ranks.rank();
+        let received: usize = all.iter().enumerate().filter(|(r, _)| *r != me).map(|(_, p)| p.len()).sum();
+        loam_fem::ranks::with_stats(|s| {
+            s.exchange_seconds += t.elapsed().as_secs_f64();
+            s.exchange_bytes += 8 * received as u64;
+        });
+        self.counts.resize(bodies.len(), Vec::new());
+        for c in &mut self.counts {
+            c.clear();
+            c.resize(supports, 0);
+        }
+        for rec in all.iter().flat_map(|part| part.chunks_exact(2)) {
+            let i = rec[0] as usize;
+            self.counts[i / supports][i % supports] += rec[1] as u32;
+        }
+    }
+}
+
+/// The state of `body` with the points of every rank (collective): each rank's records
+/// ([`crate::material_points::MaterialPoints::pack`]) gathered in rank order, the points
+/// erased on every rank summed.
+fn every_rank_state(body: &Body, ranks: Ranks) -> crate::body::BodyState {
+    let sl = body.law().state_len();
+    let mut mine = vec![body.erased() as f64];
+    for p in 0..body.points.len() {
+        body.points.pack(p, sl, &mut mine);
+    }
+    let mut state = crate::body::BodyState { points: Default::default(), erased: 0 };
+    let len = crate::material_points::MaterialPoints::RECORD_LEN + sl;
+    for part in ranks.all_gather_varcount(&mine) {
+        state.erased += part[0] as usize;
+        for rec in part[1..].chunks_exact(len) {
+            state.points.push_record(rec, sl);
+        }
+    }
+    state
+}
+
 /// Material points on a background grid (see the module doc).
 pub struct MpmDomain {
     name: String,
@@ -184,6 +256,8 @@ pub struct MpmDomain {
     soil_points: SoilPoints,
     /// In a distributed run, the rank that evaluates each block ([`Domain::own_blocks`]).
     owners: Option<loam_fem::ranks::BlockOwners>,
+    /// In a distributed run whose points are distributed: see [`DistributedPoints`].
+    distributed: Option<DistributedPoints>,
 }
 
 /// The grid nodes that the bodies' points reach (`reached`) but barely cover: a node's
@@ -230,6 +304,7 @@ impl MpmDomain {
             soil_nodes: Arc::new(RwLock::new(vec![false; nodes])),
             soil_points: Arc::new(RwLock::new(Vec::new())),
             owners: None,
+            distributed: None,
         }
     }
 
@@ -422,7 +497,18 @@ impl MpmDomain {
     /// blocks changed.
     pub fn update_pattern(&mut self) -> bool {
         let num_cells = self.grid.num_supports();
-        let active: Vec<usize> = (0..num_cells).filter(|&c| self.bodies.iter().any(|b| b.occupies(c))).collect();
+        if let Some(d) = &mut self.distributed {
+            d.count(&self.bodies, num_cells);
+        }
+        // the first body with points in each support (of every rank's points where they are
+        // distributed)
+        let first_body = |c: usize| -> Option<usize> {
+            match &self.distributed {
+                Some(d) => d.counts.iter().position(|n| n[c] > 0),
+                None => self.bodies.iter().position(|b| b.occupies(c)),
+            }
+        };
+        let active: Vec<usize> = (0..num_cells).filter(|&c| first_body(c).is_some()).collect();
         let cb = &mut self.blocks;
         let changed = if cb.rings == 0 {
             active != cb.active || cb.pattern != active
@@ -479,7 +565,7 @@ impl MpmDomain {
         cb.orphans.clear();
         cb.pressure_orphans.clear();
         for &c in &cb.pattern {
-            let first = self.bodies.iter().position(|b| b.occupies(c));
+            let first = first_body(c);
             cb.first_body.push(first.map_or(NONE, |k| k as u8));
             // a node not live is owned by the first block that holds it (on the linear basis
             // always a block without points; on a smooth one possibly one with points)
@@ -510,6 +596,10 @@ impl MpmDomain {
                 let e = young_modulus(body.law().elastic_lame());
                 body_fill.iter_mut().for_each(|w| *w = 0.0);
                 body.add_cell_weights(&self.grid, &mut body_fill);
+                if let Some(d) = &self.distributed {
+                    // a cell's points lie on one rank (the linear basis): its fill is theirs
+                    d.ranks.sum_rows_identically(&mut body_fill, 1);
+                }
                 for c in 0..num_cells {
                     if body_fill[c] > 0.0 {
                         fill[c] += body_fill[c];
@@ -584,6 +674,9 @@ impl MpmDomain {
         for body in &self.bodies {
             body.project(&self.grid, dim, &mut self.sums);
         }
+        if let Some(d) = &self.distributed {
+            self.sums.sum_over(d.ranks);
+        }
         for (a, &g) in self.node_ids.iter().enumerate() {
             let kind = self.kind(a);
             if kind == GridNodeKind::Tied {
@@ -615,6 +708,9 @@ impl MpmDomain {
             let mut sums = vec![0.0; self.grid.mesh.coords.len()];
             for body in &self.bodies {
                 body.project_pressure(&self.grid, &mut sums);
+            }
+            if let Some(d) = &self.distributed {
+                d.ranks.sum_rows_identically(&mut sums, 1);
             }
             for (a, &dof) in pressure_dofs.iter().enumerate() {
                 let m = self.sums.mass[a];
@@ -807,6 +903,82 @@ impl MpmDomain {
         Ok(())
     }
 
+    /// Whether this domain's points can be held by the ranks that own their supports in a
+    /// distributed run (docs/distributed.md, stage 3): on the linear basis, whose support is
+    /// one cell, so that every point of a cell lies on one rank (the ghost penalty's cell
+    /// fills are then sums of one rank's points); without penalty walls, an attached
+    /// structure or a contact on the grid, which read the points of several supports, and
+    /// with the points' own quadrature (`filled_cells` scales a cell's weights to its volume
+    /// from all its points, which a cell holds on two ranks between a point's move and its
+    /// migration). Those domains keep every point on every rank (stage 2).
+    fn distributes_points(&self) -> bool {
+        !self.grid.basis().is_smooth()
+            && self.quadrature == PointQuadrature::MaterialPoints
+            && self.walls.is_empty()
+            && self.attachment.is_none()
+            && Arc::strong_count(&self.soil_nodes) == 1
+            && Arc::strong_count(&self.soil_points) == 1
+    }
+
+    /// Sends every point held here whose support's block another rank owns to that rank and
+    /// takes the points the other ranks send here (collective: one exchange of the points'
+    /// records per body, [`crate::material_points::MaterialPoints::pack`]), then locates the
+    /// points held again. With `first` every rank holds every point (the first partition, or
+    /// a restored checkpoint): each keeps its own and nothing is sent.
+    fn migrate(&mut self, first: bool) {
+        let (Some(owners), Some(d)) = (&self.owners, &mut self.distributed) else { return };
+        let t = std::time::Instant::now();
+        let (ranks, me) = (d.ranks, d.ranks.rank());
+        let pattern = &self.blocks.pattern;
+        let (mut sent, mut received, mut bytes, mut held) = (0u64, 0u64, 0u64, 0usize);
+        for body in &mut self.bodies {
+            let sl = body.law().state_len();
+            let n = body.points.len();
+            let mut keep = Vec::with_capacity(n);
+            let mut outgoing = Vec::new();
+            for p in 0..n {
+                let s = body.support_of(p);
+                let b = pattern.binary_search(&s).expect("a located point's support is in the pattern");
+                let r = owners.owner(b);
+                if r == me {
+                    keep.push(p);
+                } else if !first {
+                    outgoing.push(r as f64);
+                    body.points.pack(p, sl, &mut outgoing);
+                    sent += 1;
+                }
+            }
+            let all = if first { Vec::new() } else { ranks.all_gather_varcount(&outgoing) };
+            if keep.len() != n {
+                body.points.reorder(&keep, sl);
+            }
+            let len = 1 + crate::material_points::MaterialPoints::RECORD_LEN + sl;
+            for (r, part) in all.iter().enumerate() {
+                if r == me {
+                    continue;
+                }
+                for rec in part.chunks_exact(len).filter(|rec| rec[0] as usize == me) {
+                    body.points.push_record(&rec[1..], sl);
+                    received += 1;
+                    bytes += 8 * len as u64;
+                }
+            }
+            body.locate(&self.grid, self.formulation, self.thickness);
+            held += body.points.len();
+        }
+        let before = std::mem::replace(&mut d.held, held);
+        loam_fem::ranks::with_stats(|s| {
+            s.points_held = s.points_held + held as u64 - before as u64;
+            s.points_sent += sent;
+            s.points_received += received;
+            if !first {
+                s.migrations += 1;
+                s.exchange_seconds += t.elapsed().as_secs_f64();
+                s.exchange_bytes += bytes;
+            }
+        });
+    }
+
     /// In a distributed run, before phase 3: the kernel output and law history of the points
     /// of other ranks' supports reach this rank (docs/distributed.md), so that every rank
     /// convects every point.
@@ -849,8 +1021,13 @@ impl MpmDomain {
                 .collect()
         };
         let mut mass = vec![0.0; mesh.coords.len()];
-        for body in &self.bodies {
-            body.nodal_mass(&self.grid, &mut mass);
+        if self.distributed.is_some() {
+            // the step's projection, summed over the ranks: the same points and functions
+            mass.copy_from_slice(&self.sums.mass);
+        } else {
+            for body in &self.bodies {
+                body.nodal_mass(&self.grid, &mut mass);
+            }
         }
         let mut active = vec![0.0; mesh.coords.len()];
         for &c in &self.blocks.active {
@@ -988,6 +1165,11 @@ impl Domain for MpmDomain {
         let cells_changed = self.update_pattern();
         self.project_to_grid(committed);
         let walls_changed = self.place_walls();
+        // distributed points that moved into other ranks' supports go there now; with a new
+        // pattern they go at its partition ([`Domain::own_blocks`])
+        if self.distributed.is_some() && !cells_changed && self.owners.is_some() {
+            self.migrate(false);
+        }
         Ok(cells_changed || walls_changed)
     }
 
@@ -1009,12 +1191,17 @@ impl Domain for MpmDomain {
     /// One unit per material point of a support's block (of every body); the ghost
     /// penalty's and walls' blocks, which every rank evaluates, 0.
     fn block_costs(&self, costs: &mut Vec<f64>) {
-        costs.extend(
-            self.blocks
-                .pattern
-                .iter()
-                .map(|&c| self.bodies.iter().map(|b| b.points_in_support(c).len() as f64).sum::<f64>()),
-        );
+        match &self.distributed {
+            Some(d) => {
+                costs.extend(self.blocks.pattern.iter().map(|&c| d.counts.iter().map(|n| f64::from(n[c])).sum::<f64>()))
+            }
+            None => costs.extend(
+                self.blocks
+                    .pattern
+                    .iter()
+                    .map(|&c| self.bodies.iter().map(|b| b.points_in_support(c).len() as f64).sum::<f64>()),
+            ),
+        }
         let mut rest = BlockLayout::default();
         if let Some(ghost) = &self.ghost {
             ghost.blocks(&self.grid, &self.node_ids, &mut rest);
@@ -1027,8 +1214,24 @@ impl Domain for MpmDomain {
 
     /// The material points' supports of other ranks are not evaluated here (their points'
     /// state is exchanged at the commit); the ghost penalty's and walls' blocks are.
+    ///
+    /// Where this domain's points can be distributed ([`MpmDomain::distributes_points`]), the
+    /// first partition leaves each rank only the points of its own supports, and every later
+    /// one sends the points whose supports changed owner to their new owners
+    /// ([`MpmDomain::migrate`]).
     fn own_blocks(&mut self, owners: Option<loam_fem::ranks::BlockOwners>) {
         self.owners = owners.filter(|o| o.len() >= self.blocks.pattern.len());
+        let Some(ranks) = self.owners.as_ref().map(|o| o.ranks()) else { return };
+        if self.distributed.is_none() && self.distributes_points() {
+            self.distributed = Some(DistributedPoints { ranks, counts: Vec::new(), held: 0 });
+            self.migrate(true);
+        } else if self.distributed.is_some() {
+            self.migrate(false);
+        }
+    }
+
+    fn points_distributed(&self) -> Option<Ranks> {
+        self.distributed.as_ref().map(|d| d.ranks)
     }
 
     /// Updated-Lagrangian phase: the bodies' cells, then the walls' blocks.
@@ -1066,7 +1269,9 @@ impl Domain for MpmDomain {
 
     /// Convective phase: the bodies' points move and commit; the walls record their forces.
     fn commit(&mut self, input: &AssemblyInput<'_>) {
-        self.replicate_trials();
+        if self.distributed.is_none() {
+            self.replicate_trials();
+        }
         self.interpolate_to_points(input);
         let at = GridNodes { grid: &self.grid, node_ids: &self.node_ids };
         for wall in &mut self.walls {
@@ -1189,9 +1394,17 @@ impl Domain for MpmDomain {
 
     /// The bodies' points, the walls' forces and the cells of the sparsity pattern (kept
     /// while the active cells stay inside it: a resumed run assembles the same pattern).
+    ///
+    /// Where the points are distributed, every rank's points are gathered into the state
+    /// (collective: every rank saves at the same step, rank 0 writes it), which then restores
+    /// on any number of ranks as a replicated model does.
     fn save_state(&self) -> Vec<u8> {
+        let bodies = match &self.distributed {
+            None => self.bodies.iter().map(Body::state).collect(),
+            Some(d) => self.bodies.iter().map(|b| every_rank_state(b, d.ranks)).collect(),
+        };
         let state = MpmState {
-            bodies: self.bodies.iter().map(Body::state).collect(),
+            bodies,
             walls: self.walls.iter().map(PenaltyBoundary::state).collect(),
             pattern: self.blocks.pattern.clone(),
             worst_cell_quality: self.worst_cell_quality,
@@ -1212,6 +1425,12 @@ impl Domain for MpmDomain {
         for (body, s) in self.bodies.iter_mut().zip(state.bodies) {
             body.restore(s)?;
         }
+        // every rank holds every point again, until the next partition distributes them
+        if let Some(d) = &mut self.distributed {
+            loam_fem::ranks::with_stats(|s| s.points_held -= d.held as u64);
+        }
+        self.distributed = None;
+        self.owners = None;
         for (wall, s) in self.walls.iter_mut().zip(state.walls) {
             wall.restore(s);
         }
@@ -1238,7 +1457,15 @@ impl Domain for MpmDomain {
     /// grid (small) built whole and split.
     fn output_pieces(&self, committed: &NodalState, with_grid: bool, rank: usize, size: usize) -> Vec<NamedOutput> {
         let bodies = self.bodies.len();
-        let mut out = self.outputs_of(committed, with_grid, |b| loam_fem::domain::share(b.points.len(), rank, size));
+        let distributed = self.distributed.is_some();
+        let mut out = self.outputs_of(committed, with_grid, |b| {
+            // distributed points: this rank's own
+            if distributed {
+                0..b.points.len()
+            } else {
+                loam_fem::domain::share(b.points.len(), rank, size)
+            }
+        });
         for o in &mut out[bodies..] {
             o.output = o.output.piece(rank, size);
         }

@@ -344,21 +344,37 @@ fn run_other_rank(sim: &mut Simulation, out: &Path, options: &RunOptions) -> (Ex
     let rank = sim.case.solver.ranks.rank();
     let report =
         |e: std::io::Error| eprintln!("warning: rank {rank}: writing its output pieces to {}: {e}", out.display());
+    // where the points are distributed (from the first partition on) the monitors' sums and a
+    // checkpoint's gathered state are collectives: this rank meets them whether or not it can
+    // write its pieces
     let mut writer = match ResultWriter::pieces(out, sim, options.resume.as_ref()) {
         Ok(w) => Some(w),
         Err(e) => {
             report(e);
+            if sim.model.has_distributed_points() && options.resume.as_ref().is_none_or(|s| s.rows_step < sim.step) {
+                sim.monitor_values();
+            }
             None
         }
     };
-    let write = |sim: &Simulation, force: bool, writer: &mut Option<ResultWriter>| {
-        if let Some(Err(e)) = writer.as_mut().map(|w| w.write_step(sim, force)) {
-            report(e);
-            *writer = None;
+    let write = |sim: &Simulation, force: bool, writer: &mut Option<ResultWriter>| match writer.as_mut() {
+        Some(w) => {
+            if let Err(e) = w.write_step(sim, force) {
+                report(e);
+                *writer = None;
+            }
         }
+        None if sim.model.has_distributed_points() => {
+            sim.monitor_values();
+        }
+        None => {}
     };
+    let mut clock = crate::run::CheckpointClock::new(sim);
     while !sim.finished() {
         if crate::run::interrupted_on_any_rank(sim, options) {
+            if sim.model.has_distributed_points() {
+                sim.model.save_state(); // rank 0's checkpoint gathers this rank's points
+            }
             return (ExitCode::from(INTERRUPTED), true);
         }
         let result = sim.step_observed(&mut |sim| write(sim, true, &mut writer));
@@ -366,6 +382,9 @@ fn run_other_rank(sim: &mut Simulation, out: &Path, options: &RunOptions) -> (Ex
             Ok(_) => {
                 let last = sim.finished();
                 write(sim, last, &mut writer);
+                if !last && clock.due_on_every_rank(sim) && sim.model.has_distributed_points() {
+                    sim.model.save_state(); // rank 0's checkpoint gathers this rank's points
+                }
             }
             Err(_) => {
                 if let Some(Err(e)) = writer.as_mut().map(|w| w.write_final_state(sim)) {

@@ -172,7 +172,14 @@ impl ResultWriter {
 
     /// Writes the monitors row of the committed state, and VTK files if the step is on the
     /// output interval (or `force`).
+    ///
+    /// A writer without monitors (a rank other than 0) evaluates them all the same where the
+    /// model's points are distributed: their values are sums over the ranks, collectives that
+    /// every rank must meet.
     pub fn write_step(&mut self, sim: &Simulation, force: bool) -> std::io::Result<()> {
+        if self.monitors.is_none() && sim.model.has_distributed_points() {
+            sim.monitor_values();
+        }
         if let Some(monitors) = &mut self.monitors {
             write!(monitors, "{}", sim.time())?;
             for v in sim.monitor_values() {

@@ -380,7 +380,7 @@ impl RunSummary {
         let monitors = NamedValues(
             sim.monitors
                 .iter()
-                .zip(sim.monitor_values())
+                .zip(sim.monitor_values_for_report())
                 .map(|(m, v)| (m.name.clone(), v.is_finite().then_some(v)))
                 .collect(),
         );
