@@ -164,10 +164,20 @@ fn write_checkpoint(
 /// temporary directory (the writer's state as of its last complete row), and the error
 /// with where it went.
 fn rescue(sim: &Simulation, writer: Option<WriterState>, fingerprint: u32, error: std::io::Error) -> std::io::Error {
+    if sim.model.has_distributed_points() {
+        // rank 0 alone is here: the state would gather the other ranks' points, which they do
+        // not send (this rank's exit ends the run under mpirun; docs/distributed.md, stage 3)
+        return std::io::Error::new(
+            error.kind(),
+            format!(
+                "{error}; the state at t = {} (step {}) was not saved: its material points are distributed over the MPI ranks (the results up to the last complete output are written; resume from an earlier checkpoint, analysis.checkpoint)",
+                seconds(sim.time()),
+                sim.step
+            ),
+        );
+    }
     let path =
         std::env::temp_dir().join(format!("loam_{}_{}_step_{}.ckpt", sim.case.name, std::process::id(), sim.step));
-    // (rank 0 alone: where the points are distributed, the other ranks are not here and the
-    // state gathered would wait for them; docs/distributed.md, stage 3)
     match checkpoint::write(&path, &checkpoint_of(sim, sim.model.save_state(), writer, fingerprint)) {
         Ok(()) => std::io::Error::new(
             error.kind(),

@@ -127,15 +127,20 @@ fn line_measures((a, b): (f64, f64)) -> (f64, f64) {
 /// Runs `case` (to rest or its end time) and measures it against the experiment.
 fn measure(label: &str, case: loam::case::Case) -> Collapse {
     let (sim, history) = run(case);
+    collapse_of(label, &sim, &history)
+}
+
+/// What the run `sim` with its monitors' `history` measured (see [`measure`]).
+fn collapse_of(label: &str, sim: &Simulation, history: &common::History) -> Collapse {
     let extents = point_extents(&sim.model);
     let surface = SurfaceProfile::new(&extents, 0.0);
-    let (angle, x_mid) = line_measures(failure_line(&sim));
+    let (angle, x_mid) = line_measures(failure_line(sim));
     let c = Collapse {
         label: label.to_string(),
         at_rest: sim.at_rest,
         end: sim.time(),
-        runout: last(&sim, &history, "runout"),
-        height_at_wall: last(&sim, &history, "height_at_wall"),
+        runout: last(sim, history, "runout"),
+        height_at_wall: last(sim, history, "height_at_wall"),
         surface_rms: surface.rms_distance(&read_xy("surface.csv")),
         angle,
         x_mid,
@@ -272,20 +277,7 @@ fn bui2008_collapse_triangular_grid() {
 fn bui2008_collapse_3d_slab() {
     let case = "collapse_bui2008_slab_3d.json";
     let (sim, history) = run(parse(case_json(case)));
-    let extents = point_extents(&sim.model);
-    let (angle, x_mid) = line_measures(failure_line(&sim));
-    let c = Collapse {
-        label: case.to_string(),
-        at_rest: sim.at_rest,
-        end: sim.time(),
-        runout: last(&sim, &history, "runout"),
-        height_at_wall: last(&sim, &history, "height_at_wall"),
-        surface_rms: SurfaceProfile::new(&extents, 0.0).rms_distance(&read_xy("surface.csv")),
-        angle,
-        x_mid,
-        steps: sim.stats.steps,
-        iterations: sim.stats.iterations,
-    };
+    let c = collapse_of(case, &sim, &history);
     println!("{case}: {} steps, {} Newton iterations, ended at t = {:.3} s", c.steps, c.iterations, c.end);
     let [at_rest, _, surface, failure] = check(&c);
     let centres = centre_profile_rms(&sim, 0.005);
