@@ -26,9 +26,8 @@
 //! start value (`r = (p − p_n)/s²`: a unit diagonal after the assembler's equilibration by
 //! `s = μ/h`).
 //!
-//! In a **distributed run** (docs/distributed.md) a domain on the linear basis without walls
-//! or interfaces holds, on each rank, only the points of the supports whose blocks the rank
-//! owns ([`Domain::own_blocks`]): the counts of points per support and the projection's nodal
+//! In a **distributed run** (docs/distributed.md) a domain without walls or interfaces holds,
+//! on each rank, only the points of the supports whose blocks the rank owns ([`Domain::own_blocks`]): the counts of points per support and the projection's nodal
 //! sums are summed over the ranks in the initialisation phase, and points that moved into
 //! another rank's supports migrate to it (`MpmDomain::migrate`).
 
@@ -262,12 +261,16 @@ pub struct MpmDomain {
 
 /// The grid nodes that the bodies' points reach (`reached`) but barely cover: a node's
 /// weight `Σ_p N_I w_p` below [`CUT_FRACTION`] of its smallest cell's measure (`volume`,
-/// per cell); an interior node's is about one cell's.
-fn weak_nodes(grid: &Grid, bodies: &[Body], reached: &[bool], volume: &[f64]) -> Vec<bool> {
+/// per cell); an interior node's is about one cell's. With `ranks` (distributed points), the
+/// weights of every rank's points.
+fn weak_nodes(grid: &Grid, bodies: &[Body], reached: &[bool], volume: &[f64], ranks: Option<Ranks>) -> Vec<bool> {
     let nodes = grid.mesh.coords.len();
     let mut weight = vec![0.0f64; nodes];
     for body in bodies {
         body.add_node_weights(grid, &mut weight);
+    }
+    if let Some(ranks) = ranks {
+        ranks.sum_rows_identically(&mut weight, 1);
     }
     let mut full = vec![f64::INFINITY; nodes];
     for (c, &v) in volume.iter().enumerate() {
@@ -546,6 +549,12 @@ impl MpmDomain {
             for body in &self.bodies {
                 body.mark_reached_nodes(&self.grid, &mut live);
             }
+            if let Some(d) = &self.distributed {
+                // reached by a point of any rank
+                let mut flags: Vec<f64> = live.iter().map(|&l| f64::from(u8::from(l))).collect();
+                d.ranks.sum_rows_identically(&mut flags, 1);
+                live.iter_mut().zip(&flags).for_each(|(l, &f)| *l = f > 0.0);
+            }
         } else {
             for &c in &cb.active {
                 for &a in self.grid.support(c) {
@@ -597,7 +606,6 @@ impl MpmDomain {
                 body_fill.iter_mut().for_each(|w| *w = 0.0);
                 body.add_cell_weights(&self.grid, &mut body_fill);
                 if let Some(d) = &self.distributed {
-                    // a cell's points lie on one rank (the linear basis): its fill is theirs
                     d.ranks.sum_rows_identically(&mut body_fill, 1);
                 }
                 for c in 0..num_cells {
@@ -622,7 +630,8 @@ impl MpmDomain {
             // smooth basis: the nodes that the material barely covers (a node's weight
             // `Σ_p N_I w_p` below CUT_FRACTION of a cell), which the lines of the ghost
             // penalty hold where no face does; their cells join the zone of the blocks
-            let weak = if smooth { weak_nodes(&self.grid, &self.bodies, &reached, &volume) } else { Vec::new() };
+            let ranks = self.distributed.as_ref().map(|d| d.ranks);
+            let weak = if smooth { weak_nodes(&self.grid, &self.bodies, &reached, &volume, ranks) } else { Vec::new() };
             let edge: Vec<bool> = if smooth {
                 (0..num_cells).map(|c| cut[c] || self.grid.mesh.cell(c).iter().any(|&a| weak[a])).collect()
             } else {
@@ -904,16 +913,15 @@ impl MpmDomain {
     }
 
     /// Whether this domain's points can be held by the ranks that own their supports in a
-    /// distributed run (docs/distributed.md, stage 3): on the linear basis, whose support is
-    /// one cell, so that every point of a cell lies on one rank (the ghost penalty's cell
-    /// fills are then sums of one rank's points); without penalty walls, an attached
-    /// structure or a contact on the grid, which read the points of several supports, and
-    /// with the points' own quadrature (`filled_cells` scales a cell's weights to its volume
-    /// from all its points, which a cell holds on two ranks between a point's move and its
-    /// migration). Those domains keep every point on every rank (stage 2).
+    /// distributed run (docs/distributed.md, stage 3): on every basis (a support's points
+    /// are one block's, on one rank; what the pattern and the ghost penalty read of the
+    /// points — the nodes they reach, the cells' and nodes' weights — is summed over the
+    /// ranks), with the points' own quadrature (`filled_cells` scales a cell's weights to its
+    /// volume from all its points, which a cell may hold on two ranks), and without penalty
+    /// walls, an attached structure or a contact on the grid, which read the points of
+    /// several supports. Those domains keep every point on every rank (stage 2).
     fn distributes_points(&self) -> bool {
-        !self.grid.basis().is_smooth()
-            && self.quadrature == PointQuadrature::MaterialPoints
+        self.quadrature == PointQuadrature::MaterialPoints
             && self.walls.is_empty()
             && self.attachment.is_none()
             && Arc::strong_count(&self.soil_nodes) == 1
