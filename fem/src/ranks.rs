@@ -200,13 +200,7 @@ impl Ranks {
                 mine.extend_from_slice(v);
             }
         }
-        let t = std::time::Instant::now();
-        let all = self.all_gather_varcount(&mine);
-        let received: usize = all.iter().enumerate().filter(|(r, _)| *r != self.rank).map(|(_, p)| p.len()).sum();
-        with_stats(|s| {
-            s.exchange_seconds += t.elapsed().as_secs_f64();
-            s.exchange_bytes += 8 * received as u64;
-        });
+        let all = self.exchange(&mine);
         for part in &all {
             for rec in part.chunks_exact(width + 1) {
                 let row = rec[0] as usize;
@@ -221,6 +215,20 @@ impl Ranks {
                 }
             }
         }
+    }
+
+    /// [`Ranks::all_gather_varcount`] counted in this rank's [`DistributedStats`]: its time
+    /// and the bytes of the other ranks' parts go to `exchange_seconds` and `exchange_bytes`
+    /// (the exchanges of distributed points: their counts, nodal sums and migrations).
+    pub fn exchange(&self, mine: &[f64]) -> Vec<Vec<f64>> {
+        let t = std::time::Instant::now();
+        let all = self.all_gather_varcount(mine);
+        let received: usize = all.iter().enumerate().filter(|(r, _)| *r != self.rank).map(|(_, p)| p.len()).sum();
+        with_stats(|s| {
+            s.exchange_seconds += t.elapsed().as_secs_f64();
+            s.exchange_bytes += 8 * received as u64;
+        });
+        all
     }
 
     /// Every rank's `mine`, in rank order (`MPI_Allgatherv`; collective).

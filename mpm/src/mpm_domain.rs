@@ -182,14 +182,7 @@ impl DistributedPoints {
                 }
             }
         }
-        let t = std::time::Instant::now();
-        let all = self.ranks.all_gather_varcount(&mine);
-        let me = self.ranks.rank();
-        let received: usize = all.iter().enumerate().filter(|(r, _)| *r != me).map(|(_, p)| p.len()).sum();
-        loam_fem::ranks::with_stats(|s| {
-            s.exchange_seconds += t.elapsed().as_secs_f64();
-            s.exchange_bytes += 8 * received as u64;
-        });
+        let all = self.ranks.exchange(&mine);
         self.counts.resize(bodies.len(), Vec::new());
         for c in &mut self.counts {
             c.clear();
@@ -935,10 +928,9 @@ impl MpmDomain {
     /// a restored checkpoint): each keeps its own and nothing is sent.
     fn migrate(&mut self, first: bool) {
         let (Some(owners), Some(d)) = (&self.owners, &mut self.distributed) else { return };
-        let t = std::time::Instant::now();
         let (ranks, me) = (d.ranks, d.ranks.rank());
         let pattern = &self.blocks.pattern;
-        let (mut sent, mut received, mut bytes, mut held) = (0u64, 0u64, 0u64, 0usize);
+        let (mut sent, mut received, mut held) = (0u64, 0u64, 0usize);
         for body in &mut self.bodies {
             let sl = body.law().state_len();
             let n = body.points.len();
@@ -956,10 +948,12 @@ impl MpmDomain {
                     sent += 1;
                 }
             }
-            let all = if first { Vec::new() } else { ranks.all_gather_varcount(&outgoing) };
-            if keep.len() != n {
+            let all = if first { Vec::new() } else { ranks.exchange(&outgoing) };
+            let leaving = keep.len() != n;
+            if leaving {
                 body.points.reorder(&keep, sl);
             }
+            let before = body.points.len();
             let len = 1 + crate::material_points::MaterialPoints::RECORD_LEN + sl;
             for (r, part) in all.iter().enumerate() {
                 if r == me {
@@ -968,10 +962,12 @@ impl MpmDomain {
                 for rec in part.chunks_exact(len).filter(|rec| rec[0] as usize == me) {
                     body.points.push_record(&rec[1..], sl);
                     received += 1;
-                    bytes += 8 * len as u64;
                 }
             }
-            body.locate(&self.grid, self.formulation, self.thickness);
+            // located at the step's start already unless points left or arrived
+            if leaving || body.points.len() != before {
+                body.locate(&self.grid, self.formulation, self.thickness);
+            }
             held += body.points.len();
         }
         let before = std::mem::replace(&mut d.held, held);
@@ -981,8 +977,6 @@ impl MpmDomain {
             s.points_received += received;
             if !first {
                 s.migrations += 1;
-                s.exchange_seconds += t.elapsed().as_secs_f64();
-                s.exchange_bytes += bytes;
             }
         });
     }
