@@ -306,15 +306,10 @@ pub fn point_extents(model: &Model) -> Vec<PointExtent> {
 /// (collective there: five values per point gathered to every rank).
 fn every_rank_extents(domain: &dyn Domain) -> Vec<PointExtent> {
     let local = domain.point_extents();
-    let Some(ranks) = domain.points_distributed() else { return local };
-    let mine: Vec<f64> =
-        local.iter().flat_map(|p| [p.position[0], p.position[1], p.position[2], p.size, p.initial_size]).collect();
-    ranks
-        .all_gather_varcount(&mine)
-        .iter()
-        .flat_map(|part| part.chunks_exact(5))
-        .map(|r| PointExtent { position: [r[0], r[1], r[2]], size: r[3], initial_size: r[4] })
-        .collect()
+    match domain.points_distributed() {
+        Some(ranks) => PointExtent::gathered(ranks, local),
+        None => local,
+    }
 }
 
 /// A component or invariant of a 3×3 tensor `t` (row-major).

@@ -204,6 +204,23 @@ impl PointExtent {
     pub fn half_height(&self) -> f64 {
         0.5 * self.size.min(self.initial_size)
     }
+
+    /// Every rank's `local` extents, in rank order (collective: the points of a domain whose
+    /// points are distributed over `ranks`, for what reads all of them: the surface monitors
+    /// and the contacts' gaps to the soil). One process: `local`.
+    pub fn gathered(ranks: crate::ranks::Ranks, local: Vec<PointExtent>) -> Vec<PointExtent> {
+        if !ranks.is_distributed() {
+            return local;
+        }
+        let mine: Vec<f64> =
+            local.iter().flat_map(|p| [p.position[0], p.position[1], p.position[2], p.size, p.initial_size]).collect();
+        ranks
+            .all_gather_varcount(&mine)
+            .iter()
+            .flat_map(|part| part.chunks_exact(5))
+            .map(|r| PointExtent { position: [r[0], r[1], r[2]], size: r[3], initial_size: r[4] })
+            .collect()
+    }
 }
 
 /// Vector quantities of tracked points.

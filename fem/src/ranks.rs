@@ -13,7 +13,7 @@
 //! model stays replicated. The sums every rank needs (the residual, the reactions, the
 //! soil's forces on the structure) are summed over the ranks.
 //!
-//! **Stage 3** (docs/distributed.md): where an MPM domain can, its material points are held
+//! **Stage 3** (docs/distributed.md): an MPM domain's material points are held
 //! only by the ranks that own their supports and migrate between them
 //! (`loam_mpm::mpm_domain`); the grid's nodal sums, the points' counts per support and the
 //! queries of the points are then summed over the ranks ([`Ranks::sum_rows_identically`],

@@ -26,8 +26,8 @@
 //! start value (`r = (p − p_n)/s²`: a unit diagonal after the assembler's equilibration by
 //! `s = μ/h`).
 //!
-//! In a **distributed run** (docs/distributed.md) a domain without walls or interfaces holds,
-//! on each rank, only the points of the supports whose blocks the rank owns ([`Domain::own_blocks`]): the counts of points per support and the projection's nodal
+//! In a **distributed run** (docs/distributed.md) a domain holds, on each rank, only the
+//! points of the supports whose blocks the rank owns ([`Domain::own_blocks`]): the counts of points per support and the projection's nodal
 //! sums are summed over the ranks in the initialisation phase, and points that moved into
 //! another rank's supports migrate to it (`MpmDomain::migrate`).
 
@@ -482,9 +482,28 @@ impl MpmDomain {
         for body in &mut self.bodies {
             body.locate(&self.grid, self.formulation, self.thickness);
         }
-        if self.quadrature == PointQuadrature::FilledCells {
-            normalise_filled_cells(&self.grid, self.formulation, self.thickness, &mut self.bodies);
+        // distributed points: once the points per cell of every rank are counted
+        if self.distributed.is_none() {
+            self.fill_cells();
         }
+    }
+
+    /// With [`PointQuadrature::FilledCells`], the points' weights in the cells the material
+    /// fills scaled to the cell's volume ([`normalise_filled_cells`]); a cell counts as
+    /// occupied if it holds points of any body (of any rank where the points are distributed:
+    /// on the linear basis, the only one `filled_cells` serves, a cell's points are all held
+    /// by the rank that owns its block).
+    fn fill_cells(&mut self) {
+        if self.quadrature != PointQuadrature::FilledCells {
+            return;
+        }
+        let occupied: Vec<bool> = (0..self.grid.num_supports())
+            .map(|c| match &self.distributed {
+                Some(d) => d.counts.iter().any(|n| n[c] > 0),
+                None => self.bodies.iter().any(|b| b.occupies(c)),
+            })
+            .collect();
+        normalise_filled_cells(&self.grid, self.formulation, self.thickness, &mut self.bodies, &occupied);
     }
 
     /// Phase 1c: the active cells (holding points of any body), the blocks of the pattern
@@ -495,6 +514,7 @@ impl MpmDomain {
         let num_cells = self.grid.num_supports();
         if let Some(d) = &mut self.distributed {
             d.count(&self.bodies, num_cells);
+            self.fill_cells();
         }
         // the first body with points in each support (of every rank's points where they are
         // distributed)
@@ -558,9 +578,13 @@ impl MpmDomain {
         let reached = live.clone();
         self.soil_nodes.write().expect("no writer panicked").clone_from(&reached);
         if Arc::strong_count(&self.soil_points) > 1 {
+            // the contacts measure their gaps to every rank's points
             let (formulation, thickness) = (self.formulation, self.thickness);
-            *self.soil_points.write().expect("no writer panicked") =
-                self.bodies.iter().flat_map(|b| b.point_extents(formulation, thickness)).collect();
+            let extents = self.bodies.iter().flat_map(|b| b.point_extents(formulation, thickness)).collect();
+            *self.soil_points.write().expect("no writer panicked") = match &self.distributed {
+                Some(d) => PointExtent::gathered(d.ranks, extents),
+                None => extents,
+            };
         }
         let mut live_pressure = live.clone();
         cb.first_body.clear();
@@ -905,22 +929,6 @@ impl MpmDomain {
         Ok(())
     }
 
-    /// Whether this domain's points can be held by the ranks that own their supports in a
-    /// distributed run (docs/distributed.md, stage 3): on every basis (a support's points
-    /// are one block's, on one rank; what the pattern and the ghost penalty read of the
-    /// points — the nodes they reach, the cells' and nodes' weights — is summed over the
-    /// ranks), with the points' own quadrature (`filled_cells` scales a cell's weights to its
-    /// volume from all its points, which a cell may hold on two ranks), and without penalty
-    /// walls, an attached structure or a contact on the grid, which read the points of
-    /// several supports. Those domains keep every point on every rank (stage 2).
-    fn distributes_points(&self) -> bool {
-        self.quadrature == PointQuadrature::MaterialPoints
-            && self.walls.is_empty()
-            && self.attachment.is_none()
-            && Arc::strong_count(&self.soil_nodes) == 1
-            && Arc::strong_count(&self.soil_points) == 1
-    }
-
     /// Sends every point held here whose support's block another rank owns to that rank and
     /// takes the points the other ranks send here (collective: one exchange of the points'
     /// records per body, [`crate::material_points::MaterialPoints::pack`]), then locates the
@@ -931,6 +939,7 @@ impl MpmDomain {
         let (ranks, me) = (d.ranks, d.ranks.rank());
         let pattern = &self.blocks.pattern;
         let (mut sent, mut received, mut held) = (0u64, 0u64, 0usize);
+        let mut relocated = false;
         for body in &mut self.bodies {
             let sl = body.law().state_len();
             let n = body.points.len();
@@ -967,6 +976,7 @@ impl MpmDomain {
             // located at the step's start already unless points left or arrived
             if leaving || body.points.len() != before {
                 body.locate(&self.grid, self.formulation, self.thickness);
+                relocated = true;
             }
             held += body.points.len();
         }
@@ -979,6 +989,13 @@ impl MpmDomain {
                 s.migrations += 1;
             }
         });
+        if first {
+            // the points per support of every rank, now that each holds its own
+            d.count(&self.bodies, self.grid.num_supports());
+        }
+        if relocated {
+            self.fill_cells();
+        }
     }
 
     /// In a distributed run, before phase 3: the kernel output and law history of the points
@@ -1217,14 +1234,13 @@ impl Domain for MpmDomain {
     /// The material points' supports of other ranks are not evaluated here (their points'
     /// state is exchanged at the commit); the ghost penalty's and walls' blocks are.
     ///
-    /// Where this domain's points can be distributed ([`MpmDomain::distributes_points`]), the
-    /// first partition leaves each rank only the points of its own supports, and every later
+    /// The first partition leaves each rank only the points of its own supports, and every later
     /// one sends the points whose supports changed owner to their new owners
     /// ([`MpmDomain::migrate`]).
     fn own_blocks(&mut self, owners: Option<loam_fem::ranks::BlockOwners>) {
         self.owners = owners.filter(|o| o.len() >= self.blocks.pattern.len());
         let Some(ranks) = self.owners.as_ref().map(|o| o.ranks()) else { return };
-        if self.distributed.is_none() && self.distributes_points() {
+        if self.distributed.is_none() {
             self.distributed = Some(DistributedPoints { ranks, counts: Vec::new(), held: 0 });
             self.migrate(true);
         } else if self.distributed.is_some() {

@@ -60,14 +60,22 @@ pub enum PointQuadrature {
 
 /// Scales the quadrature weights of the points of `bodies` in every filled cell of `grid`
 /// (the grid's configuration of the step, the points located in it) so that they add up to
-/// the cell's volume (see the module doc). Returns the number of cells scaled.
-pub fn normalise_filled_cells(grid: &Grid, formulation: Formulation, thickness: f64, bodies: &mut [Body]) -> usize {
+/// the cell's volume (see the module doc); `occupied[c]`: whether cell `c` holds points of
+/// any body (of any rank, where the points are distributed over ranks and `bodies` hold only
+/// this rank's). Returns the number of cells scaled.
+pub fn normalise_filled_cells(
+    grid: &Grid,
+    formulation: Formulation,
+    thickness: f64,
+    bodies: &mut [Body],
+    occupied: &[bool],
+) -> usize {
     let mesh = &grid.mesh;
     let num_cells = mesh.num_cells();
     // a node is inside the material if no cell around it is empty
     let mut inside = vec![true; mesh.coords.len()];
     for c in 0..num_cells {
-        if !bodies.iter().any(|b| b.occupies(c)) {
+        if !occupied[c] {
             for &a in mesh.cell(c) {
                 inside[a] = false;
             }
@@ -133,7 +141,8 @@ mod tests {
         let weight = |bodies: &[Body], i: usize, j: usize| bodies[0].cell_weight(j * 4 + i);
         assert_eq!(weight(&bodies, 1, 0), 0.75, "cell (1, 0) lost a point");
         assert_eq!(weight(&bodies, 1, 1), 1.25, "cell (1, 1) gained it");
-        let scaled = normalise_filled_cells(&grid, Formulation::PlaneStrain, 1.0, &mut bodies);
+        let occupied: Vec<bool> = (0..grid.mesh.num_cells()).map(|c| bodies.iter().any(|b| b.occupies(c))).collect();
+        let scaled = normalise_filled_cells(&grid, Formulation::PlaneStrain, 1.0, &mut bodies, &occupied);
         assert_eq!(scaled, 4, "the bottom row");
         for i in 0..4 {
             assert!((weight(&bodies, i, 0) - 1.0).abs() < 1e-14, "filled cell ({i}, 0): {}", weight(&bodies, i, 0));
