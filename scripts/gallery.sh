@@ -92,6 +92,7 @@ monitors biaxial_mc_softening_force biaxial_mc_softening monitors_force_vs_top_u
 monitors footing_fmu footing_fmu monitors_force_vs_footing_uy.png --x footing_uy --monitors footing_force
 # soil-structure interaction: MPM soil and FEM structures in one Newton system
 frames coupled_beam_split coupled_beam_split --field displacement:y --last
+frames coupled_beam_split_3d coupled_beam_split_3d --field displacement:y --last
 frames coupled_beam_split_mpm_clamped coupled_beam_split_mpm_clamped --field displacement:y --last
 frames coupled_beam_split_dynamic coupled_beam_split_dynamic --field displacement:y --times 0.65
 for c in coupled_collapse_rubber coupled_collapse_concrete; do
