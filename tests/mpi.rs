@@ -549,8 +549,8 @@ fn a_direct_solver_on_ranks_is_refused_naming_the_key() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A checkpoint of a run on 2 ranks (rank 0 writes it; the model is replicated, so it is the
-/// one-process checkpoint) resumed on 2 ranks: the case at `path` (edited by `edit`),
+/// A checkpoint of a run on 2 ranks (rank 0 writes it, every rank's points gathered into it)
+/// resumed on 2 ranks: the case at `path` (edited by `edit`),
 /// checkpointed after step 2 and resumed from there, writes a `monitors.csv` identical to the
 /// uninterrupted run's, byte for byte (runs on 2 ranks are reproducible: each owner sums one
 /// other rank's part).
@@ -584,8 +584,9 @@ fn checkpoint_on_2_ranks_resumes_bit_for_bit(path: &str, edit: impl Fn(&mut Valu
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// The coupled split beam (4 steps) checkpointed on 2 ranks after step 2 resumes on 2 ranks
-/// bit for bit.
+/// The coupled split beam (4 steps, its points distributed) checkpointed on 2 ranks after
+/// step 2 resumes on 2 ranks bit for bit (a static run: the projection's order of summation,
+/// which differs in the resumed run's first step, does not enter).
 #[test]
 fn a_checkpoint_on_2_ranks_resumes_on_2_ranks_bit_for_bit() {
     checkpoint_on_2_ranks_resumes_bit_for_bit("cases/coupled_beam_split.json", |_| {});
