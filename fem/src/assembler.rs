@@ -89,7 +89,12 @@ const BLOCK_WEIGHT_FLOOR: f64 = 1e-3;
 /// The global system of one sparsity pattern (see the module doc).
 pub struct Assembler {
     dofs: DofMap,
+    /// The whole matrix's pattern and gathers (one process); in a distributed run empty: a
+    /// rank gathers its blocks on its share's pattern, and PETSc preallocates its rows from
+    /// the layout ([`OwnedRows::of`](crate::ranks::OwnedRows::of)).
     pattern: AssemblyPattern,
+    /// Nonzeros of the whole matrix (in a distributed run summed over the ranks' rows).
+    whole_nnz: usize,
     /// The element blocks (the global DOF of every entry of the vector buffer).
     layout: BlockLayout,
     /// Start of each domain's blocks (`len = domains + 1`).
@@ -169,7 +174,6 @@ impl Assembler {
         frictional.sort_by_key(|f| f.0);
         let friction = NodalFriction::new(dim, &frictional, &layout);
         let dofs = DofMap::with_roles(dim, &constrained, system.roles, system.pressure_nodes, system.ties);
-        let pattern = AssemblyPattern::new(&dofs, &layout);
         let n_eq = dofs.num_equations();
         let mut scale = Vec::new();
         if !system.pressure_nodes.is_empty() {
@@ -189,9 +193,17 @@ impl Assembler {
         let owners = system.ranks.is_distributed().then(|| {
             partition(system.ranks, &layout, dim, dofs.displacement_dofs(), system.positions, &block_costs(domains))
         });
-        let share = owners.as_ref().map(|o| RankShare::new(o, &dofs, &layout, &pattern));
+        let share = owners.as_ref().map(|o| RankShare::new(o, &dofs, &layout));
+        let pattern = match &share {
+            None => AssemblyPattern::new(&dofs, &layout),
+            Some(_) => AssemblyPattern::of_blocks(&dofs, &layout, |_| false),
+        };
+        let mut whole_nnz = pattern.nnz();
         if let Some(share) = &share {
             solver.distribute(share.owned_rows.clone());
+            let mut rows = [share.owned_rows.cols.len() as f64];
+            system.ranks.sum_identically(&mut rows);
+            whole_nnz = rows[0] as usize;
         }
         if !scale.is_empty() {
             let mut signs = vec![1i8; n_eq];
@@ -223,6 +235,7 @@ impl Assembler {
             kernel_seconds: vec![0.0; domains.len()],
             dofs,
             pattern,
+            whole_nnz,
             domain_matrix,
             domain_vector,
         }
@@ -233,9 +246,9 @@ impl Assembler {
         &self.dofs
     }
 
-    /// Number of stored nonzeros of the matrix.
+    /// Number of stored nonzeros of the matrix (of the whole matrix in a distributed run).
     pub fn nnz(&self) -> usize {
-        self.pattern.nnz()
+        self.whole_nnz
     }
 
     /// What the linear solver has learnt about this pattern's matrices.
@@ -353,7 +366,7 @@ impl Assembler {
         let dim = self.dofs.dim();
         let owners = partition(owners.ranks(), &self.layout, dim, self.dofs.displacement_dofs(), positions, &costs);
         with_stats(|s| s.rebalances += 1);
-        let share = RankShare::new(&owners, &self.dofs, &self.layout, &self.pattern);
+        let share = RankShare::new(&owners, &self.dofs, &self.layout);
         self.solver.distribute(share.owned_rows.clone());
         self.share = Some(share);
         self.owners = Some(owners);
@@ -483,9 +496,9 @@ impl Assembler {
         }
     }
 
-    /// Step 3a with every block, also in a distributed run (whose model is replicated: every
-    /// rank holds every block): the whole matrix for [`Assembler::tangent_matrix`] and the
-    /// diagnosis of a failed step ([`crate::rigid_modes`]); not for a solve.
+    /// Step 3a with every block: the whole matrix for [`Assembler::tangent_matrix`] and the
+    /// diagnosis of a failed step ([`crate::rigid_modes`]); not for a solve. One process only
+    /// (a rank holds neither the other ranks' blocks nor the whole pattern).
     pub fn whole_tangent(&mut self) {
         self.friction.apply_to_matrices(&mut self.matrices);
         self.pattern.gather_matrix(&self.matrices, &mut self.values);

@@ -59,6 +59,16 @@ impl PackedGeometry {
         self.data.resize(n * self.stride(), 0.0);
     }
 
+    /// Releases the room beyond the present points (after a body lost most of its points,
+    /// e.g. to other ranks); with `clear`, all of it (the records are rewritten before they
+    /// are read again).
+    pub fn shrink_to_fit(&mut self, clear: bool) {
+        if clear {
+            self.data.clear();
+        }
+        self.data.shrink_to_fit();
+    }
+
     /// The records, one mutable chunk per point, in parallel (write them with
     /// [`PackedGeometry::pack`]).
     pub fn par_records_mut(&mut self) -> rayon::slice::ChunksExactMut<'_, f64> {

@@ -26,7 +26,7 @@
 use std::ops::Range;
 
 use crate::assembly::{AssemblyPattern, BlockLayout};
-use crate::dofs::DofMap;
+use crate::dofs::{DofMap, CONSTRAINED};
 use crate::kernel::PointOutput;
 
 /// This process's rank among the processes of the run.
@@ -563,7 +563,7 @@ impl Ownership {
             let r = owners.owner(b) as u32;
             for &g in &layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]] {
                 let e = dofs.equation(g);
-                if e != crate::dofs::CONSTRAINED {
+                if e != CONSTRAINED {
                     owner[e] = owner[e].min(r);
                 }
             }
@@ -626,7 +626,8 @@ impl Ownership {
 
 /// The rows of the global matrix that this rank owns, in compressed-row form with global
 /// column indices: what PETSc preallocates on this rank (the union of every rank's
-/// contributions to these rows, which the replicated pattern gives without communication).
+/// contributions to these rows, which the replicated block layout gives without
+/// communication).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct OwnedRows {
     /// Which equations each rank owns.
@@ -639,19 +640,70 @@ pub struct OwnedRows {
 }
 
 impl OwnedRows {
-    /// This rank's rows of the (whole, structurally symmetric) `pattern`: column `c` of the
-    /// compressed-column pattern is row `c`.
-    /// The columns are PETSc rows ([`Ownership::row`]), sorted within each row.
-    pub fn of(ownership: Ownership, pattern: &AssemblyPattern) -> Self {
-        let (col_ptr, row_idx) = (pattern.symbolic().col_ptr(), pattern.symbolic().row_idx());
-        let mut row_ptr = vec![0];
+    /// This rank's rows of the matrix of every block of `layout` (every rank's): row `e`
+    /// holds the equations of the blocks that hold `e` (the block pattern is structurally
+    /// symmetric), in PETSc's numbering ([`Ownership::row`]), sorted within each row. Built
+    /// from the layout, so that no rank holds the whole matrix's pattern (at 10⁶ points it
+    /// was about a gigabyte on every rank): two passes over the blocks, the first counting
+    /// each owned row's entries with repeats, the second writing them; each row is then sorted
+    /// and its repeats dropped.
+    pub fn of(ownership: Ownership, dofs: &DofMap, layout: &BlockLayout) -> Self {
+        let equations = ownership.equations();
+        let mut local = vec![usize::MAX; dofs.num_equations()];
+        for (i, &e) in equations.iter().enumerate() {
+            local[e] = i;
+        }
+        let free = |b: usize| {
+            layout.dofs[layout.dof_ptr[b]..layout.dof_ptr[b + 1]]
+                .iter()
+                .map(|&g| dofs.equation(g))
+                .filter(|&e| e != CONSTRAINED)
+        };
+        let mut start = vec![0usize; equations.len() + 1];
+        for b in 0..layout.num_blocks() {
+            let width = free(b).count();
+            for e in free(b) {
+                if local[e] != usize::MAX {
+                    start[local[e] + 1] += width;
+                }
+            }
+        }
+        for i in 0..equations.len() {
+            start[i + 1] += start[i];
+        }
+        let mut repeated = vec![0usize; start[equations.len()]];
+        let mut fill = start.clone();
+        for b in 0..layout.num_blocks() {
+            for e in free(b) {
+                if local[e] != usize::MAX {
+                    let i = local[e];
+                    for c in free(b) {
+                        repeated[fill[i]] = ownership.row(c);
+                        fill[i] += 1;
+                    }
+                }
+            }
+        }
+        drop(fill);
+        let mut row_ptr = Vec::with_capacity(equations.len() + 1);
+        row_ptr.push(0);
         let mut cols = Vec::new();
-        for e in ownership.equations() {
-            let start = cols.len();
-            cols.extend(row_idx[col_ptr[e]..col_ptr[e + 1]].iter().map(|&c| ownership.row(c)));
-            cols[start..].sort_unstable();
+        for i in 0..equations.len() {
+            let row = &mut repeated[start[i]..start[i + 1]];
+            row.sort_unstable();
+            let first = cols.len();
+            cols.extend_from_slice(row);
+            let mut kept = first;
+            for k in first..cols.len() {
+                if k == first || cols[k] != cols[kept - 1] {
+                    cols[kept] = cols[k];
+                    kept += 1;
+                }
+            }
+            cols.truncate(kept);
             row_ptr.push(cols.len());
         }
+        cols.shrink_to_fit();
         Self { ownership, row_ptr, cols }
     }
 }
@@ -674,14 +726,14 @@ pub struct RankShare {
 
 impl RankShare {
     /// The share of this rank of the system of `dofs`, the blocks of `layout` with their
-    /// `owners` and their whole `pattern`.
-    pub fn new(owners: &BlockOwners, dofs: &DofMap, layout: &BlockLayout, pattern: &AssemblyPattern) -> Self {
+    /// `owners`.
+    pub fn new(owners: &BlockOwners, dofs: &DofMap, layout: &BlockLayout) -> Self {
         let ownership = Ownership::of_blocks(owners, dofs, layout);
         let share = AssemblyPattern::of_blocks(dofs, layout, |b| owners.owns(b));
         Self {
             values: vec![0.0; share.nnz()],
             pattern: share,
-            owned_rows: OwnedRows::of(ownership, pattern),
+            owned_rows: OwnedRows::of(ownership, dofs, layout),
             #[cfg(feature = "mpi")]
             residual_sum: None,
         }
@@ -710,6 +762,45 @@ mod tests {
 
     fn ranks(rank: usize, size: usize) -> Ranks {
         Ranks { rank, size }
+    }
+
+    /// The owned rows built from the layout are the rows of the whole pattern: quad blocks of
+    /// a 5 × 4 grid of cells (2 DOFs per node, the nodes of one edge held) on 3 ranks, blocks
+    /// dealt round-robin; on each rank, every owned row against the whole matrix's column of
+    /// the same equation (the pattern is structurally symmetric), in PETSc's numbering.
+    #[test]
+    fn owned_rows_from_the_layout_are_the_rows_of_the_whole_pattern() {
+        let (nx, ny) = (5, 4);
+        let node = |i: usize, j: usize| j * (nx + 1) + i;
+        let held: Vec<bool> = (0..(nx + 1) * (ny + 1) * 2).map(|g| (g / 2) % (nx + 1) == 0).collect();
+        let dofs = DofMap::new(2, &held);
+        let mut layout = BlockLayout::default();
+        for j in 0..ny {
+            for i in 0..nx {
+                let nodes = [node(i, j), node(i + 1, j), node(i + 1, j + 1), node(i, j + 1)];
+                layout.push(nodes.iter().flat_map(|&a| [2 * a, 2 * a + 1]));
+            }
+        }
+        let whole = AssemblyPattern::new(&dofs, &layout);
+        let (col_ptr, row_idx) = (whole.symbolic().col_ptr(), whole.symbolic().row_idx());
+        let owner: Vec<u32> = (0..layout.num_blocks()).map(|b| (b % 3) as u32).collect();
+        let mut total = 0;
+        for r in 0..3 {
+            let owners = BlockOwners::new(ranks(r, 3), owner.clone());
+            let rows = OwnedRows::of(Ownership::of_blocks(&owners, &dofs, &layout), &dofs, &layout);
+            let o = &rows.ownership;
+            for (i, e) in o.equations().into_iter().enumerate() {
+                let mut expected: Vec<usize> = row_idx[col_ptr[e]..col_ptr[e + 1]].iter().map(|&c| o.row(c)).collect();
+                expected.sort_unstable();
+                assert_eq!(
+                    &rows.cols[rows.row_ptr[i]..rows.row_ptr[i + 1]],
+                    expected.as_slice(),
+                    "rank {r}, equation {e}"
+                );
+            }
+            total += rows.cols.len();
+        }
+        assert_eq!(total, whole.nnz(), "the ranks' rows make the whole matrix");
     }
 
     /// 10 equations on 3 ranks: 4, 3, 3 in order (PETSc's split); every equation has exactly
@@ -742,8 +833,7 @@ mod tests {
         layout.push([0, 1]);
         layout.push([1, 2]);
         layout.push([2, 3]);
-        let whole = AssemblyPattern::new(&dofs, &layout);
-        let first = RankShare::new(&BlockOwners::new(ranks(0, 2), vec![1, 1, 0]), &dofs, &layout, &whole);
+        let first = RankShare::new(&BlockOwners::new(ranks(0, 2), vec![1, 1, 0]), &dofs, &layout);
         let ownership = &first.owned_rows.ownership;
         assert_eq!((ownership.row(0), ownership.row(1), ownership.row(2)), (2, 0, 1));
         assert_eq!((ownership.owner(0), ownership.owner(1), ownership.owner(2)), (1, 0, 0));
@@ -751,7 +841,7 @@ mod tests {
         assert_eq!(first.owned_rows.row_ptr, vec![0, 3, 5]);
         assert_eq!(first.owned_rows.cols, vec![0, 1, 2, 0, 1]);
         assert_eq!(first.pattern.nnz(), 4, "spring 2: equations 1 and 2");
-        let second = RankShare::new(&BlockOwners::new(ranks(1, 2), vec![1, 1, 0]), &dofs, &layout, &whole);
+        let second = RankShare::new(&BlockOwners::new(ranks(1, 2), vec![1, 1, 0]), &dofs, &layout);
         assert_eq!(second.owned_rows.ownership.rows(), 2..3);
         assert_eq!(second.owned_rows.row_ptr, vec![0, 2]);
         assert_eq!(second.owned_rows.cols, vec![0, 2]);

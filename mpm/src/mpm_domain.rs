@@ -990,8 +990,10 @@ impl MpmDomain {
             }
         });
         if first {
-            // the points per support of every rank, now that each holds its own
+            // the points per support of every rank, now that each holds its own; the room the
+            // other ranks' points took is given back
             d.count(&self.bodies, self.grid.num_supports());
+            self.bodies.iter_mut().for_each(Body::shrink_to_fit);
         }
         if relocated {
             self.fill_cells();
