@@ -26,7 +26,8 @@
 //! pattern, each rank owning a contiguous range of PETSc rows — the equations renumbered so
 //! that a rank's rows are those its blocks mostly reach ([`crate::ranks::Ownership`]; the
 //! right-hand side, the solution and the near null space are permuted to and from that order
-//! here) — preallocated exactly from the replicated whole pattern; each rank adds its part
+//! here) — preallocated exactly with the owned rows of the whole pattern, which every rank
+//! builds from the replicated block layout ([`crate::ranks::OwnedRows::of`]); each rank adds its part
 //! (the blocks it evaluates, on the same transposed positions) with `ADD_VALUES`, gives its
 //! owned entries of the (replicated) right-hand side and receives the whole solution; CG or GMRES is chosen when every rank's
 //! part is symmetric (one `MPI_Allreduce`), so that every rank takes the same path.
