@@ -193,18 +193,20 @@ impl Assembler {
         let owners = system.ranks.is_distributed().then(|| {
             partition(system.ranks, &layout, dim, dofs.displacement_dofs(), system.positions, &block_costs(domains))
         });
-        let share = owners.as_ref().map(|o| RankShare::new(o, &dofs, &layout));
-        let pattern = match &share {
-            None => AssemblyPattern::new(&dofs, &layout),
-            Some(_) => AssemblyPattern::of_blocks(&dofs, &layout, |_| false),
+        let (pattern, share, whole_nnz) = match &owners {
+            None => {
+                let pattern = AssemblyPattern::new(&dofs, &layout);
+                let nnz = pattern.nnz();
+                (pattern, None, nnz)
+            }
+            Some(o) => {
+                let (share, rows) = RankShare::new(o, &dofs, &layout);
+                let mut nnz = [rows.cols.len() as f64];
+                system.ranks.sum_identically(&mut nnz);
+                solver.distribute(rows);
+                (AssemblyPattern::of_blocks(&dofs, &layout, |_| false), Some(share), nnz[0] as usize)
+            }
         };
-        let mut whole_nnz = pattern.nnz();
-        if let Some(share) = &share {
-            solver.distribute(share.owned_rows.clone());
-            let mut rows = [share.owned_rows.cols.len() as f64];
-            system.ranks.sum_identically(&mut rows);
-            whole_nnz = rows[0] as usize;
-        }
         if !scale.is_empty() {
             let mut signs = vec![1i8; n_eq];
             for (g, &e) in dofs.equations().iter().enumerate() {
@@ -366,8 +368,8 @@ impl Assembler {
         let dim = self.dofs.dim();
         let owners = partition(owners.ranks(), &self.layout, dim, self.dofs.displacement_dofs(), positions, &costs);
         with_stats(|s| s.rebalances += 1);
-        let share = RankShare::new(&owners, &self.dofs, &self.layout);
-        self.solver.distribute(share.owned_rows.clone());
+        let (share, rows) = RankShare::new(&owners, &self.dofs, &self.layout);
+        self.solver.distribute(rows);
         self.share = Some(share);
         self.owners = Some(owners);
         self.factors_for = None;

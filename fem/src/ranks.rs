@@ -718,25 +718,24 @@ pub struct RankShare {
     pub pattern: AssemblyPattern,
     /// Matrix values of this rank's blocks on `pattern`.
     pub values: Vec<f64>,
-    /// The owned rows of the whole pattern (the solver's preallocation).
-    pub owned_rows: OwnedRows,
     #[cfg(feature = "mpi")]
     residual_sum: Option<loam_petsc::VectorSum>,
 }
 
 impl RankShare {
     /// The share of this rank of the system of `dofs`, the blocks of `layout` with their
-    /// `owners`.
-    pub fn new(owners: &BlockOwners, dofs: &DofMap, layout: &BlockLayout) -> Self {
+    /// `owners`, and the rows of the whole matrix that PETSc keeps on this rank (the solver's
+    /// preallocation, handed to it: [`crate::linear_solver::LinearSolver::distribute`]).
+    pub fn new(owners: &BlockOwners, dofs: &DofMap, layout: &BlockLayout) -> (Self, OwnedRows) {
         let ownership = Ownership::of_blocks(owners, dofs, layout);
         let share = AssemblyPattern::of_blocks(dofs, layout, |b| owners.owns(b));
-        Self {
+        let share = Self {
             values: vec![0.0; share.nnz()],
             pattern: share,
-            owned_rows: OwnedRows::of(ownership, dofs, layout),
             #[cfg(feature = "mpi")]
             residual_sum: None,
-        }
+        };
+        (share, OwnedRows::of(ownership, dofs, layout))
     }
 
     /// Replaces this rank's part of a DOF vector (its blocks' gather) by the sum over the
@@ -833,18 +832,18 @@ mod tests {
         layout.push([0, 1]);
         layout.push([1, 2]);
         layout.push([2, 3]);
-        let first = RankShare::new(&BlockOwners::new(ranks(0, 2), vec![1, 1, 0]), &dofs, &layout);
-        let ownership = &first.owned_rows.ownership;
+        let (first, first_rows) = RankShare::new(&BlockOwners::new(ranks(0, 2), vec![1, 1, 0]), &dofs, &layout);
+        let ownership = &first_rows.ownership;
         assert_eq!((ownership.row(0), ownership.row(1), ownership.row(2)), (2, 0, 1));
         assert_eq!((ownership.owner(0), ownership.owner(1), ownership.owner(2)), (1, 0, 0));
         assert_eq!(ownership.rows(), 0..2);
-        assert_eq!(first.owned_rows.row_ptr, vec![0, 3, 5]);
-        assert_eq!(first.owned_rows.cols, vec![0, 1, 2, 0, 1]);
+        assert_eq!(first_rows.row_ptr, vec![0, 3, 5]);
+        assert_eq!(first_rows.cols, vec![0, 1, 2, 0, 1]);
         assert_eq!(first.pattern.nnz(), 4, "spring 2: equations 1 and 2");
-        let second = RankShare::new(&BlockOwners::new(ranks(1, 2), vec![1, 1, 0]), &dofs, &layout);
-        assert_eq!(second.owned_rows.ownership.rows(), 2..3);
-        assert_eq!(second.owned_rows.row_ptr, vec![0, 2]);
-        assert_eq!(second.owned_rows.cols, vec![0, 2]);
+        let (second, second_rows) = RankShare::new(&BlockOwners::new(ranks(1, 2), vec![1, 1, 0]), &dofs, &layout);
+        assert_eq!(second_rows.ownership.rows(), 2..3);
+        assert_eq!(second_rows.row_ptr, vec![0, 2]);
+        assert_eq!(second_rows.cols, vec![0, 2]);
         assert_eq!(second.pattern.nnz(), 4, "springs 0 and 1: equations 0 and 1");
         assert_eq!(second.pattern.reached_dofs(), vec![0, 1, 2]);
     }
