@@ -488,8 +488,7 @@ fn a_footing_in_contact_with_filled_cells_on_2_and_4_ranks_equals_the_serial_run
             case["monitors"].as_array_mut().unwrap().retain(|m| m["name"] != "q_over_su");
         }
     };
-    let m =
-        runs_on_ranks_agree_with("cases/footing_fem_on_mpm.json", &[2, 4], false, Some(90_000), |c| edit(c, false));
+    let m = runs_on_ranks_agree_with("cases/footing_fem_on_mpm.json", &[2, 4], false, Some(90_000), |c| edit(c, false));
     println!("footing on 4 ranks after 3 steps: q/s_u {:.9} through the contact", last_value(&m, "interface_q"));
     let dir = temp_dir("footing-reaction");
     let out = dir.join("ranks4");

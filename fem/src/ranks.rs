@@ -186,34 +186,36 @@ impl Ranks {
     }
 
     /// Sums the rows of the dense row-major array `values` (`width` values per row) over the
-    /// ranks, every rank receiving the same bits: each rank sends only the rows it holds a
-    /// non-zero value in (the nodes its points reach), and every rank adds the rows it
-    /// receives in rank order (collective). One process: nothing.
+    /// ranks, every rank receiving the same bits ([`Ranks::sum_rows_identically_in`]).
     pub fn sum_rows_identically(&self, values: &mut [f64], width: usize) {
+        self.sum_rows_identically_in(&mut DenseRows { values, width });
+    }
+
+    /// Sums `rows` over the ranks, every rank receiving the same bits: each rank sends only
+    /// the rows it holds a non-zero value in (the nodes its points reach), and every rank
+    /// clears the rows it receives and adds them in rank order (collective). One process:
+    /// nothing. The rows are read and written where they are kept (the grid's nodal sums:
+    /// no copy of the whole array in each step).
+    pub fn sum_rows_identically_in(&self, rows: &mut impl SummedRows) {
         if !self.is_distributed() {
             return;
         }
+        let width = rows.width();
+        let mut row = vec![0.0; width];
         let mut mine = Vec::new();
-        for (row, v) in values.chunks_exact(width).enumerate() {
-            if v.iter().any(|&x| x != 0.0) {
-                mine.push(row as f64);
-                mine.extend_from_slice(v);
+        for r in 0..rows.rows() {
+            rows.read(r, &mut row);
+            if row.iter().any(|&x| x != 0.0) {
+                mine.push(r as f64);
+                mine.extend_from_slice(&row);
             }
         }
         let all = self.exchange(&mine);
-        for part in &all {
-            for rec in part.chunks_exact(width + 1) {
-                let row = rec[0] as usize;
-                values[row * width..(row + 1) * width].fill(0.0);
-            }
+        for rec in all.iter().flat_map(|part| part.chunks_exact(width + 1)) {
+            rows.clear(rec[0] as usize);
         }
-        for part in &all {
-            for rec in part.chunks_exact(width + 1) {
-                let row = rec[0] as usize;
-                for (x, y) in values[row * width..(row + 1) * width].iter_mut().zip(&rec[1..]) {
-                    *x += y;
-                }
-            }
+        for rec in all.iter().flat_map(|part| part.chunks_exact(width + 1)) {
+            rows.add(rec[0] as usize, &rec[1..]);
         }
     }
 
@@ -621,6 +623,51 @@ impl Ownership {
         let mut eqs: Vec<usize> = (0..n).filter(|&e| self.owner(e) == self.ranks.rank).collect();
         eqs.sort_unstable_by_key(|&e| self.row(e));
         eqs
+    }
+}
+
+/// Rows of `width` values summed over the ranks by [`Ranks::sum_rows_identically_in`], read
+/// and written where they are kept.
+pub trait SummedRows {
+    /// Number of rows.
+    fn rows(&self) -> usize;
+    /// Values per row.
+    fn width(&self) -> usize;
+    /// Row `r`'s values into `out` (`width` of them).
+    fn read(&self, r: usize, out: &mut [f64]);
+    /// Sets row `r` to zero.
+    fn clear(&mut self, r: usize);
+    /// Adds `values` to row `r`.
+    fn add(&mut self, r: usize, values: &[f64]);
+}
+
+/// A dense row-major array as [`SummedRows`].
+struct DenseRows<'a> {
+    values: &'a mut [f64],
+    width: usize,
+}
+
+impl SummedRows for DenseRows<'_> {
+    fn rows(&self) -> usize {
+        self.values.len() / self.width
+    }
+
+    fn width(&self) -> usize {
+        self.width
+    }
+
+    fn read(&self, r: usize, out: &mut [f64]) {
+        out.copy_from_slice(&self.values[r * self.width..(r + 1) * self.width]);
+    }
+
+    fn clear(&mut self, r: usize) {
+        self.values[r * self.width..(r + 1) * self.width].fill(0.0);
+    }
+
+    fn add(&mut self, r: usize, values: &[f64]) {
+        for (x, y) in self.values[r * self.width..(r + 1) * self.width].iter_mut().zip(values) {
+            *x += y;
+        }
     }
 }
 

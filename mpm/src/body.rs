@@ -87,16 +87,39 @@ impl GridSums {
     }
 
     /// The sums of every rank's points, every rank receiving the same bits (a node's seven
-    /// values sent by the ranks whose points reach it; `Ranks::sum_rows_identically`).
+    /// values sent by the ranks whose points reach it; `Ranks::sum_rows_identically_in`).
     pub fn sum_over(&mut self, ranks: loam_fem::ranks::Ranks) {
-        let mut rows: Vec<f64> = (0..self.mass.len())
-            .flat_map(|a| std::iter::once(self.mass[a]).chain(self.momentum[a]).chain(self.inertia[a]))
-            .collect();
-        ranks.sum_rows_identically(&mut rows, 7);
-        for (a, row) in rows.chunks_exact(7).enumerate() {
-            self.mass[a] = row[0];
-            self.momentum[a] = [row[1], row[2], row[3]];
-            self.inertia[a] = [row[4], row[5], row[6]];
+        ranks.sum_rows_identically_in(self);
+    }
+}
+
+/// A node's row: `[m, (m v)_x, (m v)_y, (m v)_z, (m a)_x, (m a)_y, (m a)_z]`.
+impl loam_fem::ranks::SummedRows for GridSums {
+    fn rows(&self) -> usize {
+        self.mass.len()
+    }
+
+    fn width(&self) -> usize {
+        7
+    }
+
+    fn read(&self, a: usize, out: &mut [f64]) {
+        out[0] = self.mass[a];
+        out[1..4].copy_from_slice(&self.momentum[a]);
+        out[4..7].copy_from_slice(&self.inertia[a]);
+    }
+
+    fn clear(&mut self, a: usize) {
+        self.mass[a] = 0.0;
+        self.momentum[a] = [0.0; 3];
+        self.inertia[a] = [0.0; 3];
+    }
+
+    fn add(&mut self, a: usize, values: &[f64]) {
+        self.mass[a] += values[0];
+        for i in 0..3 {
+            self.momentum[a][i] += values[1 + i];
+            self.inertia[a][i] += values[4 + i];
         }
     }
 }
