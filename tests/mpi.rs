@@ -231,16 +231,20 @@ fn fem_2d_cantilever_on_2_and_4_ranks_equals_the_serial_run() {
 /// direct-solver runs.
 #[test]
 fn fem_3d_cantilever_on_1_to_8_ranks_equals_the_serial_runs() {
-    let m = runs_on_1_to_8_ranks_agree("cantilever_fem_3d.json", 0, |case| {
+    cantilever_3d_on_1_to_8_ranks("3D FEM cantilever", "cantilever_fem_3d.json", 0, 0.03);
+}
+
+/// The 3D cantilever of benchmark 1 in case `name` (`points` material points, 0 for FEM) on 1,
+/// 2, 4 and 8 ranks against the serial runs, its tip on 8 ranks against Timoshenko within
+/// `tolerance` and its clamp carrying the whole weight ρ g L h b = 68 670 N to 1e-9.
+fn cantilever_3d_on_1_to_8_ranks(what: &str, name: &str, points: u64, tolerance: f64) {
+    let m = runs_on_1_to_8_ranks_agree(name, points, |case| {
         case["output"] = json!({ "vtk": false });
     });
-    report("3D FEM cantilever on 8 ranks: tip_uy vs Timoshenko [m]", last_value(&m, "tip_uy"), timoshenko(7.0), 0.03);
-    report(
-        "3D FEM cantilever on 8 ranks: clamp reaction vs weight [N]",
-        last_value(&m, "clamp_reaction_y"),
-        68_670.0,
-        1e-9,
-    );
+    let tip = last_value(&m, "tip_uy");
+    report(&format!("{what} on 8 ranks: tip_uy vs Timoshenko [m]"), tip, timoshenko(7.0), tolerance);
+    let clamp = last_value(&m, "clamp_reaction_y");
+    report(&format!("{what} on 8 ranks: clamp reaction vs weight [N]"), clamp, 68_670.0, 1e-9);
 }
 
 /// Benchmark 1, 3D MPM (`cases/cantilever_mpm_3d.json`, hex8 grid h = 1/6 m, 8 points per
@@ -251,14 +255,7 @@ fn fem_3d_cantilever_on_1_to_8_ranks_equals_the_serial_runs() {
 /// Issue 26 item 5: on 1, 2, 4 and 8 ranks, against the serial PETSc and direct-solver runs.
 #[test]
 fn mpm_3d_cantilever_on_1_to_8_ranks_equals_the_serial_runs() {
-    let m = runs_on_1_to_8_ranks_agree("cantilever_mpm_3d.json", 4032, |_| {});
-    report("3D MPM cantilever on 8 ranks: tip_uy vs Timoshenko [m]", last_value(&m, "tip_uy"), timoshenko(7.0), 0.05);
-    report(
-        "3D MPM cantilever on 8 ranks: clamp reaction vs weight [N]",
-        last_value(&m, "clamp_reaction_y"),
-        68_670.0,
-        1e-9,
-    );
+    cantilever_3d_on_1_to_8_ranks("3D MPM cantilever", "cantilever_mpm_3d.json", 4032, 0.05);
 }
 
 /// Benchmark 12, the coupled split beam (FEM half, MPM half, shared interface nodes): the
@@ -268,14 +265,20 @@ fn mpm_3d_cantilever_on_1_to_8_ranks_equals_the_serial_runs() {
 /// Issue 26 item 5: on 1, 2, 4 and 8 ranks, against the serial PETSc and direct-solver runs.
 #[test]
 fn coupled_split_beam_on_1_to_8_ranks_equals_the_serial_runs() {
-    let m = runs_on_1_to_8_ranks_agree("coupled_beam_split.json", 6400, |_| {});
-    report("coupled split beam on 8 ranks: tip_uy vs Timoshenko [m]", last_value(&m, "tip_uy"), -0.67806, 0.015);
-    report(
-        "coupled split beam on 8 ranks: interface force vs weight of the MPM half [N]",
-        last_value(&m, "interface_force_y"),
-        -39_240.0,
-        1e-9,
-    );
+    split_beam_on_1_to_8_ranks("coupled split beam", "coupled_beam_split.json", 6400, 0.015);
+}
+
+/// The split beam of benchmark 12 in case `name` (`points` material points) on 1, 2, 4 and 8
+/// ranks against the serial runs, its tip on 8 ranks against Timoshenko's −0.67806 m within
+/// `tolerance` and the force of the MPM half on the FEM half equal to its weight 39 240 N to
+/// 1e-9.
+fn split_beam_on_1_to_8_ranks(what: &str, name: &str, points: u64, tolerance: f64) {
+    let m = runs_on_1_to_8_ranks_agree(name, points, |case| {
+        case["output"] = json!({ "vtk": false });
+    });
+    report(&format!("{what} on 8 ranks: tip_uy vs Timoshenko [m]"), last_value(&m, "tip_uy"), -0.67806, tolerance);
+    let force = last_value(&m, "interface_force_y");
+    report(&format!("{what} on 8 ranks: interface force vs weight of the MPM half [N]"), force, -39_240.0, 1e-9);
 }
 
 /// Benchmark 12 in 3D (`cases/coupled_beam_split_3d.json`: an FEM hex8 half, a half of 4 096
@@ -287,16 +290,7 @@ fn coupled_split_beam_on_1_to_8_ranks_equals_the_serial_runs() {
 /// against the serial PETSc and direct-solver runs.
 #[test]
 fn coupled_split_beam_3d_on_1_to_8_ranks_equals_the_serial_runs() {
-    let m = runs_on_1_to_8_ranks_agree("coupled_beam_split_3d.json", 4096, |case| {
-        case["output"] = json!({ "vtk": false });
-    });
-    report("3D coupled split beam on 8 ranks: tip_uy vs Timoshenko [m]", last_value(&m, "tip_uy"), -0.67806, 0.025);
-    report(
-        "3D coupled split beam on 8 ranks: interface force vs weight of the MPM half [N]",
-        last_value(&m, "interface_force_y"),
-        -39_240.0,
-        1e-9,
-    );
+    split_beam_on_1_to_8_ranks("3D coupled split beam", "coupled_beam_split_3d.json", 4096, 0.025);
 }
 
 /// Benchmark 1, 2D MPM (`cases/cantilever_mpm.json`: quad4 grid h = 0.125 m, 4 points per
@@ -390,16 +384,24 @@ fn a_block_on_a_slip_interface_slides_across_the_ranks_as_in_the_serial_run() {
         0.5 * 4.905 * t * t,
         0.01,
     );
-    let dir = temp_dir("slip-migration");
-    let case = edited_case("cases/coupled_slip_block.json", &dir, "slip.json", edit);
-    let out = dir.join("ranks4");
-    loam_run(&case, &out, Some(4));
-    let summary: Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let (_, summary) = run_on_4_ranks("cases/coupled_slip_block.json", edit);
     let sent: Vec<u64> =
         summary["distributed"].as_array().unwrap().iter().map(|s| s["points_sent"].as_u64().unwrap()).collect();
     println!("slip block on 4 ranks: points sent per rank {sent:?}");
     assert!(sent.iter().sum::<u64>() > 0, "the block's points migrated");
+}
+
+/// The case at `path` edited by `edit`, run once on 4 ranks: its monitors and `summary.json`
+/// (what [`runs_on_ranks_agree_with`] does not return; its directory is removed).
+fn run_on_4_ranks(path: &str, edit: impl Fn(&mut Value)) -> ((Vec<String>, Vec<Vec<f64>>), Value) {
+    let name = Path::new(path).file_name().unwrap().to_str().unwrap();
+    let dir = temp_dir(&format!("once-{name}"));
+    let out = dir.join("ranks4");
+    loam_run(&edited_case(path, &dir, name, edit), &out, Some(4));
+    let summary = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let m = monitors(&out);
     let _ = std::fs::remove_dir_all(&dir);
+    (m, summary)
 }
 
 /// A penalty wall on ranks (benchmark 6 with slip, `cases/cylinder_incline_slip_mpm.json`:
@@ -438,10 +440,7 @@ fn a_cylinder_on_a_penalty_wall_slides_on_2_and_4_ranks_as_in_the_serial_run() {
         0.5 * 9.81 * a.sin() * t * t,
         0.02,
     );
-    let dir = temp_dir("wall-forces");
-    let out = dir.join("ranks4");
-    loam_run(&edited_case("cases/cylinder_incline_slip_mpm.json", &dir, "wall.json", |c| edit(c, true)), &out, Some(4));
-    let (names, rows) = monitors(&out);
+    let ((names, rows), _) = run_on_4_ranks("cases/cylinder_incline_slip_mpm.json", |c| edit(c, true));
     let column = |name: &str| names.iter().position(|n| n == name).unwrap();
     let (fx, fy) = (column("wall_fx"), column("wall_fy"));
     let steps = &rows[1..];
@@ -457,7 +456,6 @@ fn a_cylinder_on_a_penalty_wall_slides_on_2_and_4_ranks_as_in_the_serial_run() {
     );
     println!("cylinder on 4 ranks: mean friction force {friction:.3e} N/m (asserted < 1e-6 of the normal force)");
     assert!(friction.abs() < 1e-6 * normal);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A contact and `filled_cells` quadrature on ranks: the first 3 steps of the rigid footing
@@ -490,14 +488,10 @@ fn a_footing_in_contact_with_filled_cells_on_2_and_4_ranks_equals_the_serial_run
     };
     let m = runs_on_ranks_agree_with("cases/footing_fem_on_mpm.json", &[2, 4], false, Some(90_000), |c| edit(c, false));
     println!("footing on 4 ranks after 3 steps: q/s_u {:.9} through the contact", last_value(&m, "interface_q"));
-    let dir = temp_dir("footing-reaction");
-    let out = dir.join("ranks4");
-    loam_run(&edited_case("cases/footing_fem_on_mpm.json", &dir, "footing.json", |c| edit(c, true)), &out, Some(4));
-    let m = monitors(&out);
+    let (m, _) = run_on_4_ranks("cases/footing_fem_on_mpm.json", |c| edit(c, true));
     let (q, q_contact) = (last_value(&m, "q_over_su"), last_value(&m, "interface_q"));
     println!("footing on 4 ranks after 3 steps: q/s_u {q:.9} at the top, {q_contact:.9} through the contact");
     assert!(q > 0.0 && (q - q_contact).abs() <= 1e-6 * q, "{q} against {q_contact}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The first 4 ms of the 3D granular column collapse (`benches/scale/collapse_3d_column.json`:
