@@ -184,10 +184,8 @@ impl Monitor {
                     None => f64::NAN, // the point left the grid and was erased
                 }
             }
-            MonitorKind::Runout { wall, base, threshold } => {
-                SurfaceProfile::new(&point_extents(model), *base).runout(*wall, *threshold)
-            }
-            MonitorKind::SurfaceHeight { x, base } => SurfaceProfile::new(&point_extents(model), *base).height_at(*x),
+            MonitorKind::Runout { wall, base, threshold } => surface_runout(model, *wall, *base, *threshold),
+            MonitorKind::SurfaceHeight { x, base } => surface_height(model, *x, *base),
             MonitorKind::MaterialPointTensor { points, quantity, component } => {
                 let (mut sum, mut count) = (0.0, 0);
                 for &(domain, id) in points {
@@ -288,11 +286,17 @@ fn held_anywhere(domain: &dyn Domain, local: Option<[f64; 3]>) -> Option<[f64; 3
 /// column against symmetry planes gives its runout along `x`. Where a domain's points are
 /// distributed, every rank's are gathered (collective).
 pub fn point_extents(model: &Model) -> Vec<PointExtent> {
+    extents_seen_by_the_surface(model, |d| every_rank_extents(d))
+}
+
+/// The extents `of` each domain, seen as the surface monitors see them (the side view in 3D:
+/// [`point_extents`]).
+fn extents_seen_by_the_surface(model: &Model, of: impl Fn(&dyn Domain) -> Vec<PointExtent>) -> Vec<PointExtent> {
     let side_view = model.dim == 3;
     model
         .domains
         .iter()
-        .flat_map(|d| every_rank_extents(d.as_ref()))
+        .flat_map(|d| of(d.as_ref()))
         .map(|mut p| {
             if side_view {
                 p.position.swap(1, 2);
@@ -300,6 +304,39 @@ pub fn point_extents(model: &Model) -> Vec<PointExtent> {
             p
         })
         .collect()
+}
+
+/// The ranks over which some domain's points are distributed, if any.
+fn points_ranks(model: &Model) -> Option<loam_fem::ranks::Ranks> {
+    model.domains.iter().find_map(|d| d.points_distributed())
+}
+
+/// The runout monitor ([`SurfaceProfile::runout`]) over every domain's points. Where points
+/// are distributed, each rank joins its own points' squares into runs and only the runs are
+/// gathered (three values each, a few per rank), whose joined runout is that of all the
+/// points bit for bit ([`SurfaceProfile::runout_runs`]); replicated domains' points are on
+/// every rank, and their runs repeated do not change it.
+fn surface_runout(model: &Model, wall: f64, base: f64, threshold: f64) -> f64 {
+    let Some(ranks) = points_ranks(model) else {
+        return SurfaceProfile::new(&point_extents(model), base).runout(wall, threshold);
+    };
+    let local = extents_seen_by_the_surface(model, |d| d.point_extents());
+    let runs = SurfaceProfile::new(&local, base).runout_runs(wall, threshold);
+    let mine: Vec<f64> = runs.iter().flat_map(|&(l, r, s)| [l, r, s]).collect();
+    let all = ranks.all_gather_varcount(&mine);
+    let runs = all.iter().flat_map(|part| part.chunks_exact(3)).map(|r| (r[0], r[1], r[2])).collect();
+    loam_mpm::surface::runout_of_spans(runs, wall)
+}
+
+/// The surface height monitor ([`SurfaceProfile::height_at`]): the highest point covering
+/// `x`, where points are distributed the largest of the ranks' own (exact).
+fn surface_height(model: &Model, x: f64, base: f64) -> f64 {
+    let Some(ranks) = points_ranks(model) else {
+        return SurfaceProfile::new(&point_extents(model), base).height_at(x);
+    };
+    let local = extents_seen_by_the_surface(model, |d| d.point_extents());
+    let height = SurfaceProfile::new(&local, base).height_at(x);
+    ranks.all_gather_varcount(&[height]).iter().flatten().fold(0.0, |m: f64, &h| m.max(h))
 }
 
 /// A domain's [`Domain::point_extents`], of every rank where its points are distributed

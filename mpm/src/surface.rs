@@ -33,6 +33,25 @@ pub struct SlopeFit {
     pub rms_residual: f64,
 }
 
+/// A stretch of the surface along `x`: `(left, right, size)` of a point's square, or of a run
+/// of overlapping squares with the size of its first ([`SurfaceProfile::runout_runs`]).
+pub type Span = (f64, f64, f64);
+
+/// The runout from the wall at `x = wall` over `spans` (see [`SurfaceProfile::runout`]):
+/// sorted by their left ends, they are joined from the wall across gaps up to half the size
+/// of the span that follows the gap.
+pub fn runout_of_spans(mut spans: Vec<Span>, wall: f64) -> f64 {
+    spans.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut reach = wall;
+    for (left, right, size) in spans {
+        if left > reach + 0.5 * size {
+            break;
+        }
+        reach = reach.max(right);
+    }
+    reach - wall
+}
+
 /// Material points as seen by the surface: positions and sizes.
 #[derive(Debug, Clone, Copy)]
 pub struct SurfaceProfile<'a> {
@@ -62,21 +81,39 @@ impl<'a> SurfaceProfile<'a> {
     /// the base. Squares are joined across gaps up to half a point size (points of a
     /// deformed body do not tile exactly); detached points beyond a larger gap do not count.
     pub fn runout(&self, wall: f64, threshold: f64) -> f64 {
-        let mut spans: Vec<(f64, f64, f64)> = self
+        runout_of_spans(self.spans(wall, threshold), wall)
+    }
+
+    /// The squares that [`SurfaceProfile::runout`] joins, `(left, right, size)`, sorted by
+    /// their left ends.
+    fn spans(&self, wall: f64, threshold: f64) -> Vec<Span> {
+        let mut spans: Vec<Span> = self
             .points
             .iter()
             .filter(|p| p.position[1] + p.half_height() - self.base >= threshold && p.position[0] + 0.5 * p.size > wall)
             .map(|p| (p.position[0] - 0.5 * p.size, p.position[0] + 0.5 * p.size, p.size))
             .collect();
         spans.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut reach = wall;
-        for (left, right, size) in spans {
-            if left > reach + 0.5 * size {
-                break;
+        spans
+    }
+
+    /// These points' part of [`SurfaceProfile::runout`] for a runout over several sets of
+    /// points (the ranks' shares of a body): their squares joined where they overlap, each
+    /// run of overlapping squares as `(left, right, size)` of its first square and its
+    /// farthest right end. [`runout_of_spans`] over every set's runs (in any order) is the
+    /// runout of all the points together, bit for bit: an accepted first square makes its
+    /// whole run accepted in the one sweep as in the other (each next square starts within
+    /// the reach of those before it, and so does every square of another set that starts
+    /// among them), and a run is rejected only where no square before it reaches its start.
+    pub fn runout_runs(&self, wall: f64, threshold: f64) -> Vec<Span> {
+        let mut runs: Vec<Span> = Vec::new();
+        for (left, right, size) in self.spans(wall, threshold) {
+            match runs.last_mut() {
+                Some(run) if left <= run.1 => run.1 = run.1.max(right),
+                _ => runs.push((left, right, size)),
             }
-            reach = reach.max(right);
         }
-        reach - wall
+        runs
     }
 
     /// Root mean square of `h(x_k) − y_k` over a reference surface `(x_k, y_k)` (heights
@@ -166,6 +203,46 @@ mod tests {
         assert_eq!(SurfaceProfile::new(&pts, 0.0).runout(0.0, 0.5), 10.0);
         let reference = [(2.5, 8.0), (4.5, 6.0)];
         assert!(SurfaceProfile::new(&pts, 0.0).rms_distance(&reference) < 1e-12);
+    }
+
+    /// The runout over several sets of points from their runs equals that of all the points:
+    /// the staircase split by the parity of its points' index (so that the sets interleave
+    /// along x), with points of other sizes and gaps joined across half a size, for every
+    /// threshold.
+    #[test]
+    fn runout_from_the_runs_of_several_sets_is_the_whole_runout() {
+        let mut pts = staircase();
+        pts.push(PointExtent::new([10.6, 0.3, 0.0], 0.4));
+        pts.push(PointExtent::new([11.15, 0.3, 0.0], 0.3));
+        pts.push(PointExtent::new([12.0, 0.5, 0.0], 1.0));
+        pts.push(PointExtent::new([13.2, 0.2, 0.0], 0.2));
+        let split_equals_whole = |pts: &[PointExtent], threshold: f64, sets: usize, of: &dyn Fn(usize) -> usize| {
+            let whole = SurfaceProfile::new(pts, 0.0).runout(0.0, threshold);
+            let runs: Vec<Span> = (0..sets)
+                .flat_map(|k| {
+                    let set: Vec<PointExtent> = (0..pts.len()).filter(|&p| of(p) == k).map(|p| pts[p]).collect();
+                    SurfaceProfile::new(&set, 0.0).runout_runs(0.0, threshold)
+                })
+                .collect();
+            assert_eq!(runout_of_spans(runs, 0.0).to_bits(), whole.to_bits(), "threshold {threshold}, {sets} sets");
+        };
+        for threshold in [0.1, 0.3, 0.5, 2.0, 3.0, 9.5] {
+            for sets in [2, 3] {
+                split_equals_whole(&pts, threshold, sets, &|p| p % sets);
+            }
+        }
+        // scattered squares of many sizes with gaps of every width, dealt at random
+        let mut seed = 12345u64;
+        let mut random = move || {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..200 {
+            let pts: Vec<PointExtent> =
+                (0..60).map(|_| PointExtent::new([12.0 * random(), random(), 0.0], 0.05 + 0.5 * random())).collect();
+            let owner: Vec<usize> = (0..pts.len()).map(|_| (4.0 * random()) as usize).collect();
+            split_equals_whole(&pts, 0.2 * random(), 4, &|p| owner[p]);
+        }
     }
 
     /// A point whose volume has grown a hundredfold (size 10, initial size 1) at the toe of
