@@ -24,7 +24,7 @@ use std::path::Path;
 use std::process::Command;
 
 use common::cli::{root, temp_dir};
-use common::{report, timoshenko};
+use common::{mean_plane_force, report, timoshenko};
 use serde_json::{json, Value};
 
 /// Relative agreement of every monitor with the serial PETSc run (relative to the largest
@@ -443,10 +443,8 @@ fn a_cylinder_on_a_penalty_wall_slides_on_2_and_4_ranks_as_in_the_serial_run() {
     let ((names, rows), _) = run_on_4_ranks("cases/cylinder_incline_slip_mpm.json", |c| edit(c, true));
     let column = |name: &str| names.iter().position(|n| n == name).unwrap();
     let (fx, fy) = (column("wall_fx"), column("wall_fy"));
-    let steps = &rows[1..];
-    let mean = |f: &dyn Fn(&Vec<f64>) -> f64| steps.iter().map(f).sum::<f64>() / steps.len() as f64;
-    let normal = mean(&|r| -r[fx] * a.sin() + r[fy] * a.cos());
-    let friction = mean(&|r| r[fx] * a.cos() + r[fy] * a.sin());
+    let forces: Vec<(f64, f64)> = rows[1..].iter().map(|r| (r[fx], r[fy])).collect();
+    let (normal, friction) = mean_plane_force(&forces, a);
     let mass = 7800.0 * 0.01 * 0.01 * 1264.0;
     report(
         "cylinder on 4 ranks: mean normal force of the plane vs m g cos α [N/m]",

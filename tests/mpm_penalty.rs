@@ -13,7 +13,7 @@
 
 mod common;
 
-use common::{case, last, monitor, report, run, History};
+use common::{case, last, mean_plane_force, monitor, report, run, History};
 use loam::case::{BodySpec, Case};
 use loam::simulation::Simulation;
 
@@ -40,11 +40,8 @@ fn cylinder_mass(case: &Case) -> f64 {
 /// cylinder) and up the slope (N per metre of thickness).
 fn mean_wall_force(sim: &Simulation, h: &History) -> (f64, f64) {
     let (cx, cy) = (monitor(sim, "wall_fx"), monitor(sim, "wall_fy"));
-    let rows = &h[1..];
-    let fx = rows.iter().map(|r| r.1[cx]).sum::<f64>() / rows.len() as f64;
-    let fy = rows.iter().map(|r| r.1[cy]).sum::<f64>() / rows.len() as f64;
-    let a = 60f64.to_radians();
-    (-fx * a.sin() + fy * a.cos(), fx * a.cos() + fy * a.sin())
+    let forces: Vec<(f64, f64)> = h[1..].iter().map(|r| (r.1[cx], r.1[cy])).collect();
+    mean_plane_force(&forces, 60f64.to_radians())
 }
 
 /// Mean displacement of the four material points around the centre (the centre of the

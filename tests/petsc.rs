@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{case_json, last, monitor, nearest_point, parse, report, run, timoshenko, History};
+use common::{case_json, last, mean_plane_force, monitor, nearest_point, parse, report, run, timoshenko, History};
 use loam::simulation::Simulation;
 use serde_json::{json, Value};
 
@@ -141,12 +141,67 @@ fn dynamic_mpm_cantilever_keeps_the_direct_path() {
     assert_same_monitors("cantilever_mpm_dynamic", &sim, &h, &direct);
 }
 
+/// Where GAMG does not converge and the options name no preconditioner, MUMPS's LU takes over
+/// for the pattern: benchmark 6 with slip (`cases/cylinder_incline_slip_mpm.json`, a penalty
+/// wall of 10¹³ N/m³ whose initial acceleration, the mass matrix and the penalty alone, breaks
+/// CG and GMRES with GAMG down), its first 0.2 s. Asserted: at least one such fallback
+/// (`gamg_failures`), the displacements of the four points around the centre equal to the
+/// direct solver's within [`DIRECT_AGREEMENT`], the centre's slide against `½ g sin α t²`
+/// within 2 % and the plane's mean normal force against `m g cos α` (1 264 points of
+/// ρ s² = 0.78 kg/m) within 1 %. The wall's force is not compared with the direct solver's: it
+/// is the penalty times a gap of about 10⁻⁸ m, which carries the solvers' round-off at about
+/// 3e-9 of itself.
+#[test]
+fn gamg_that_fails_on_a_penalty_wall_hands_the_pattern_to_mumps() {
+    let json = |solver: Value| {
+        let mut json = case_json("cylinder_incline_slip_mpm.json");
+        json["analysis"]["end_time"] = json!(0.2);
+        json["solver"] = solver;
+        json
+    };
+    let (sim, h) = run(parse(json(json!({"linear_solver": "petsc"}))));
+    let (_, direct) = run(parse(json(json!({"linear_solver": "lu"}))));
+    let fallbacks = sim.model.solver_timings().gamg_failures;
+    println!("GAMG failures handed to MUMPS: {fallbacks}");
+    assert!(fallbacks >= 1, "GAMG failed on the penalty wall and MUMPS took over");
+    let a = 60f64.to_radians();
+    let (mut ux, mut uy) = (0.0, 0.0);
+    for k in 0..4 {
+        ux += 0.25 * last(&sim, &h, &format!("c{k}_ux"));
+        uy += 0.25 * last(&sim, &h, &format!("c{k}_uy"));
+        for c in ["ux", "uy"] {
+            let name = format!("c{k}_{c}");
+            let (m, d) = (monitor(&sim, &name), &direct);
+            let scale = d.iter().map(|r| r.1[m].abs()).fold(0.0, f64::max);
+            let diff = h.iter().zip(d).map(|(p, q)| (p.1[m] - q.1[m]).abs()).fold(0.0, f64::max);
+            assert!(diff <= DIRECT_AGREEMENT * scale, "{name}: {diff:e} of {scale:e}");
+        }
+    }
+    let t = h.last().unwrap().0;
+    report(
+        "cylinder with PETSc → MUMPS: centre down the 60° plane [m]",
+        -(ux * a.cos() + uy * a.sin()),
+        4.905 * a.sin() * t * t,
+        0.02,
+    );
+    let (fx, fy) = (monitor(&sim, "wall_fx"), monitor(&sim, "wall_fy"));
+    let forces: Vec<(f64, f64)> = h[1..].iter().map(|r| (r.1[fx], r.1[fy])).collect();
+    let (normal, _) = mean_plane_force(&forces, a);
+    report(
+        "cylinder with PETSc → MUMPS: mean normal force vs m g cos α [N/m]",
+        normal,
+        7800.0 * 1e-4 * 1264.0 * 9.81 * a.cos(),
+        0.01,
+    );
+}
+
 /// A Krylov solve that does not converge is a failed step, retried with shorter ones: with
-/// at most 3 iterations allowed none converges, the step is cut `max_step_cuts` times and the
-/// error names PETSc's reason.
+/// GAMG named in the options (so that MUMPS does not take over) and at most 3 iterations
+/// allowed none converges, the step is cut `max_step_cuts` times and the error names PETSc's
+/// reason.
 #[test]
 fn krylov_non_convergence_fails_the_step_with_petscs_reason() {
-    let mut json = with_petsc(case_json("cantilever_fem.json"), json!({"-ksp_max_it": 3}));
+    let mut json = with_petsc(case_json("cantilever_fem.json"), json!({"-pc_type": "gamg", "-ksp_max_it": 3}));
     json["analysis"]["max_step_cuts"] = json!(2);
     let mut sim = Simulation::new(parse(json)).expect("case builds");
     let err = sim.step().expect_err("3 Krylov iterations cannot reach 1e-10").to_string();

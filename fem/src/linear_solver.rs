@@ -186,6 +186,9 @@ pub struct SolverTimings {
     pub reused_factors: usize,
     /// Patterns on which the LU on the symmetric pattern failed (then the general LU).
     pub pattern_lu_failures: usize,
+    /// PETSc solves in which GAMG did not converge, after which MUMPS's LU took over
+    /// ([`crate::petsc_solver`]).
+    pub gamg_failures: usize,
 }
 
 impl std::ops::AddAssign for SolverTimings {
@@ -200,6 +203,7 @@ impl std::ops::AddAssign for SolverTimings {
         self.saddle_point_lu += o.saddle_point_lu;
         self.reused_factors += o.reused_factors;
         self.pattern_lu_failures += o.pattern_lu_failures;
+        self.gamg_failures += o.gamg_failures;
     }
 }
 
@@ -382,6 +386,10 @@ pub struct SolverMemory {
     /// Solves left to LU before `L B Lᵀ` / `L D Lᵀ` is tried again.
     #[serde(default)]
     pub ldlt_skip: u32,
+    /// PETSc's GAMG did not converge on this pattern: MUMPS's LU from then on (the `petsc`
+    /// kind without a preconditioner in its options).
+    #[serde(default)]
+    pub gamg_failed: bool,
 }
 
 /// A direct solver bound to one sparsity pattern.
@@ -407,6 +415,9 @@ pub struct LinearSolver {
     ldlt_skip: u32,
     /// Set once GMRES on the symmetric part's factors failed on this pattern: LU from then on.
     symmetric_part_failed: bool,
+    /// Set once PETSc's GAMG did not converge on this pattern: MUMPS's LU from then on (a
+    /// new pattern tries GAMG again; a checkpoint keeps the flag, [`SolverMemory`]).
+    gamg_failed: bool,
     /// `(A + Aᵀ)/2` for its factorisation.
     symmetric_values: Vec<f64>,
     gmres: Gmres,
@@ -444,6 +455,7 @@ impl LinearSolver {
             ldlt_backoff: 0,
             ldlt_skip: 0,
             symmetric_part_failed: false,
+            gamg_failed: false,
             symmetric_values: Vec::new(),
             gmres: Gmres::default(),
             kept: KeptFactors::None,
@@ -492,6 +504,7 @@ impl LinearSolver {
             pattern_lu_failed: self.pattern_lu_failed,
             ldlt_backoff: self.ldlt_backoff,
             ldlt_skip: self.ldlt_skip,
+            gamg_failed: self.gamg_failed,
         }
     }
 
@@ -502,6 +515,7 @@ impl LinearSolver {
         self.pattern_lu_failed = memory.pattern_lu_failed;
         self.ldlt_backoff = memory.ldlt_backoff;
         self.ldlt_skip = memory.ldlt_skip;
+        self.gamg_failed = memory.gamg_failed;
     }
 
     /// Entries (values) of the factor the last successful solve left if it is Cholesky-type
@@ -672,11 +686,14 @@ impl LinearSolver {
                 &self.petsc_options,
                 &self.near_null_space,
                 self.owned_rows.as_ref(),
+                self.gamg_failed,
             )?);
             self.timings.symbolic += t.elapsed().as_secs_f64();
         }
         let solver = self.petsc.as_mut().expect("PETSc solver present");
-        solver.solve(pattern, values, rhs, &mut self.timings)?;
+        let solved = solver.solve(pattern, values, rhs, &mut self.timings);
+        self.gamg_failed |= solver.gamg_failed();
+        solved?;
         check_finite(rhs)
     }
 

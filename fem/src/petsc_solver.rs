@@ -10,6 +10,11 @@
 //! Newton takes the direct solver's path; at most [`PETSC_MAX_ITERATIONS`] iterations.
 //! A CG solve that fails (GAMG's Chebyshev smoothers can make the preconditioner indefinite:
 //! `DIVERGED_INDEFINITE_PC`) is repeated by GMRES, which then serves the rest of the pattern.
+//! Where GMRES with GAMG does not converge either and the options name no preconditioner (a
+//! penalty wall's 10¹³ N/m³ against the mass matrix of the initial acceleration, a nearly
+//! incompressible soil under a contact), the solve is repeated with MUMPS's LU, which then
+//! serves the rest of the pattern (`gamg_failures` in `summary.json`); a new pattern tries
+//! GAMG again.
 //! [`PetscOptions`] (the case file's `solver.petsc_options`) override any of it
 //! (`-ksp_type`, `-pc_type`, `-ksp_rtol`, …); `-pc_type hypre` is BoomerAMG and the value
 //! `mumps` of `-pc_type` stands for `-pc_type lu -pc_factor_mat_solver_type mumps` (MUMPS's
@@ -67,6 +72,10 @@ pub(crate) struct PetscSolver {
     /// Set once CG failed on this pattern (e.g. an indefinite preconditioner): GMRES from
     /// then on, as the direct solver turns to LU after a failed Cholesky.
     cg_failed: bool,
+    /// Whether the options fix the preconditioner (then GAMG has no fallback).
+    pc_given: bool,
+    /// Set once GMRES with GAMG did not converge: MUMPS's LU from then on.
+    gamg_failed: bool,
     /// The ranks of a distributed solve (one process: [`Ranks::single`]).
     ranks: Ranks,
     /// Distributed: this rank's matrix entries per assembly, and those in other ranks' rows
@@ -98,11 +107,14 @@ impl PetscSolver {
     /// its matrices (the rigid-body modes per equation, for GAMG; may be empty). Distributed
     /// (`owned_rows` given, collective): `pattern` is this rank's part of the matrix (the
     /// blocks it assembles, global equation numbers), `owned_rows` the rows PETSc keeps here.
+    /// With `direct` (GAMG failed on an earlier pattern, and the options name no
+    /// preconditioner) it starts with MUMPS's LU.
     pub(crate) fn new(
         pattern: &AssemblyPattern,
         options: &PetscOptions,
         near_null_space: &[Vec<f64>],
         owned_rows: Option<&OwnedRows>,
+        direct: bool,
     ) -> Result<Self, LinearSolverError> {
         let mut settings = KrylovSettings {
             ksp_type: "gmres".into(),
@@ -114,15 +126,20 @@ impl PetscSolver {
             right_preconditioning: true,
         };
         let mut ksp_given = false;
+        let mut pc_given = false;
         let mut passed = Vec::with_capacity(options.options.len());
         for (name, value) in &options.options {
             match (name.as_str(), value.as_deref()) {
                 ("-pc_type", Some("mumps")) => {
                     settings.pc_type = "lu".into();
                     settings.factor_package = Some("mumps".into());
+                    pc_given = true;
                     continue;
                 }
-                ("-pc_type", Some(pc)) => settings.pc_type = pc.to_string(),
+                ("-pc_type", Some(pc)) => {
+                    settings.pc_type = pc.to_string();
+                    pc_given = true;
+                }
                 ("-ksp_type", Some(ksp)) => {
                     settings.ksp_type = ksp.to_string();
                     ksp_given = true;
@@ -172,7 +189,35 @@ impl PetscSolver {
             let modes: Vec<Vec<f64>> = near_null_space.iter().map(|v| to_rows(&row_of, v)).collect();
             krylov.set_near_null_space(&modes).map_err(petsc_error)?;
         }
-        Ok(Self { krylov, settings, ksp_given, configured_symmetric: None, cg_failed: false, ranks, entries, row_of })
+        let mut solver = Self {
+            krylov,
+            settings,
+            ksp_given,
+            configured_symmetric: None,
+            cg_failed: false,
+            pc_given,
+            gamg_failed: false,
+            ranks,
+            entries,
+            row_of,
+        };
+        if direct && !pc_given {
+            solver.use_mumps();
+        }
+        Ok(solver)
+    }
+
+    /// Whether GAMG did not converge on this pattern (MUMPS's LU took over).
+    pub(crate) fn gamg_failed(&self) -> bool {
+        self.gamg_failed
+    }
+
+    /// MUMPS's LU as the preconditioner from now on (GMRES converges in one iteration).
+    fn use_mumps(&mut self) {
+        self.settings.pc_type = "lu".into();
+        self.settings.factor_package = Some("mumps".into());
+        self.gamg_failed = true;
+        self.configured_symmetric = None;
     }
 
     /// Solves `A x = b` in place (`rhs`: `b` on entry, `x` on exit) for the matrix with the
@@ -207,6 +252,14 @@ impl PetscSolver {
             // CG failed (an indefinite preconditioner, or the limit): GMRES on the same
             // matrix, and from then on for this pattern (`rhs` is unchanged after a failure)
             self.cg_failed = true;
+            self.configure(false)?;
+            report = self.run(rhs, timings)?;
+        }
+        if !report.converged && !self.pc_given && !self.gamg_failed {
+            // GAMG failed too (a penalty of 10¹³ N/m³ against the mass matrix, a nearly
+            // incompressible soil under a contact): MUMPS's LU from then on for this pattern
+            timings.gamg_failures += 1;
+            self.use_mumps();
             self.configure(false)?;
             report = self.run(rhs, timings)?;
         }

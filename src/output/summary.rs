@@ -129,6 +129,10 @@ pub struct LinearSolverReport {
     /// a small pivot or an inaccurate solve, so that LU with partial pivoting took over.
     #[serde(default)]
     pub pattern_lu_failures: usize,
+    /// PETSc solves in which GAMG did not converge, after which MUMPS's LU took over (the
+    /// `petsc` solver without a preconditioner in `solver.petsc_options`).
+    #[serde(default)]
+    pub gamg_failures: usize,
 }
 
 /// Memory of the run (issue 30): what the process held at its peak beside the sizes of the
@@ -419,6 +423,7 @@ impl RunSummary {
                 saddle_point_lu: solver.saddle_point_lu,
                 ldlt_failures: solver.ldlt_failures,
                 pattern_lu_failures: solver.pattern_lu_failures,
+                gamg_failures: solver.gamg_failures,
             },
             wall_time,
             memory: MemoryReport::of(sim, read_peak),

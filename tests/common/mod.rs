@@ -80,6 +80,16 @@ pub fn last(sim: &Simulation, h: &History, name: &str) -> f64 {
     h.last().unwrap().1[monitor(sim, name)]
 }
 
+/// Time-mean force of a plane inclined by `alpha` (rising towards +x) on a body, from the
+/// forces `(f_x, f_y)` of the steps: resolved along the plane's normal (into the body) and up
+/// the slope.
+pub fn mean_plane_force(forces: &[(f64, f64)], alpha: f64) -> (f64, f64) {
+    let n = forces.len().max(1) as f64;
+    let fx = forces.iter().map(|f| f.0).sum::<f64>() / n;
+    let fy = forces.iter().map(|f| f.1).sum::<f64>() / n;
+    (-fx * alpha.sin() + fy * alpha.cos(), fx * alpha.cos() + fy * alpha.sin())
+}
+
 /// Prints measured vs reference and asserts the relative error is within `tolerance`.
 pub fn report(what: &str, measured: f64, reference: f64, tolerance: f64) {
     let err = (measured - reference).abs() / reference.abs();
