@@ -107,8 +107,9 @@ impl PetscSolver {
     /// its matrices (the rigid-body modes per equation, for GAMG; may be empty). Distributed
     /// (`owned_rows` given, collective): `pattern` is this rank's part of the matrix (the
     /// blocks it assembles, global equation numbers), `owned_rows` the rows PETSc keeps here.
-    /// With `direct` (GAMG failed on an earlier pattern, and the options name no
-    /// preconditioner) it starts with MUMPS's LU.
+    /// With `direct` (GAMG already failed on this pattern: before a rebalance rebuilt the
+    /// solver, or in the run a checkpoint resumes, [`crate::linear_solver::SolverMemory`]) and
+    /// no preconditioner in the options, it starts with MUMPS's LU.
     pub(crate) fn new(
         pattern: &AssemblyPattern,
         options: &PetscOptions,
@@ -212,7 +213,8 @@ impl PetscSolver {
         self.gamg_failed
     }
 
-    /// MUMPS's LU as the preconditioner from now on (GMRES converges in one iteration).
+    /// MUMPS's LU as the preconditioner from now on (CG or GMRES then converges in one
+    /// iteration).
     fn use_mumps(&mut self) {
         self.settings.pc_type = "lu".into();
         self.settings.factor_package = Some("mumps".into());
