@@ -71,7 +71,8 @@ frames slip_slope_mpm slip_slope_mpm --field velocity --last
 frames block_friction_grid_mpm block_friction_grid_mpm --field velocity --last
 frames rigid_disk_rolling_on_mpm rigid_disk_rolling_on_mpm --field velocity --times 0.2,0.4 --range 0,1.1
 # benchmark 8: Bui et al. 2008 collapse, with the experiment's surface and failure line
-for c in collapse_bui2008_quad collapse_bui2008_quad_rough collapse_bui2008_quad_h10 collapse_bui2008_quad_h2.5 collapse_bui2008_tri collapse_bui2008_tri_h2; do
+for c in collapse_bui2008_quad collapse_bui2008_quad_rough collapse_bui2008_quad_h10 collapse_bui2008_quad_h2.5 collapse_bui2008_tri collapse_bui2008_tri_h2 \
+  collapse_bui2008_mu_i collapse_bui2008_mu_i_up; do
   frames "$c" "$c" --field $KAPPA --last --range 0,2 --max-stretch 2 \
     --overlay "$BUI/surface.csv:experiment, surface" --overlay "$BUI/failure.csv:experiment, failure line"
 done

@@ -8,7 +8,8 @@
 #                                 build and tests, about 2.5 of them; a fresh machine adds its
 #                                 builds and about 2 minutes of packages: 21 + 5 measured)
 #   LOAM_LONG=1 scripts/test.sh   also the long validation runs: every test marked
-#                                 #[ignore = "long ..."] (about 25 minutes in all)
+#                                 #[ignore = "long ..."] (about 25 minutes, plus about 18 for
+#                                 the three μ(I) Bui tests run together: 1 050 s measured)
 #   LOAM_MPI=0 scripts/test.sh    without the distributed path; LOAM_MPI=1 fails where its
 #                                 packages cannot be installed (by default the stage is then
 #                                 skipped with a message)
