@@ -171,7 +171,7 @@ impl ComponentProblem {
         let pattern = AssemblyPattern::new(&dofs, &layout);
         let blocks: Vec<f64> = edges.iter().flat_map(|_| [1.0, -1.0, -1.0, 1.0]).collect();
         let mut values = vec![0.0; pattern.nnz()];
-        pattern.gather_matrix(&blocks, &mut values);
+        pattern.gather_matrix(&blocks, &mut values, &mut Vec::new());
         // every free node is joined to a fixed one (hold_unanchored_islands): L_FF is SPD
         let factor =
             CholeskyFactor::new(&pattern, &values).expect("the Laplacian of a connected band is positive definite");

@@ -107,6 +107,8 @@ pub struct Assembler {
     matrices: Vec<f64>,
     vectors: Vec<f64>,
     values: Vec<f64>,
+    /// Scratch of the matrix gather: the values in row order ([`AssemblyPattern::gather_matrix`]).
+    values_by_rows: Vec<f64>,
     /// Residual `R = f_int − f_body + M ã − f_ext` per DOF (local frames at slip nodes).
     residual: Vec<f64>,
     /// `−R` per equation before a solve, the correction per equation after it.
@@ -220,6 +222,7 @@ impl Assembler {
             matrices: vec![0.0; layout.matrix_len()],
             vectors: vec![0.0; layout.vector_len()],
             values: vec![0.0; pattern.nnz()],
+            values_by_rows: Vec::new(),
             residual: vec![0.0; num_dofs],
             rhs: vec![0.0; n_eq],
             delta: vec![0.0; num_dofs],
@@ -493,8 +496,8 @@ impl Assembler {
     pub fn tangent(&mut self) {
         self.friction.apply_to_matrices(&mut self.matrices);
         match &mut self.share {
-            None => self.pattern.gather_matrix(&self.matrices, &mut self.values),
-            Some(share) => share.pattern.gather_matrix(&self.matrices, &mut share.values),
+            None => self.pattern.gather_matrix(&self.matrices, &mut self.values, &mut self.values_by_rows),
+            Some(share) => share.pattern.gather_matrix(&self.matrices, &mut share.values, &mut self.values_by_rows),
         }
     }
 
@@ -503,7 +506,7 @@ impl Assembler {
     /// (a rank holds neither the other ranks' blocks nor the whole pattern).
     pub fn whole_tangent(&mut self) {
         self.friction.apply_to_matrices(&mut self.matrices);
-        self.pattern.gather_matrix(&self.matrices, &mut self.values);
+        self.pattern.gather_matrix(&self.matrices, &mut self.values, &mut self.values_by_rows);
     }
 
     /// Frictional slip nodes that stick and that slide at the last residual.
