@@ -62,7 +62,7 @@
 //! constraint and no u–p form.
 
 use loam_laws::mixed::MixedLaw;
-use loam_laws::{StressResponse, TangentRequest};
+use loam_laws::{idx, StressResponse, TangentRequest};
 use nalgebra::Matrix3;
 
 use crate::element::MAX_NODES;
@@ -117,10 +117,26 @@ pub fn mixed_element<G: Geometries + ?Sized>(
     } else {
         mixed_element_in::<MAX_DOFS, MAX_NODES, G>
     };
-    run(ctx, disp, pressure, geometry, f0, f_prev, committed, trial, point_out, residual, stiffness, projection_rule)
+    run(
+        ctx,
+        disp,
+        pressure,
+        geometry,
+        f0,
+        f_prev,
+        committed,
+        trial,
+        point_out,
+        residual,
+        stiffness,
+        projection_rule,
+        false,
+    )
 }
 
-/// [`mixed_element`] with scratch for `DOFS` displacement DOFs and `NODES` nodes.
+/// [`mixed_element`] with scratch for `DOFS` displacement DOFs and `NODES` nodes; every
+/// formulation through the general gradient operator if `general_operator` (the check of the
+/// tensor form, [`TensorPoint`]).
 #[allow(clippy::too_many_arguments)]
 fn mixed_element_in<const DOFS: usize, const NODES: usize, G: Geometries + ?Sized>(
     ctx: &KernelContext<'_>,
@@ -135,8 +151,10 @@ fn mixed_element_in<const DOFS: usize, const NODES: usize, G: Geometries + ?Size
     residual: &mut [f64],
     mut stiffness: Option<&mut [f64]>,
     projection_rule: Option<&[PointGeometry]>,
+    general_operator: bool,
 ) -> Result<(), KernelError> {
     let law = mixed_law(ctx)?;
+    let tensor = if general_operator { None } else { TensorPoint::of(ctx.formulation) };
     let nn = disp.len();
     let dim = ctx.element.dim();
     let nu = nn * dim;
@@ -191,6 +209,13 @@ fn mixed_element_in<const DOFS: usize, const NODES: usize, G: Geometries + ?Size
         }
         let theta = law.volumetric_strain(det_f.ln(), &committed[q * stride..(q + 1) * stride]);
         let volumetric = theta - p * inv_k;
+        if let Some(point) = tensor {
+            let terms = PointTerms { w, w0, stress: &stress, dp_tilde: &dp_tilde, volumetric, inv_k };
+            let tangent = stiffness.is_some().then_some(&response.tangent);
+            point.add(nn, g, &terms, &delta_f, tangent, residual, stiffness.as_deref_mut());
+            volume += w0;
+            continue;
+        }
         let nc = gradient_operator(ctx.formulation, nn, dim, g, &mut b);
         for r in 0..nu {
             let v: f64 = (0..nc).map(|c| stress[(active[c] / 3, active[c] % 3)] * b[r][c]).sum();
@@ -273,6 +298,128 @@ fn mixed_element_in<const DOFS: usize, const NODES: usize, G: Geometries + ?Size
     Ok(())
 }
 
+/// A point's own values in the residual and tangent of [`mixed_element_in`].
+struct PointTerms<'a> {
+    /// Its weight in `X̃` and in the stress-free configuration.
+    w: f64,
+    w0: f64,
+    /// `P̃` and `B̃ = J0⁻¹ (∂P/∂p) F0ᵀ`.
+    stress: &'a Matrix3<f64>,
+    dp_tilde: &'a Matrix3<f64>,
+    /// `θ − p/K`, and `1/K`.
+    volumetric: f64,
+    inv_k: f64,
+}
+
+/// Plane strain (`D` = 2) and 3D (`D` = 3), where the active components of `F` are the
+/// `D × D` block and the gradient operator is `B_(ai),(kL) = δ_ik ∂N_a/∂X̃_L`: one point's
+/// terms with the zeros of `B` skipped (the tensor form of [`crate::kernel::solid_element`]),
+/// each sum over the same nonzero products in the same order as the general operator's, so
+/// that both give the same values bit for bit. Axisymmetry (the hoop row `N_a/R`) takes the
+/// general operator.
+#[derive(Clone, Copy)]
+enum TensorPoint {
+    PlaneStrain,
+    ThreeD,
+}
+
+impl TensorPoint {
+    fn of(formulation: Formulation) -> Option<Self> {
+        match formulation {
+            Formulation::PlaneStrain => Some(Self::PlaneStrain),
+            Formulation::ThreeD => Some(Self::ThreeD),
+            Formulation::Axisymmetric | Formulation::PlaneStress => None,
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn add(
+        self,
+        nn: usize,
+        g: &PointGeometry,
+        terms: &PointTerms<'_>,
+        delta_f: &Matrix3<f64>,
+        tangent: Option<&loam_laws::Tangent>,
+        residual: &mut [f64],
+        stiffness: Option<&mut [f64]>,
+    ) {
+        match self {
+            Self::PlaneStrain => add_tensor_point::<2>(nn, g, terms, delta_f, tangent, residual, stiffness),
+            Self::ThreeD => add_tensor_point::<3>(nn, g, terms, delta_f, tangent, residual, stiffness),
+        }
+    }
+}
+
+/// [`TensorPoint::add`] in `D` dimensions: `r_u,ai += w P̃_iJ ∂N_a/∂X̃_J`, `r_p,a += w0 N_a (θ −
+/// p/K)` and, with the tangent `Ã`, `K_uu,(ai)(bk) += Σ_L (w Σ_J ∂N_a/∂X̃_J Ã_iJkL) ∂N_b/∂X̃_L`,
+/// `K_up,(ai)b += w (Σ_J ∂N_a/∂X̃_J B̃_iJ) N_b`, `K_pu,a(bk) += w0 N_a Σ_L ΔF⁻ᵀ_kL ∂N_b/∂X̃_L`,
+/// `K_pp,ab −= w0 N_a N_b / K`.
+fn add_tensor_point<const D: usize>(
+    nn: usize,
+    g: &PointGeometry,
+    terms: &PointTerms<'_>,
+    delta_f: &Matrix3<f64>,
+    tangent: Option<&loam_laws::Tangent>,
+    residual: &mut [f64],
+    stiffness: Option<&mut [f64]>,
+) {
+    let PointTerms { w, w0, stress, dp_tilde, volumetric, inv_k } = *terms;
+    let nu = nn * D;
+    let nd = nu + nn;
+    for a in 0..nn {
+        let ga = &g.gradient[a];
+        for i in 0..D {
+            let v: f64 = (0..D).map(|j| stress[(i, j)] * ga[j]).sum();
+            residual[a * D + i] += w * v;
+        }
+    }
+    for a in 0..nn {
+        residual[nu + a] += w0 * g.shape[a] * volumetric;
+    }
+    let (Some(k), Some(tangent)) = (stiffness, tangent) else { return };
+    let dfi = delta_f.try_inverse().unwrap_or_else(Matrix3::zeros).transpose();
+    for a in 0..nn {
+        let ga = &g.gradient[a];
+        for i in 0..D {
+            // bt[k][l] = w Σ_J ∂N_a/∂X̃_J Ã_iJkL (a row of w Bᵀ Ã)
+            let mut bt = [[0.0; D]; D];
+            for (kk, row) in bt.iter_mut().enumerate() {
+                for (l, value) in row.iter_mut().enumerate() {
+                    let v: f64 = (0..D).map(|j| ga[j] * tangent[(idx(i, j), idx(kk, l))]).sum();
+                    *value = w * v;
+                }
+            }
+            let r = a * D + i;
+            let row = &mut k[r * nd..(r + 1) * nd];
+            for b in 0..nn {
+                let gb = &g.gradient[b];
+                for kk in 0..D {
+                    row[b * D + kk] += (0..D).map(|l| bt[kk][l] * gb[l]).sum::<f64>();
+                }
+            }
+            let bp: f64 = (0..D).map(|j| ga[j] * dp_tilde[(i, j)]).sum();
+            for b in 0..nn {
+                row[nu + b] += w * bp * g.shape[b];
+            }
+        }
+    }
+    for b in 0..nn {
+        let gb = &g.gradient[b];
+        for kk in 0..D {
+            let dj: f64 = (0..D).map(|l| dfi[(kk, l)] * gb[l]).sum();
+            let s = b * D + kk;
+            for a in 0..nn {
+                k[(nu + a) * nd + s] += w0 * g.shape[a] * dj;
+            }
+        }
+    }
+    for a in 0..nn {
+        for c in 0..nn {
+            k[(nu + a) * nd + nu + c] -= w0 * g.shape[a] * g.shape[c] * inv_k;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -287,7 +434,8 @@ mod tests {
     /// displacement and pressure, for every element and formulation, with `F0 ≠ I` (the MPM
     /// pull-back): Neo-Hookean (ν = 0.4999 and exactly incompressible), and Mohr–Coulomb
     /// with φ = 0 (Tresca) and φ = 25° (ψ = 0: the unsymmetric coupling) on its yield
-    /// surface. Relative error < 1e-6 of the largest entry.
+    /// surface. Relative error < 1e-6 of the largest entry. In plane strain and 3D the
+    /// element's tensor form ([`TensorPoint`]) also equals the general operator's, bit for bit.
     #[test]
     fn mixed_tangent_matches_finite_differences_of_residual() {
         let nh = NeoHookean::new(1000.0, 1.0e6, 0.4999);
@@ -390,7 +538,36 @@ mod tests {
             (r, trial)
         };
         let mut k = vec![0.0; nd * nd];
-        let (_, trial) = residual(&x, Some(&mut k));
+        let (r, trial) = residual(&x, Some(&mut k));
+        if TensorPoint::of(formulation).is_some() {
+            // the tensor form against the general operator, bit for bit
+            let disp: Vec<[f64; 3]> =
+                (0..nn).map(|a| std::array::from_fn(|i| if i < dim { x[a * dim + i] } else { 0.0 })).collect();
+            let (mut r2, mut k2) = (vec![0.0; nd], vec![0.0; nd * nd]);
+            let mut out = vec![PointOutput::default(); np];
+            let mut trial2 = committed.clone();
+            mixed_element_in::<MAX_DOFS, MAX_NODES, [PointGeometry]>(
+                &ctx,
+                &disp,
+                &x[nn * dim..],
+                &geometry[..],
+                &f0s,
+                &f0s,
+                &committed,
+                &mut trial2,
+                &mut out,
+                &mut r2,
+                Some(&mut k2),
+                projection.as_deref(),
+                true,
+            )
+            .unwrap();
+            assert!(
+                r.iter().zip(&r2).all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{element:?} {formulation:?}: residual"
+            );
+            assert!(k.iter().zip(&k2).all(|(a, b)| a.to_bits() == b.to_bits()), "{element:?} {formulation:?}: tangent");
+        }
         if plastic {
             let flag = law.state_variables().iter().position(|v| *v == "yield_flag").unwrap();
             let mut values = vec![0.0; law.state_variables().len()];
