@@ -612,7 +612,11 @@ fn mu_i_refinement(suffix: &str) -> Vec<(Collapse, f64)> {
 
 /// Issue 24 item 4 with the mixed u–p element (`cases/collapse_bui2008_mu_i_up_h10.json`,
 /// `…_up.json`, `…_up_h2.5.json`): the same parameters at every h. Measured (6 December
-/// 2026): runouts 0.4013 / 0.4248 / 0.4278 m (+1.9 % on the finest), differences 0.0235 and 0.0030 m, observed order 3.0, extrapolated 0.4282 m (+2.0 %); point-centre profiles 1.73 / 1.04 / 1.38 mm RMS; failure lines 31.5° / 30.6° / 30.5° against the experiment's 32.9°; at rest at 0.72 / 0.70 / 0.75 s. Asserted: every level at rest, the runout's differences shrinking, the
+/// 2026): runouts 0.4013 / 0.4248 / 0.4278 m (+1.9 % on the finest), differences 0.0235 and
+/// 0.0030 m, observed order 3.0, extrapolated 0.4282 m (+2.0 %); point-centre profiles 1.73 /
+/// 1.04 / 1.38 mm RMS; failure lines 31.5° / 30.6° / 30.5° against the experiment's 32.9°; at
+/// rest at 0.72 / 0.70 / 0.75 s. Asserted: every level at rest, the runout's differences
+/// shrinking, the
 /// finest runout within 3 % of the experiment's 0.42 m, the point-centre profile within
 /// 2.5 mm RMS of the experiment's surface on every level, the failure line within 3° of the
 /// experiment's. Printed, not asserted: the height at the wall, 0.1001 m against the
@@ -636,7 +640,10 @@ fn bui2008_mu_i_up_converges_to_the_experiment() {
 }
 
 /// Issue 24 item 4 with the displacement element (`cases/collapse_bui2008_mu_i_h10.json`,
-/// `…_mu_i.json`, `…_mu_i_h2.5.json`). Measured (6 December 2026): runouts 0.3729 / 0.4616 / 0.4346 m (+3.5 % on the finest; the differences alternate, +0.0887 and −0.0270 m: ratio −0.30, order 1.7, extrapolated 0.4409 m, +5.0 %); point-centre profiles 1.65 / 2.11 / 1.95 mm RMS; failure lines 31.4° / 30.6° / 30.4°. Asserted:
+/// `…_mu_i.json`, `…_mu_i_h2.5.json`). Measured (6 December 2026): runouts 0.3729 / 0.4616 /
+/// 0.4346 m (+3.5 % on the finest; the differences alternate, +0.0887 and −0.0270 m: ratio
+/// −0.30, order 1.7, extrapolated 0.4409 m, +5.0 %); point-centre profiles 1.65 / 2.11 / 1.95
+/// mm RMS; failure lines 31.4° / 30.6° / 30.4°. Asserted:
 /// every level at rest, the runout's differences shrinking, the finest within benchmark 8's
 /// 5 %, its point-centre profile within 2.5 mm RMS and its failure line within 3° of the
 /// experiment's. About 8 minutes on one thread.

@@ -136,7 +136,7 @@ pub fn mixed_element<G: Geometries + ?Sized>(
 
 /// [`mixed_element`] with scratch for `DOFS` displacement DOFs and `NODES` nodes; every
 /// formulation through the general gradient operator if `general_operator` (the check of the
-/// tensor form, [`TensorPoint`]).
+/// tensor form, [`tensor_form`]).
 #[allow(clippy::too_many_arguments)]
 fn mixed_element_in<const DOFS: usize, const NODES: usize, G: Geometries + ?Sized>(
     ctx: &KernelContext<'_>,
@@ -154,7 +154,7 @@ fn mixed_element_in<const DOFS: usize, const NODES: usize, G: Geometries + ?Size
     general_operator: bool,
 ) -> Result<(), KernelError> {
     let law = mixed_law(ctx)?;
-    let tensor = if general_operator { None } else { TensorPoint::of(ctx.formulation) };
+    let tensor = if general_operator { None } else { tensor_form(ctx.formulation) };
     let nn = disp.len();
     let dim = ctx.element.dim();
     let nu = nn * dim;
@@ -209,10 +209,10 @@ fn mixed_element_in<const DOFS: usize, const NODES: usize, G: Geometries + ?Size
         }
         let theta = law.volumetric_strain(det_f.ln(), &committed[q * stride..(q + 1) * stride]);
         let volumetric = theta - p * inv_k;
-        if let Some(point) = tensor {
+        if let Some(add) = tensor {
             let terms = PointTerms { w, w0, stress: &stress, dp_tilde: &dp_tilde, volumetric, inv_k };
             let tangent = stiffness.is_some().then_some(&response.tangent);
-            point.add(nn, g, &terms, &delta_f, tangent, residual, stiffness.as_deref_mut());
+            add(nn, g, &terms, &delta_f, tangent, residual, stiffness.as_deref_mut());
             volume += w0;
             continue;
         }
@@ -311,46 +311,32 @@ struct PointTerms<'a> {
     inv_k: f64,
 }
 
+/// One point's terms in tensor form ([`add_tensor_point`]).
+type TensorPointFn = fn(
+    usize,
+    &PointGeometry,
+    &PointTerms<'_>,
+    &Matrix3<f64>,
+    Option<&loam_laws::Tangent>,
+    &mut [f64],
+    Option<&mut [f64]>,
+);
+
 /// Plane strain (`D` = 2) and 3D (`D` = 3), where the active components of `F` are the
 /// `D × D` block and the gradient operator is `B_(ai),(kL) = δ_ik ∂N_a/∂X̃_L`: one point's
 /// terms with the zeros of `B` skipped (the tensor form of [`crate::kernel::solid_element`]),
 /// each sum over the same nonzero products in the same order as the general operator's, so
 /// that both give the same values bit for bit. Axisymmetry (the hoop row `N_a/R`) takes the
-/// general operator.
-#[derive(Clone, Copy)]
-enum TensorPoint {
-    PlaneStrain,
-    ThreeD,
-}
-
-impl TensorPoint {
-    fn of(formulation: Formulation) -> Option<Self> {
-        match formulation {
-            Formulation::PlaneStrain => Some(Self::PlaneStrain),
-            Formulation::ThreeD => Some(Self::ThreeD),
-            Formulation::Axisymmetric | Formulation::PlaneStress => None,
-        }
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    fn add(
-        self,
-        nn: usize,
-        g: &PointGeometry,
-        terms: &PointTerms<'_>,
-        delta_f: &Matrix3<f64>,
-        tangent: Option<&loam_laws::Tangent>,
-        residual: &mut [f64],
-        stiffness: Option<&mut [f64]>,
-    ) {
-        match self {
-            Self::PlaneStrain => add_tensor_point::<2>(nn, g, terms, delta_f, tangent, residual, stiffness),
-            Self::ThreeD => add_tensor_point::<3>(nn, g, terms, delta_f, tangent, residual, stiffness),
-        }
+/// general operator (`None`).
+fn tensor_form(formulation: Formulation) -> Option<TensorPointFn> {
+    match formulation {
+        Formulation::PlaneStrain => Some(add_tensor_point::<2>),
+        Formulation::ThreeD => Some(add_tensor_point::<3>),
+        Formulation::Axisymmetric | Formulation::PlaneStress => None,
     }
 }
 
-/// [`TensorPoint::add`] in `D` dimensions: `r_u,ai += w P̃_iJ ∂N_a/∂X̃_J`, `r_p,a += w0 N_a (θ −
+/// [`tensor_form`] in `D` dimensions: `r_u,ai += w P̃_iJ ∂N_a/∂X̃_J`, `r_p,a += w0 N_a (θ −
 /// p/K)` and, with the tangent `Ã`, `K_uu,(ai)(bk) += Σ_L (w Σ_J ∂N_a/∂X̃_J Ã_iJkL) ∂N_b/∂X̃_L`,
 /// `K_up,(ai)b += w (Σ_J ∂N_a/∂X̃_J B̃_iJ) N_b`, `K_pu,a(bk) += w0 N_a Σ_L ΔF⁻ᵀ_kL ∂N_b/∂X̃_L`,
 /// `K_pp,ab −= w0 N_a N_b / K`.
@@ -435,7 +421,7 @@ mod tests {
     /// pull-back): Neo-Hookean (ν = 0.4999 and exactly incompressible), and Mohr–Coulomb
     /// with φ = 0 (Tresca) and φ = 25° (ψ = 0: the unsymmetric coupling) on its yield
     /// surface. Relative error < 1e-6 of the largest entry. In plane strain and 3D the
-    /// element's tensor form ([`TensorPoint`]) also equals the general operator's, bit for bit.
+    /// element's tensor form ([`tensor_form`]) also equals the general operator's, bit for bit.
     #[test]
     fn mixed_tangent_matches_finite_differences_of_residual() {
         let nh = NeoHookean::new(1000.0, 1.0e6, 0.4999);
@@ -509,18 +495,14 @@ mod tests {
             *v =
                 if s < nn * dim { scale * ((s * 3 + 1) as f64).sin() } else { -3.0e3 * (1.0 + 0.3 * (s as f64).cos()) };
         }
-        let residual = |x: &[f64], k: Option<&mut [f64]>| {
-            let disp: Vec<[f64; 3]> = (0..nn)
-                .map(|a| {
-                    let mut d = [0.0; 3];
-                    d[..dim].copy_from_slice(&x[a * dim..(a + 1) * dim]);
-                    d
-                })
-                .collect();
+        // the element through the tensor form (plane strain, 3D) or the general operator
+        let evaluate = |x: &[f64], k: Option<&mut [f64]>, general_operator: bool| {
+            let disp: Vec<[f64; 3]> =
+                (0..nn).map(|a| std::array::from_fn(|i| if i < dim { x[a * dim + i] } else { 0.0 })).collect();
             let mut r = vec![0.0; nd];
             let mut out = vec![PointOutput::default(); np];
             let mut trial = committed.clone();
-            mixed_element(
+            mixed_element_in::<MAX_DOFS, MAX_NODES, [PointGeometry]>(
                 &ctx,
                 &disp,
                 &x[nn * dim..],
@@ -533,40 +515,21 @@ mod tests {
                 &mut r,
                 k,
                 projection.as_deref(),
+                general_operator,
             )
             .unwrap();
             (r, trial)
         };
+        let residual = |x: &[f64], k: Option<&mut [f64]>| evaluate(x, k, false);
         let mut k = vec![0.0; nd * nd];
         let (r, trial) = residual(&x, Some(&mut k));
-        if TensorPoint::of(formulation).is_some() {
+        if tensor_form(formulation).is_some() {
             // the tensor form against the general operator, bit for bit
-            let disp: Vec<[f64; 3]> =
-                (0..nn).map(|a| std::array::from_fn(|i| if i < dim { x[a * dim + i] } else { 0.0 })).collect();
-            let (mut r2, mut k2) = (vec![0.0; nd], vec![0.0; nd * nd]);
-            let mut out = vec![PointOutput::default(); np];
-            let mut trial2 = committed.clone();
-            mixed_element_in::<MAX_DOFS, MAX_NODES, [PointGeometry]>(
-                &ctx,
-                &disp,
-                &x[nn * dim..],
-                &geometry[..],
-                &f0s,
-                &f0s,
-                &committed,
-                &mut trial2,
-                &mut out,
-                &mut r2,
-                Some(&mut k2),
-                projection.as_deref(),
-                true,
-            )
-            .unwrap();
-            assert!(
-                r.iter().zip(&r2).all(|(a, b)| a.to_bits() == b.to_bits()),
-                "{element:?} {formulation:?}: residual"
-            );
-            assert!(k.iter().zip(&k2).all(|(a, b)| a.to_bits() == b.to_bits()), "{element:?} {formulation:?}: tangent");
+            let mut k2 = vec![0.0; nd * nd];
+            let (r2, _) = evaluate(&x, Some(&mut k2), true);
+            let same = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(a, b)| a.to_bits() == b.to_bits());
+            assert!(same(&r, &r2), "{element:?} {formulation:?}: residual");
+            assert!(same(&k, &k2), "{element:?} {formulation:?}: tangent");
         }
         if plastic {
             let flag = law.state_variables().iter().position(|v| *v == "yield_flag").unwrap();
