@@ -168,8 +168,8 @@ fn mixed_element_in<const DOFS: usize, const NODES: usize, G: Geometries + ?Size
     }
     let active = active_components(ctx.formulation);
     let request = if stiffness.is_some() { TangentRequest::Components(active) } else { TangentRequest::None };
-    let mut b = [[0.0; 9]; DOFS];
-    let mut bt_a = [[0.0; 9]; DOFS];
+    // the general operator's scratch `B` and `w Bᵀ Ã`, zeroed only where that path runs
+    let mut operator = if tensor.is_none() { Some(([[0.0; 9]; DOFS], [[0.0; 9]; DOFS])) } else { None };
     let mut response = StressResponse::default();
     let mut dp_df = Matrix3::zeros();
     // the projection's moments: m_a = Σ w0 N_a, V = Σ w0, and Σ w0 N_a p (for Π₀p)
@@ -216,7 +216,8 @@ fn mixed_element_in<const DOFS: usize, const NODES: usize, G: Geometries + ?Size
             volume += w0;
             continue;
         }
-        let nc = gradient_operator(ctx.formulation, nn, dim, g, &mut b);
+        let (b, bt_a) = operator.as_mut().expect("the general operator's scratch where there is no tensor form");
+        let nc = gradient_operator(ctx.formulation, nn, dim, g, b);
         for r in 0..nu {
             let v: f64 = (0..nc).map(|c| stress[(active[c] / 3, active[c] % 3)] * b[r][c]).sum();
             residual[r] += w * v;
