@@ -360,25 +360,8 @@ fn bui_slab_3d_is_the_plane_strain_case_per_metre_of_depth() {
     }
 }
 
-/// The largest `x` of a material-point centre at `height` or more above the base (y in 2D,
-/// z in 3D).
-fn farthest_centre(sim: &Simulation, height: f64) -> f64 {
-    let up = sim.model.dim - 1;
-    let mut farthest = f64::NEG_INFINITY;
-    for d in &sim.model.domains {
-        for id in d.points_in_box(&[f64::MIN; 3][..sim.model.dim], &[f64::MAX; 3][..sim.model.dim]) {
-            let x = d.point_quantity(id, PointQuantity::Position).expect("position");
-            if x[up] >= height {
-                farthest = farthest.max(x[0]);
-            }
-        }
-    }
-    farthest
-}
-
-/// The highest material-point centre within `±h/2` of each `x` (0 where none; the vertical is
-/// y in 2D, z in 3D): issue 24 item 4's profile of the final surface.
-fn centre_profile(sim: &Simulation, h: f64, xs: &[f64]) -> Vec<f64> {
+/// Every material point's centre as (x, height above the base: y in 2D, z in 3D).
+fn point_centres(sim: &Simulation) -> Vec<(f64, f64)> {
     let up = sim.model.dim - 1;
     let mut centres = Vec::new();
     for d in &sim.model.domains {
@@ -387,6 +370,18 @@ fn centre_profile(sim: &Simulation, h: f64, xs: &[f64]) -> Vec<f64> {
             centres.push((x[0], x[up]));
         }
     }
+    centres
+}
+
+/// The largest `x` of a material-point centre at `height` or more above the base.
+fn farthest_centre(sim: &Simulation, height: f64) -> f64 {
+    point_centres(sim).iter().filter(|c| c.1 >= height).map(|c| c.0).fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// The highest material-point centre within `±h/2` of each `x` (0 where none; the vertical is
+/// y in 2D, z in 3D): issue 24 item 4's profile of the final surface.
+fn centre_profile(sim: &Simulation, h: f64, xs: &[f64]) -> Vec<f64> {
+    let centres = point_centres(sim);
     xs.iter().map(|&x| centres.iter().filter(|c| (c.0 - x).abs() <= 0.5 * h).map(|c| c.1).fold(0.0, f64::max)).collect()
 }
 
