@@ -3,7 +3,7 @@
 //! the structure alone, with the Newton iterations of each.
 //!
 //! - **collapse**: the Bui column onto the rubber plate (`cases/coupled_collapse_rubber.json`)
-//!   against the same column without the plate (`collapse_bui2008_quad.json`, the same grid
+//!   against the same column without the plate (`collapse_bui2008_quad_mc.json`, the same grid
 //!   without the plate's 24 cells) and the plate alone (FEM, clamped, under gravity); fixed
 //!   steps of 1 ms from t = 0.1 s (the flow reaches the plate at about 0.11 s: the steps
 //!   time the impact), after one warm-up step.
@@ -112,7 +112,7 @@ fn main() {
     let mut coupled = case_json("coupled_collapse_rubber.json");
     coupled.as_object_mut().unwrap().remove("fmu");
     fixed_steps(&mut coupled, dt, end);
-    let mut soil = case_json("collapse_bui2008_quad.json");
+    let mut soil = case_json("collapse_bui2008_quad_mc.json");
     soil["analysis"]["scheme"] = coupled["analysis"]["scheme"].clone();
     fixed_steps(&mut soil, dt, end);
     let mut plate = coupled.clone();

@@ -4,7 +4,7 @@
 //! - **footing**: benchmark 11 in MPM (`footing_undrained_mpm_up.json` against
 //!   `footing_undrained_mpm_u.json`), steps 10 to 10 + `LOAM_BENCH_STEPS` of the 50 (the soil
 //!   under the footing yielding), after the first 10 steps untimed;
-//! - **Bui column**: `collapse_bui2008_quad_up.json` against `collapse_bui2008_quad.json`,
+//! - **Bui column**: `collapse_bui2008_quad_up.json` against `collapse_bui2008_quad_mc.json`,
 //!   fixed steps of 1 ms from t = 0.1 s (the column collapsing);
 //! - **solvers**: the u–p footing and Cook's membrane (Kratos' mesh) with `lu`, `ldlt`
 //!   (signed regularisation), `lblt` (Bunch–Kaufman, what `auto` takes on a symmetric saddle
@@ -117,7 +117,7 @@ fn bui(threads: usize, steps: usize, headers: &[&str]) {
     };
     let bui = vec![
         timed(column("collapse_bui2008_quad_up.json"), "Bui column, u–p", start, threads, steps),
-        timed(column("collapse_bui2008_quad.json"), "Bui column, displacement", start, threads, steps),
+        timed(column("collapse_bui2008_quad_mc.json"), "Bui column, displacement", start, threads, steps),
     ];
     print_table(&bui, headers);
     ratio("Bui column", &bui[0], &bui[1]);

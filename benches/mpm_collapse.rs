@@ -5,8 +5,8 @@
 //!
 //! - **steps** (default): from the start of the collapse, one warm-up step and then
 //!   `LOAM_BENCH_STEPS` (default 10) steps of Kratos' step Δt = 5e-5 s, with 1 and 2 threads,
-//!   on the quadrilateral grids h = 10 / 5 / 2.5 mm (`collapse_bui2008_quad_h10`, `_quad`,
-//!   `_quad_h2.5`) and on Kratos' own validation discretisation of this benchmark
+//!   on the quadrilateral grids h = 10 / 5 / 2.5 mm (`collapse_bui2008_quad_mc_h10`, `_quad_mc`,
+//!   `_quad_mc_h2.5`: Mohr–Coulomb on the linear basis, as Kratos runs it) and on Kratos' own validation discretisation of this benchmark
 //!   (`collapse_bui2008_tri_h2`: triangles h = 2 mm, 3 points each, 30 000 points). Kratos'
 //!   MPM application needs 0.83 s per step there on one thread (`shared/kratos/README.md`);
 //!   the last column is that over Loam's time per step.
@@ -16,7 +16,7 @@
 //!   `LOAM_BENCH_THREADS` (default 2). The h = 2.5 mm level takes about 10 minutes on 2 cores.
 //!
 //! - **small step** (`LOAM_BENCH_COLLAPSE=small_step`): the first case (default
-//!   `collapse_bui2008_quad`) run twice until at rest, with Kratos' fixed step Δt = 5e-5 s
+//!   `collapse_bui2008_quad_mc`) run twice until at rest, with Kratos' fixed step Δt = 5e-5 s
 //!   and with the case's adaptive steps; prints both wall times and the RMS vertical distance
 //!   between the two final surfaces (sampled every millimetre from the wall to 0.5 m).
 //! - **repeat** (`LOAM_BENCH_COLLAPSE=repeat`): the same with two identical adaptive runs,
@@ -31,7 +31,7 @@
 //! compared with one small-step run, and a perturbation at round-off level (e.g. gravity
 //! −9.81 (1 + 1e-12)) in repeat mode measures how far the final surface moves under it.
 //!
-//! Choose cases with `LOAM_BENCH_CASES=collapse_bui2008_quad,collapse_bui2008_tri_h2`, and
+//! Choose cases with `LOAM_BENCH_CASES=collapse_bui2008_quad_mc,collapse_bui2008_tri_h2`, and
 //! the element of every domain with `LOAM_BENCH_FORMULATION=mixed_up` (the u–p refinement
 //! study: `LOAM_BENCH_COLLAPSE=full LOAM_BENCH_FORMULATION=mixed_up`, about 10 minutes).
 //! Run: `cargo bench --bench mpm_collapse`. Nothing is asserted about times.
@@ -248,11 +248,11 @@ fn main() {
         } else {
             vec![("Δt = 5e-5 s", Steps::FixedToRest(KRATOS_TIME_STEP)), ("adaptive", Steps::Patched)]
         };
-        surface_comparison(name.as_deref().unwrap_or("collapse_bui2008_quad"), threads.unwrap_or(2), runs);
+        surface_comparison(name.as_deref().unwrap_or("collapse_bui2008_quad_mc"), threads.unwrap_or(2), runs);
         return;
     }
     let full = std::env::var("LOAM_BENCH_COLLAPSE").is_ok_and(|v| v == "full");
-    let levels = ["collapse_bui2008_quad_h10", "collapse_bui2008_quad", "collapse_bui2008_quad_h2.5"];
+    let levels = ["collapse_bui2008_quad_mc_h10", "collapse_bui2008_quad_mc", "collapse_bui2008_quad_mc_h2.5"];
     let mut cases: Vec<String> = levels.iter().map(|s| s.to_string()).collect();
     if !full {
         cases.push(KRATOS_CASE.into());

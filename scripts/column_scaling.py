@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Granular column scaling (issue 24, items 5 and 6): columns of aspect ratio a = H0/L0 =
 0.5, 1, 2, 4, 8 of the Bui et al. (2008) aluminium bars (Mohr-Coulomb phi = 19.8 deg, c = 0,
-psi = 0) with L0 = 0.1 m, the numerical settings of cases/collapse_bui2008_quad.json, run to
+psi = 0) with L0 = 0.1 m, the numerical settings of cases/collapse_bui2008_quad_mc.json, run to
 rest; the normalised runout (L_inf - L0)/L0 and final height at the wall H_inf/L0 against
 two published fits for plane (quasi-2D channel) columns; and the steps and wall time of the
 three phases of each run (collapse, spreading, settling). Python 3 standard library only.
@@ -112,7 +112,7 @@ def make_case(a, h=H_CELL):
         f"geostatic K0 = 1 - sin(phi) start; quadrilateral grid h = {h * 1000:g} mm{h_note}, 4 points per "
         f"cell, PIC relaxation time {tau:g} s, adaptive implicit steps (their length set by the local time-integration "
         f"error, 2e-6 m, and shortened past 8 Newton iterations), until at rest: the settings of "
-        f"cases/collapse_bui2008_quad.json. Fits of the normalised runout (L_inf - L0)/L0 for plane "
+        f"cases/collapse_bui2008_quad_mc.json. Fits of the normalised runout (L_inf - L0)/L0 for plane "
         f"(quasi-2D channel) columns: Lube et al. 2005 (Phys. Rev. E 72, 041301) 1.2 a for a <~ 2.3, "
         f"1.9 a^(2/3) beyond: {lo:.2f} here; Lajeunesse et al. 2005 (Phys. Fluids 17, 103302) 1.8 a for "
         f"a < 3, 2.3 a^(2/3) beyond: {la:.2f} here; final height at the wall H_inf/L0 (Lube) a for "

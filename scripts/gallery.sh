@@ -71,12 +71,12 @@ frames slip_slope_mpm slip_slope_mpm --field velocity --last
 frames block_friction_grid_mpm block_friction_grid_mpm --field velocity --last
 frames rigid_disk_rolling_on_mpm rigid_disk_rolling_on_mpm --field velocity --times 0.2,0.4 --range 0,1.1
 # benchmark 8: Bui et al. 2008 collapse, with the experiment's surface and failure line
-for c in collapse_bui2008_quad collapse_bui2008_quad_rough collapse_bui2008_quad_h10 collapse_bui2008_quad_h2.5 collapse_bui2008_tri collapse_bui2008_tri_h2 \
-  collapse_bui2008_mu_i collapse_bui2008_mu_i_up; do
+for c in collapse_bui2008_quad_mc collapse_bui2008_quad_rough collapse_bui2008_quad_mc_h10 collapse_bui2008_quad_mc_h2.5 collapse_bui2008_tri collapse_bui2008_tri_h2 \
+  collapse_bui2008_mu_i collapse_bui2008_quad; do
   frames "$c" "$c" --field $KAPPA --last --range 0,2 --max-stretch 2 \
     --overlay "$BUI/surface.csv:experiment, surface" --overlay "$BUI/failure.csv:experiment, failure line"
 done
-monitors collapse_bui2008_quad_runout collapse_bui2008_quad monitors_length.png
+monitors collapse_bui2008_quad_mc_runout collapse_bui2008_quad_mc monitors_length.png
 frames collapse_bui2008_slab_3d collapse_bui2008_slab_3d --field $KAPPA --last --range 0,2 --max-stretch 2 --plane xz \
   --overlay "$BUI/surface.csv:experiment, surface" --overlay "$BUI/failure.csv:experiment, failure line"
 frames collapse_two_layers collapse_two_layers --field $KAPPA --last --range 0,2 --max-stretch 2

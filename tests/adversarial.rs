@@ -245,7 +245,7 @@ fn named_inputs(dir: &Path, inputs: &mut Vec<Input>) {
     };
     let (fem, mpm) = (read("cantilever_fem.json"), read("cantilever_mpm.json"));
     let penalty = read("cylinder_incline_slip_mpm.json");
-    let collapse = read("collapse_bui2008_quad.json");
+    let collapse = read("collapse_bui2008_quad_mc.json");
     let coupled = read("coupled_beam_split.json");
     let mut n = 0;
     let mut case = |name: &str, command: &'static str, base: &Value, edit: &dyn Fn(&mut Value), expect: Expect| {
@@ -961,7 +961,7 @@ fn adversarial_corpus_is_refused_cleanly() {
         "cantilever_mpm",
         "cylinder_incline_slip_mpm",
         "coupled_beam_split",
-        "collapse_bui2008_quad",
+        "collapse_bui2008_quad_mc",
         "footing_fmu",
         "disk_collision_mpm",
     ];

@@ -814,7 +814,7 @@ fn bui_saddle_point_factorises_on_its_symmetric_pattern() {
 /// experiment is `mpm_collapse::bui2008_collapse_mixed_up`): the isochoric flow with ψ = 0
 /// must not stiffen or soften the collapse (issue 15), so the u–p runout lies within 5 % of
 /// the displacement run's on the same grid and base, and both come to rest. Both run on
-/// quadratic B-splines with the frictional base of `collapse_bui2008_quad.json` (measured:
+/// quadratic B-splines with the frictional base of `collapse_bui2008_quad_mc.json` (measured:
 /// displacement 0.4265 m, u–p 0.4157 m, 2.5 % apart, under the bundled error control; 0.4261 m
 /// under the iteration control; u–p 0.4146 m before the saddle point went
 /// through the LU on its symmetric pattern, a change of round-off path). On the linear basis the runout at the
@@ -825,7 +825,7 @@ fn bui_saddle_point_factorises_on_its_symmetric_pattern() {
 #[test]
 #[ignore = "long (about 3 min in release): LOAM_LONG=1 scripts/test.sh"]
 fn bui_collapse_with_mixed_up() {
-    let mut displacement = common::case_json("collapse_bui2008_quad.json");
+    let mut displacement = common::case_json("collapse_bui2008_quad_mc.json");
     let mut mixed = common::case_json("collapse_bui2008_quad_up.json");
     mixed["boundary_conditions"] = displacement["boundary_conditions"].clone();
     for json in [&mut displacement, &mut mixed] {

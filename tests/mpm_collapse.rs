@@ -203,29 +203,67 @@ fn check(c: &Collapse) -> [bool; 4] {
     ]
 }
 
-fn collapse(case_name: &str) {
+/// Runs `case_name` and asserts benchmark 8's checks of [`check`]; the runout only where
+/// `runout_asserted` (see [`bui2008_mohr_coulomb_on_the_linear_basis`] for why not).
+fn collapse(case_name: &str, runout_asserted: bool) -> Collapse {
     let c = measure(case_name, parse(case_json(case_name)));
-    let passed = check(&c);
+    assert_checks(case_name, &c, runout_asserted);
+    c
+}
+
+/// Asserts [`check`]'s checks of `c`, the runout only where `runout_asserted`.
+fn assert_checks(label: &str, c: &Collapse, runout_asserted: bool) {
+    let passed = check(c);
     let names = ["at rest", "runout", "surface RMS", "failure-line angle"];
     for (ok, name) in passed.iter().zip(names) {
-        assert!(ok, "{case_name}: {name} outside its tolerance");
+        if name == "runout" && !runout_asserted {
+            println!(
+                "{label}: runout {} its tolerance (printed, not asserted)",
+                if *ok { "inside" } else { "outside" }
+            );
+            continue;
+        }
+        assert!(ok, "{label}: {name} outside its tolerance");
     }
 }
 
-/// Quadrilateral grid h = 5 mm, 4 points per cell, frictional base μ_b = tan φ = 0.36
-/// (`cases/collapse_bui2008_quad.json`, steps set by the local time-integration error).
-/// Measured: at rest at 0.71 s in 384 steps, runout 0.4367 m (+3.99 %), surface 3.65 mm RMS,
-/// failure line 34.7° (under the iteration control before 6 December 2026: 0.4329 m,
-/// 3.00 mm, 34.5°). The runout check passes by the chance of round-off: with gravity
-/// × (1 + k·1e-12), k = 0 … 9, the monitor ends at 0.437 m in six runs, 0.495 m in three and
-/// 0.368 m in one (the one-point sheet's squares crossing the 2 mm threshold; the flow is the
-/// same, the points' centres reaching 2 mm out to 0.468–0.477 m in all ten; docs/validation.md,
-/// benchmark 8). (The rough base of
-/// `collapse_bui2008_quad_rough.json` ends at 0.3946 m, −6.0 %, outside the tolerance; docs/validation.md,
-/// granular flow.)
+/// Benchmark 8 on the bundled default case (issue 24's acceptance,
+/// `cases/collapse_bui2008_quad.json`): μ(I) with μ_s = tan 19.8°, the mixed u–p element,
+/// quadratic B-splines, h = 5 mm, 4 points per cell, the frictional base μ_b = 0.36, the PIC
+/// relaxation time 0.32 s (weak: the deposit does not depend on it), steps set by the local
+/// time-integration error. Asserted against the experiment: at rest, runout within 5 %, final
+/// surface within 4 mm RMS, failure line within 5°, and issue 24 item 4's point-centre profile
+/// within 2.5 mm RMS. Measured (6 December 2026): at rest at 0.70 s in 1 262 steps, runout
+/// 0.4248 m (+1.1 %), point-centre profile 1.04 mm RMS, failure line 30.6°. Its runout holds
+/// under round-off (gravity × (1 + k·1e-12), k = 0, 1, 2: 0.42478 / 0.42484 / 0.42476 m), and
+/// the farthest point centre at 2 mm agrees with the monitor. Its refinement is
+/// [`bui2008_mu_i_up_converges_to_the_experiment`]. About a minute on 2 threads.
 #[test]
 fn bui2008_collapse_quadrilateral_grid() {
-    collapse("collapse_bui2008_quad.json");
+    let case = "collapse_bui2008_quad.json";
+    let (sim, history) = run(parse(case_json(case)));
+    let c = collapse_of(case, &sim, &history);
+    assert_checks(case, &c, true);
+    let centres = centre_profile_rms(&sim, 0.005);
+    println!("{case}: point-centre profile {:.2} mm RMS from the experiment (tolerance 2.5 mm)", centres * 1e3);
+    assert!(centres <= 0.0025, "{case}: point-centre profile outside 2.5 mm");
+}
+
+/// The Mohr–Coulomb case on the linear basis (`cases/collapse_bui2008_quad_mc.json`: the
+/// configuration of the Kratos comparisons and of the performance figures; h = 5 mm, 4 points
+/// per cell, frictional base μ_b = tan φ = 0.36, PIC relaxation time 0.02 s). Asserted: at
+/// rest, final surface within 4 mm RMS, failure line within 5°. The runout is printed and not
+/// asserted: this case's deposit ends in a sheet one material point thick whose squares lie
+/// at the experiment's 2 mm threshold, so the runout monitor's reading follows round-off —
+/// with gravity × (1 + k·1e-12), k = 0 … 9, it ends at 0.437 m in six runs, 0.495 m in three
+/// and 0.368 m in one, while the flow is the same (the farthest point centre at 2 mm at
+/// 0.468–0.477 m, +12 to +14 %, in all ten; docs/validation.md, benchmark 8). Its runout is
+/// set by the damping, not the friction (the weak-damping runs reach 0.52 m); the runout is
+/// validated on the default μ(I) case. Measured: at rest at 0.71 s in 384 steps, monitor
+/// 0.4367 m, surface 3.65 mm RMS, failure line 34.7°.
+#[test]
+fn bui2008_mohr_coulomb_on_the_linear_basis() {
+    collapse("collapse_bui2008_quad_mc.json", false);
 }
 
 /// `solver.predictor` = `constant_acceleration` (Newton starts from `u_n + Δt v_n + ½ Δt² a_n`,
@@ -240,7 +278,7 @@ fn bui2008_collapse_quadrilateral_grid() {
 #[test]
 fn bui2008_constant_acceleration_predictor() {
     let iteration_control = |predictor: &str| {
-        let mut json = case_json("collapse_bui2008_quad.json");
+        let mut json = case_json("collapse_bui2008_quad_mc.json");
         let adaptive = &mut json["analysis"]["adaptive"];
         adaptive.as_object_mut().expect("adaptive").remove("error_tolerance");
         adaptive["target_iterations"] = serde_json::json!(6);
@@ -248,11 +286,7 @@ fn bui2008_constant_acceleration_predictor() {
         measure(predictor, parse(json))
     };
     let predicted = iteration_control("constant_acceleration");
-    let passed = check(&predicted);
-    let names = ["at rest", "runout", "surface RMS", "failure-line angle"];
-    for (ok, name) in passed.iter().zip(names) {
-        assert!(ok, "constant-acceleration predictor: {name} outside its tolerance");
-    }
+    assert_checks("constant-acceleration predictor", &predicted, false);
     let from_last = iteration_control("constant_displacement");
     println!(
         "Newton iterations: constant acceleration {} ({} steps), constant displacement {} ({} steps): ratio {:.2}",
@@ -270,7 +304,7 @@ fn bui2008_constant_acceleration_predictor() {
 /// (+3.66 %), surface 2.72 mm RMS, failure line 28.1° (iteration control: 0.4342 m, 2.55 mm). (With a rough base: 0.4765 m, +13.5 %.)
 #[test]
 fn bui2008_collapse_triangular_grid() {
-    collapse("collapse_bui2008_tri.json");
+    collapse("collapse_bui2008_tri.json", true);
 }
 
 /// Benchmark 8 in 3D (issue 26 item 5's "3D Bui slab"): `cases/collapse_bui2008_slab_3d.json`,
@@ -311,7 +345,7 @@ fn bui2008_collapse_3d_slab() {
 }
 
 /// Consistency check (Loam against Loam): the 3D Bui slab is the plane-strain case. The first
-/// 4 ms of `collapse_bui2008_slab_3d.json` and of `collapse_bui2008_quad.json` in fixed steps
+/// 4 ms of `collapse_bui2008_slab_3d.json` and of `collapse_bui2008_quad_mc.json` in fixed steps
 /// of 1 ms with Newton tolerances of 1e-9: the slab's kinetic energy and base reactions per
 /// metre of its 5 mm depth equal the 2D case's within 1e-9 relative. (Its runout and height
 /// at the wall are read from the points' cubes, not squares, and differ by 3e-5 where J ≠ 1.)
@@ -345,7 +379,7 @@ fn bui_slab_3d_is_the_plane_strain_case_per_metre_of_depth() {
         let cols: Vec<usize> = names.iter().map(|n| column(n)).collect();
         history.iter().map(|(t, row)| (*t, cols.iter().map(|&k| row[k]).collect::<Vec<f64>>())).collect::<Vec<_>>()
     };
-    let plane = steps("collapse_bui2008_quad.json", "y");
+    let plane = steps("collapse_bui2008_quad_mc.json", "y");
     let slab = steps("collapse_bui2008_slab_3d.json", "z");
     assert_eq!(plane.len(), slab.len());
     let names = ["kinetic energy", "base normal force", "base tangential force"];
@@ -429,7 +463,7 @@ fn bui2008_collapse_mixed_up() {
 #[test]
 #[ignore = "long (about 3 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_pure_flip_fails_the_tolerances() {
-    let mut json = case_json("collapse_bui2008_quad.json");
+    let mut json = case_json("collapse_bui2008_quad_mc.json");
     json["domains"][0].as_object_mut().expect("a domain").remove("pic_relaxation_time");
     let c = measure("pure FLIP", parse(json));
     let [at_rest, runout, surface, _] = check(&c);
@@ -458,7 +492,7 @@ fn bui2008_runout_at_weak_damping_does_not_depend_on_it() {
     let runs: Vec<(f64, Collapse)> = [0.16, 0.32, 0.64]
         .into_iter()
         .map(|tau| {
-            let mut json = case_json("collapse_bui2008_quad.json");
+            let mut json = case_json("collapse_bui2008_quad_mc.json");
             json["domains"][0]["pic_relaxation_time"] = serde_json::json!(tau);
             (tau, measure(&format!("τ = {tau} s"), parse(json)))
         })
@@ -504,7 +538,7 @@ fn bui2008_runout_at_weak_damping_does_not_depend_on_it() {
 #[test]
 #[ignore = "long (about 3 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_adaptive_steps_end_on_the_small_step_surface() {
-    let adaptive = case_json("collapse_bui2008_quad.json");
+    let adaptive = case_json("collapse_bui2008_quad_mc.json");
     let mut small = adaptive.clone();
     small["analysis"].as_object_mut().expect("analysis").remove("adaptive");
     small["analysis"]["time_step"] = serde_json::json!(5e-5);
@@ -542,7 +576,7 @@ fn bui2008_adaptive_steps_end_on_the_small_step_surface() {
 #[ignore = "long (about 1.5 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_collapse_on_smooth_bases() {
     for basis in ["gimp", "bspline2"] {
-        let mut json = case_json("collapse_bui2008_quad.json");
+        let mut json = case_json("collapse_bui2008_quad_mc.json");
         json["domains"][0]["grid"]["basis"] = serde_json::json!(basis);
         let c = measure(basis, parse(json));
         let [at_rest, runout, surface, angle] = check(&c);
@@ -595,17 +629,16 @@ fn measure_level(case_name: &str, h: f64) -> (Collapse, f64) {
 
 /// Issue 24 item 4 on the bundled μ(I) cases (`cases/collapse_bui2008_mu_i*.json`: μ(I)
 /// with μ_s = tan 19.8°, μ₂ = 0.64, I₀ = 0.279, d = 1.5 mm; quadratic B-splines; the
-/// frictional base μ_b = 0.36; PIC relaxation time 0.32 s at every h) at h = 10 / 5 / 2.5 mm,
-/// the element given by `suffix` (`""` displacement, `"_up"` mixed u–p): each level measured
+/// frictional base μ_b = 0.36; PIC relaxation time 0.32 s at every h) at h = 10 / 5 / 2.5 mm:
+/// `{prefix}_h10.json`, `{prefix}.json`, `{prefix}_h2.5.json`, the element given by the cases
+/// (`collapse_bui2008_quad`: mixed u–p, `collapse_bui2008_mu_i`: displacement); each level measured
 /// against the experiment, the runout's differences, observed order and Richardson
 /// extrapolation printed. Returns the three levels.
-fn mu_i_refinement(suffix: &str) -> Vec<(Collapse, f64)> {
+fn mu_i_refinement(prefix: &str) -> Vec<(Collapse, f64)> {
     let levels = [("_h10", 0.01), ("", 0.005), ("_h2.5", 0.0025)];
     let (angle_exp, _) = line_measures(fit_line(&read_xy("failure.csv")));
-    let runs: Vec<(Collapse, f64)> = levels
-        .iter()
-        .map(|(level, h)| measure_level(&format!("collapse_bui2008_mu_i{suffix}{level}.json"), *h))
-        .collect();
+    let runs: Vec<(Collapse, f64)> =
+        levels.iter().map(|(level, h)| measure_level(&format!("{prefix}{level}.json"), *h)).collect();
     for ((c, centres), (_, h)) in runs.iter().zip(levels) {
         println!(
             "h = {:.1} mm: at rest {} at {:.3} s ({} steps, {} Newton iterations); runout {:.4} m ({:+.2} % on {RUNOUT} m); \
@@ -639,8 +672,8 @@ fn mu_i_refinement(suffix: &str) -> Vec<(Collapse, f64)> {
     runs
 }
 
-/// Issue 24 item 4 with the mixed u–p element (`cases/collapse_bui2008_mu_i_up_h10.json`,
-/// `…_up.json`, `…_up_h2.5.json`): the same parameters at every h. Measured (6 December
+/// Issue 24 item 4 with the mixed u–p element (`cases/collapse_bui2008_quad_h10.json`,
+/// the default `collapse_bui2008_quad.json`, `collapse_bui2008_quad_h2.5.json`): the same parameters at every h. Measured (6 December
 /// 2026): runouts 0.4013 / 0.4248 / 0.4278 m (+1.9 % on the finest), differences 0.0235 and
 /// 0.0030 m, observed order 3.0, extrapolated 0.4282 m (+2.0 %); point-centre profiles 1.73 /
 /// 1.04 / 1.38 mm RMS; failure lines 31.5° / 30.6° / 30.5° against the experiment's 32.9°; at
@@ -656,7 +689,7 @@ fn mu_i_refinement(suffix: &str) -> Vec<(Collapse, f64)> {
 #[test]
 #[ignore = "long (about 17 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_mu_i_up_converges_to_the_experiment() {
-    let runs = mu_i_refinement("_up");
+    let runs = mu_i_refinement("collapse_bui2008_quad");
     let (angle_exp, _) = line_measures(fit_line(&read_xy("failure.csv")));
     for (c, centres) in &runs {
         assert!(c.at_rest, "{}: at rest", c.label);
@@ -679,7 +712,7 @@ fn bui2008_mu_i_up_converges_to_the_experiment() {
 #[test]
 #[ignore = "long (about 8 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_mu_i_displacement_element_under_refinement() {
-    let runs = mu_i_refinement("");
+    let runs = mu_i_refinement("collapse_bui2008_mu_i");
     let (angle_exp, _) = line_measures(fit_line(&read_xy("failure.csv")));
     for (c, _) in &runs {
         assert!(c.at_rest, "{}: at rest", c.label);
@@ -742,7 +775,7 @@ fn bui2008_mu_i_deposit_does_not_depend_on_the_damping() {
 /// for bit.
 #[test]
 fn bui2008_is_the_same_bit_for_bit_on_1_and_2_threads() {
-    let mut json = case_json("collapse_bui2008_quad.json");
+    let mut json = case_json("collapse_bui2008_quad_mc.json");
     json["analysis"]["end_time"] = serde_json::json!(0.15);
     let on = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a pool");

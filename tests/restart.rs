@@ -90,7 +90,7 @@ fn mpm_cantilever_resumes_bit_for_bit() {
 /// grid continue as if uninterrupted.
 #[test]
 fn bui_collapse_adaptive_resumes_bit_for_bit() {
-    resume_equals_uninterrupted("collapse_bui2008_quad_h10", 50, 150, |_| {});
+    resume_equals_uninterrupted("collapse_bui2008_quad_mc_h10", 50, 150, |_| {});
 }
 
 /// A coupled case (MPM and FEM in one Newton system, the grid following the structure):
@@ -166,7 +166,8 @@ fn coupled_collapse_resumes_bit_for_bit() {
 /// Issue 16's acceptance: `loam run cases/collapse_bui2008_quad.json --out D` interrupted by
 /// SIGINT mid-run exits 130 saying how to resume; resumed with `--resume` it ends with
 /// `monitors.csv` (and every result file) equal byte for byte to an uninterrupted run's.
-/// `quick` runs the h = 10 mm column (3 s), the long version the default case (about 1 min).
+/// `quick` runs the Mohr–Coulomb h = 10 mm column (3 s), the long version the default case
+/// (μ(I) u–p on B-splines, about a minute and a half per run).
 fn sigint_then_resume(name: &str, rows_before_signal: usize) {
     let dir = temp_dir(&format!("sigint_{name}"));
     let case = root().join("cases").join(format!("{name}.json"));
@@ -207,11 +208,11 @@ fn sigint_then_resume(name: &str, rows_before_signal: usize) {
 
 #[test]
 fn sigint_then_resume_is_bit_for_bit() {
-    sigint_then_resume("collapse_bui2008_quad_h10", 120);
+    sigint_then_resume("collapse_bui2008_quad_mc_h10", 120);
 }
 
 #[test]
-#[ignore = "long: two Bui collapses at h = 5 mm (about 2 minutes); LOAM_LONG=1 scripts/test.sh runs it"]
+#[ignore = "long: two Bui collapses at h = 5 mm (about 4 minutes); LOAM_LONG=1 scripts/test.sh runs it"]
 fn sigint_then_resume_the_default_bui_collapse() {
     sigint_then_resume("collapse_bui2008_quad", 300);
 }

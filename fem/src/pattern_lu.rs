@@ -28,8 +28,12 @@
 //! ([`PivotFailure`]), and the caller checks the residual of every solve and falls back to
 //! the general LU ([`crate::linear_solver`]).
 
+use std::mem::MaybeUninit;
+
+use faer::dyn_stack::MemStack;
+use faer::linalg::lu::partial_pivoting::factor::{lu_in_place, lu_in_place_scratch};
 use faer::linalg::matmul::matmul;
-use faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place;
+use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_unit_lower_triangular_in_place};
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholeskyRaw};
 use faer::sparse::linalg::SupernodalThreshold;
@@ -45,9 +49,16 @@ use rayon::prelude::*;
 pub const PIVOT_TOLERANCE: f64 = 1e-13;
 
 /// Multiply–adds `width · below²` of a front's update from which it goes to faer's dense
-/// triangular solve and matrix product; below it, plain loops (faster on the 2D fronts of
-/// the Bui collapse: 5.8 against 6.5 ms per factorisation of `collapse_bui2008_tri_h2`).
-pub const LARGE_UPDATE: usize = 1 << 20;
+/// triangular solve and matrix product (register-tiled, fused multiply–add); below it, plain
+/// loops. Measured per factorisation against 2²⁰ (docs/performance.md, LU kernels): −25 % on
+/// the u–p B-spline Bui case, −18 % on `collapse_bui2008_tri_h2`; 2¹², 2¹⁵ and 2¹⁶ lie within
+/// the noise of 2¹⁴.
+pub const LARGE_UPDATE: usize = 1 << 14;
+
+/// Width of a supernode from which its panel is factorised by blocks
+/// ([`factor_panel_blocked`]: faer's recursive LU on the diagonal block, `L21` by a triangular
+/// solve); narrower panels column by column ([`factor_panel`]).
+pub const BLOCKED_PANEL: usize = 32;
 
 /// The factorisation met a pivot below [`PIVOT_TOLERANCE`] at this (permuted) equation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -103,6 +114,22 @@ struct Workspace {
     front: Vec<f64>,
     updates: Vec<f64>,
     pending: Vec<(usize, usize)>,
+    panel: PanelScratch,
+}
+
+/// The scratch of [`factor_panel_blocked`], grown to the widest blocked panel on the first
+/// factorisation and reused after.
+#[derive(Default)]
+struct PanelScratch {
+    /// faer's row permutation of the diagonal block and its inverse.
+    perm: Vec<usize>,
+    perm_inv: Vec<usize>,
+    /// While the permutation is turned into swaps: the original row at each position, and
+    /// the position of each original row.
+    row_at: Vec<usize>,
+    position_of: Vec<usize>,
+    /// faer's stack (the transpositions of its recursive LU).
+    stack: Vec<MaybeUninit<u8>>,
 }
 
 /// Subtrees of the supernodal elimination tree assigned to threads (subtree-to-thread
@@ -306,7 +333,12 @@ fn eliminate(
         }
         ws.updates.truncate(start);
     }
-    factor_panel(front, m, width, pivot).map_err(|k| PivotFailure(b0 + k))?;
+    if width >= BLOCKED_PANEL {
+        factor_panel_blocked(front, m, width, pivot, &mut ws.panel)
+    } else {
+        factor_panel(front, m, width, pivot)
+    }
+    .map_err(|k| PivotFailure(b0 + k))?;
     if below > 0 && width * below * below < LARGE_UPDATE {
         // small fronts: U12 = L11⁻¹ F12 and C −= L21 U12 column by column, a column
         // of `[F12; F22]` eliminated against the panel's `width` columns
@@ -669,6 +701,75 @@ fn factor_panel(front: &mut [f64], m: usize, width: usize, pivot: &mut [usize]) 
     Ok(())
 }
 
+/// [`factor_panel`] by blocks, for wide panels: `P F11 = L11 U11` by faer's recursive LU
+/// with partial pivoting on the diagonal block only (the restricted pivoting of the module
+/// doc, register-tiled kernels with fused multiply–add), its permutation turned into the
+/// sequence of swaps `pivot` that [`PatternLu::solve_in_place`] reads and applied to the rows
+/// of `F12`, then `L21 = F21 U11⁻¹` by a triangular solve (`U11ᵀ L21ᵀ = F21ᵀ`). The pivot
+/// test of [`factor_panel`] is made on the factors: at its elimination, column `k` of the
+/// block holds `U[..k, k]` above the pivot `U[k, k]` and `L[k+1.., k] U[k, k]` below it, with
+/// `|L| ≤ 1`, so its largest entry is `max_{i≤k} |U[i, k]|`. `Err(k)` at the first column
+/// whose pivot fails it (the factors past it are not used).
+#[inline(always)]
+fn factor_panel_blocked(
+    front: &mut [f64],
+    m: usize,
+    width: usize,
+    pivot: &mut [usize],
+    scratch: &mut PanelScratch,
+) -> Result<(), usize> {
+    let PanelScratch { perm, perm_inv, row_at, position_of, stack } = scratch;
+    let stack_bytes =
+        lu_in_place_scratch::<usize, f64>(width, width, Par::Seq, Default::default()).unaligned_bytes_required();
+    if stack.len() < stack_bytes {
+        stack.resize(stack_bytes, MaybeUninit::uninit());
+    }
+    for v in [&mut *perm, &mut *perm_inv, &mut *row_at, &mut *position_of] {
+        v.resize(v.len().max(width), 0);
+    }
+    {
+        let panel = MatMut::from_column_major_slice_mut(&mut front[..m * width], m, width);
+        let (mut f11, mut f21) = panel.split_at_row_mut(width);
+        lu_in_place(
+            f11.rb_mut(),
+            &mut perm[..width],
+            &mut perm_inv[..width],
+            Par::Seq,
+            MemStack::new(stack),
+            Default::default(),
+        );
+        for k in 0..width {
+            let diagonal = f11[(k, k)].abs();
+            let largest = (0..=k).map(|i| f11[(i, k)].abs()).fold(0.0f64, f64::max);
+            if diagonal <= PIVOT_TOLERANCE * largest || !diagonal.is_finite() {
+                return Err(k);
+            }
+        }
+        solve_lower_triangular_in_place(f11.rb().transpose(), f21.rb_mut().transpose_mut(), Par::Seq);
+    }
+    // the permutation (perm[i]: the block's original row now at i) as swaps of row k with
+    // row pivot[k] ≥ k, applied in order
+    for i in 0..width {
+        row_at[i] = i;
+        position_of[i] = i;
+    }
+    for k in 0..width {
+        let p = position_of[perm[k]];
+        pivot[k] = p;
+        row_at.swap(k, p);
+        position_of[row_at[k]] = k;
+        position_of[row_at[p]] = p;
+    }
+    for column in front[m * width..].chunks_exact_mut(m) {
+        for (k, &p) in pivot.iter().enumerate() {
+            if p != k {
+                column.swap(k, p);
+            }
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -679,10 +780,66 @@ mod tests {
     /// small diagonal in a few rows.
     #[test]
     fn solves_an_unsymmetric_matrix_on_its_symmetric_pattern() {
-        // 30²: every front's update by the loops; 160²: the top fronts by faer's kernels
-        for side in [30, 160] {
+        // 12²: every front's update by the loops; 160²: the top fronts by faer's kernels,
+        // the widest panels by blocks
+        for side in [12, 160] {
             solves_on_a_grid(side);
         }
+    }
+
+    /// [`factor_panel_blocked`] is [`factor_panel`] with faer's kernels: on a dense 90 × 90
+    /// front with a 56-column panel whose diagonal is weak in some rows (pivoting exercised),
+    /// the same swaps, the same factors and swapped rows of `F12` to round-off (the
+    /// kernels' fused multiply–adds and order differ), and a zero column of the panel refused
+    /// at the same column by both.
+    #[test]
+    fn blocked_panel_matches_the_column_by_column_panel() {
+        let (m, width) = (90usize, 56usize);
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut random = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let mut front: Vec<f64> = (0..m * m).map(|_| random()).collect();
+        for i in 0..m {
+            front[i * m + i] += if i % 7 == 3 { 0.0 } else { 3.0 };
+        }
+        let factorise = |front: &[f64], blocked: bool| {
+            let mut f = front.to_vec();
+            let mut pivot = vec![0; width];
+            let result = if blocked {
+                factor_panel_blocked(&mut f, m, width, &mut pivot, &mut PanelScratch::default())
+            } else {
+                factor_panel(&mut f, m, width, &mut pivot)
+            };
+            (f, pivot, result)
+        };
+        let (columns, pivot_columns, result_columns) = factorise(&front, false);
+        let (blocks, pivot_blocks, result_blocks) = factorise(&front, true);
+        assert_eq!((result_columns, result_blocks), (Ok(()), Ok(())));
+        let swaps = pivot_columns.iter().enumerate().filter(|(k, p)| *k != **p).count();
+        // the panel's columns and the first `width` rows of the others (F22 is untouched)
+        let compared = |f: &[f64]| -> Vec<f64> {
+            (0..m)
+                .flat_map(|j| (0..if j < width { m } else { width }).map(move |i| (i, j)))
+                .map(|(i, j)| f[j * m + i])
+                .collect()
+        };
+        let (a, b) = (compared(&columns), compared(&blocks));
+        let scale = a.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        let difference = a.iter().zip(&b).fold(0.0f64, |s, (x, y)| s.max((x - y).abs())) / scale;
+        println!("{swaps} row swaps; factors differ by {difference:.1e} of the largest entry");
+        assert!(swaps > 0, "the test exercises pivoting");
+        assert_eq!(pivot_columns, pivot_blocks);
+        assert!(difference < 1e-12, "factors differ by {difference:e}");
+        for j in 0..m {
+            front[j * m + 5] = 0.0;
+            front[5 * m + j] = 0.0;
+        }
+        assert_eq!(factorise(&front, false).2, Err(5));
+        assert_eq!(factorise(&front, true).2, Err(5));
     }
 
     /// A grid matrix in which every fifth equation is decoupled in value but not in
@@ -830,8 +987,10 @@ mod tests {
         let biggest = (0..lu.begin.len() - 1)
             .map(|s| (lu.begin[s + 1] - lu.begin[s]) * (lu.pattern_ptr[s + 1] - lu.pattern_ptr[s]).pow(2))
             .max();
-        println!("{side}²: {large} fronts by faer's kernels, largest update {biggest:?}");
+        let blocked = (0..lu.begin.len() - 1).filter(|&s| lu.begin[s + 1] - lu.begin[s] >= BLOCKED_PANEL).count();
+        println!("{side}²: {large} fronts by faer's kernels, largest update {biggest:?}, {blocked} panels by blocks");
         assert_eq!(large > 0, side > 100, "the test covers both kernels");
+        assert_eq!(blocked > 0, side > 100, "the test covers both panel factorisations");
         lu.factorise(a.as_ref()).expect("factorisation");
         let relative = solve_residual(&mut lu, &a);
         println!("relative residual {relative:.2e}, factor entries {}", lu.factor_entries());
