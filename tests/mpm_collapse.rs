@@ -233,8 +233,9 @@ fn assert_checks(label: &str, c: &Collapse, runout_asserted: bool) {
 /// relaxation time 0.32 s (weak: the deposit does not depend on it), steps set by the local
 /// time-integration error. Asserted against the experiment: at rest, runout within 5 %, final
 /// surface within 4 mm RMS, failure line within 5°, and issue 24 item 4's point-centre profile
-/// within 2.5 mm RMS. Measured (6 December 2026): at rest at 0.70 s in 1 262 steps, runout
-/// 0.4248 m (+1.1 %), point-centre profile 1.04 mm RMS, failure line 30.6°. Its runout holds
+/// within 2.5 mm RMS. Measured (7 December 2026, the LU's FMA kernels): at rest at 0.70 s in
+/// 1 121 steps, runout 0.4255 m (+1.3 %), surface 1.37 mm RMS, point-centre profile 1.06 mm
+/// RMS, failure line 30.6° (6 December: 1 262 steps, 0.4248 m, 1.04 mm). Its runout holds
 /// under round-off (gravity × (1 + k·1e-12), k = 0, 1, 2: 0.42478 / 0.42484 / 0.42476 m), and
 /// the farthest point centre at 2 mm agrees with the monitor. Its refinement is
 /// [`bui2008_mu_i_up_converges_to_the_experiment`]. About a minute on 2 threads.
@@ -686,6 +687,12 @@ fn mu_i_refinement(prefix: &str) -> Vec<(Collapse, f64)> {
 /// move in any run (it stays at its initial 0.1 m plus the elastic unloading), so the
 /// experiment's 1 mm lower top, within its digitising error, is not a quantity of the flow.
 /// About 17 minutes beside the other two μ(I) tests (the finest level most of it).
+///
+/// **Fails since the LU's FMA kernels (7 December 2026, tenth session)**: the finest level
+/// depends on round-off. On that build h = 2.5 mm ends at 0.4445 / 0.4412 / 0.4406 m (+5.8 /
+/// +5.1 / +4.9 %) with gravity × (1 + k·1e-12), k = 0 / 1 / 2, against 0.4278 m on the build
+/// above: its front is a sheet two points thick whose reach small differences decide
+/// (docs/validation.md, μ(I) section). The tolerance is left as the issue asks.
 #[test]
 #[ignore = "long (about 17 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_mu_i_up_converges_to_the_experiment() {

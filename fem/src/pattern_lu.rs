@@ -33,12 +33,14 @@ use std::mem::MaybeUninit;
 use faer::dyn_stack::MemStack;
 use faer::linalg::lu::partial_pivoting::factor::{lu_in_place, lu_in_place_scratch};
 use faer::linalg::matmul::matmul;
-use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_unit_lower_triangular_in_place};
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_unit_lower_triangular_in_place, solve_upper_triangular_in_place,
+};
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholeskyRaw};
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Accum, MatMut, Par, Side};
+use faer::{Accum, MatMut, MatRef, Par, Side};
 use rayon::prelude::*;
 
 /// Smallest pivot, relative to the largest entry of its column in the supernode's diagonal
@@ -59,6 +61,11 @@ pub const LARGE_UPDATE: usize = 1 << 14;
 /// ([`factor_panel_blocked`]: faer's recursive LU on the diagonal block, `L21` by a triangular
 /// solve); narrower panels column by column ([`factor_panel`]).
 pub const BLOCKED_PANEL: usize = 32;
+
+/// Width of a supernode from which [`PatternLu::solve_in_place`] applies its panel with
+/// faer's dense triangular solve and matrix–vector product (the rows below gathered and
+/// scattered once); narrower panels column by column.
+pub const DENSE_SOLVE_WIDTH: usize = 16;
 
 /// The factorisation met a pivot below [`PIVOT_TOLERANCE`] at this (permuted) equation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -83,6 +90,10 @@ pub struct PatternLu {
     children: Vec<usize>,
     /// For each entry of `pattern`: its position in the parent supernode's front.
     position_in_parent: Vec<u32>,
+    /// For each entry of `pattern`: how many entries from it on (within its supernode) sit
+    /// at consecutive positions of the parent's front — the extend-add adds such a run as
+    /// one slice.
+    run_length: Vec<u32>,
     /// The matrix entries of each front: (nonzero of `A`, column-major index in the front).
     front_entries_ptr: Vec<usize>,
     front_entries: Vec<(u32, u32)>,
@@ -105,6 +116,8 @@ pub struct PatternLu {
     /// The subtrees eliminated in parallel, for the number of threads it was made for.
     schedule: Option<Schedule>,
     work: Vec<f64>,
+    /// The rows below a panel, gathered by the solve.
+    below_rows: Vec<f64>,
 }
 
 /// Where one thread eliminates its fronts: the front, and the updates `C_s` waiting for
@@ -250,6 +263,7 @@ struct Structure<'a> {
     pattern_ptr: &'a [usize],
     children: &'a [usize],
     position_in_parent: &'a [u32],
+    run_length: &'a [u32],
     front_entries_ptr: &'a [usize],
     front_entries: &'a [(u32, u32)],
     factor_ptr: &'a [usize],
@@ -323,12 +337,19 @@ fn eliminate(
     for _ in 0..st.children[s] {
         let (c, start) = ws.pending.pop().expect("a child's update is pending");
         let positions = &st.position_in_parent[st.pattern_ptr[c]..st.pattern_ptr[c + 1]];
+        let runs = &st.run_length[st.pattern_ptr[c]..st.pattern_ptr[c + 1]];
         let mc = positions.len();
         let update = &ws.updates[start..start + mc * mc];
         for (column, &pj) in update.chunks_exact(mc).zip(positions) {
             let target = &mut front[pj as usize * m..(pj as usize + 1) * m];
-            for (&value, &pi) in column.iter().zip(positions) {
-                target[pi as usize] += value;
+            // the column's entries in runs of consecutive positions, each run as one slice
+            let mut q = 0;
+            while q < mc {
+                let (len, at) = (runs[q] as usize, positions[q] as usize);
+                for (t, &value) in target[at..at + len].iter_mut().zip(&column[q..q + len]) {
+                    *t += value;
+                }
+                q += len;
             }
         }
         ws.updates.truncate(start);
@@ -438,6 +459,14 @@ impl PatternLu {
             }
             front.iter().for_each(|&i| slot[i] = u32::MAX);
         }
+        let mut run_length = vec![1u32; pattern.len()];
+        for s in 0..supernodes {
+            for q in (pattern_ptr[s]..pattern_ptr[s + 1].saturating_sub(1)).rev() {
+                if position_in_parent[q + 1] == position_in_parent[q] + 1 {
+                    run_length[q] = run_length[q + 1] + 1;
+                }
+            }
+        }
         let mut postorder = Vec::with_capacity(supernodes);
         let mut stack: Vec<(usize, usize)> =
             (0..supernodes).rev().filter(|&s| parent[s].is_none()).map(|s| (s, 0)).collect();
@@ -483,10 +512,11 @@ impl PatternLu {
         let work_of: Vec<f64> =
             (0..supernodes).map(|s| front_work(begin[s + 1] - begin[s], pattern_ptr[s + 1] - pattern_ptr[s])).collect();
         let mut factor_ptr = vec![0usize];
-        let mut largest_front = 0;
+        let (mut largest_front, mut largest_below) = (0, 0);
         for s in 0..supernodes {
             let (width, below) = (begin[s + 1] - begin[s], rows(s).len());
             largest_front = largest_front.max((width + below) * (width + below));
+            largest_below = largest_below.max(below);
             factor_ptr.push(factor_ptr[s] + (width + below) * width + width * below);
         }
         Some(Self {
@@ -499,6 +529,7 @@ impl PatternLu {
             postorder,
             children: kids.iter().map(Vec::len).collect(),
             position_in_parent,
+            run_length,
             front_entries_ptr,
             front_entries,
             factor_ptr,
@@ -510,6 +541,7 @@ impl PatternLu {
             work_of,
             schedule: None,
             work: vec![0.0; n],
+            below_rows: vec![0.0; largest_below],
         })
     }
 
@@ -535,6 +567,7 @@ impl PatternLu {
             pattern_ptr: &self.pattern_ptr,
             children: &self.children,
             position_in_parent: &self.position_in_parent,
+            run_length: &self.run_length,
             front_entries_ptr: &self.front_entries_ptr,
             front_entries: &self.front_entries,
             factor_ptr: &self.factor_ptr,
@@ -608,21 +641,47 @@ impl PatternLu {
         Ok(())
     }
 
-    /// Overwrites `b` with `A⁻¹ b` from the factors of the last [`PatternLu::factorise`].
+    /// Overwrites `b` with `A⁻¹ b` from the factors of the last [`PatternLu::factorise`]:
+    /// per supernode in order, `y₁ ← L11⁻¹ P y₁` and `y₂ −= L21 y₁`, then in reverse order
+    /// `y₁ ← U11⁻¹ (y₁ − U12 y₂)` (`y₁` the supernode's equations, `y₂` the rows below it).
+    /// Panels from [`DENSE_SOLVE_WIDTH`] columns go through faer's dense kernels with `y₂`
+    /// gathered once, narrower ones column by column.
     pub fn solve_in_place(&mut self, b: &mut [f64]) {
-        let y = &mut self.work;
-        for (yi, &o) in y.iter_mut().zip(&self.ordering) {
+        let Self { work: y, below_rows, begin, pattern, pattern_ptr, factor, factor_ptr, pivot, ordering, .. } = self;
+        for (yi, &o) in y.iter_mut().zip(ordering.iter()) {
             *yi = b[o];
         }
-        let supernodes = self.begin.len() - 1;
+        let supernodes = begin.len() - 1;
         for s in 0..supernodes {
-            let (b0, b1) = (self.begin[s], self.begin[s + 1]);
+            let (b0, b1) = (begin[s], begin[s + 1]);
             let width = b1 - b0;
-            let rows = &self.pattern[self.pattern_ptr[s]..self.pattern_ptr[s + 1]];
+            let rows = &pattern[pattern_ptr[s]..pattern_ptr[s + 1]];
             let m = width + rows.len();
-            let panel = &self.factor[self.factor_ptr[s]..self.factor_ptr[s] + m * width];
+            let panel = &factor[factor_ptr[s]..factor_ptr[s] + m * width];
             for k in 0..width {
-                y.swap(b0 + k, b0 + self.pivot[b0 + k]);
+                y.swap(b0 + k, b0 + pivot[b0 + k]);
+            }
+            if width >= DENSE_SOLVE_WIDTH {
+                let (l11, l21) = MatRef::from_column_major_slice(panel, m, width).split_at_row(width);
+                let head = &mut y[b0..b1];
+                solve_unit_lower_triangular_in_place(
+                    l11,
+                    MatMut::from_column_major_slice_mut(head, width, 1),
+                    Par::Seq,
+                );
+                let below = &mut below_rows[..rows.len()];
+                matmul(
+                    MatMut::from_column_major_slice_mut(below, rows.len(), 1),
+                    Accum::Replace,
+                    l21,
+                    MatRef::from_column_major_slice(&y[b0..b1], width, 1),
+                    1.0,
+                    Par::Seq,
+                );
+                for (&v, &r) in below.iter().zip(rows) {
+                    y[r] -= v;
+                }
+                continue;
             }
             for (j, column) in panel.chunks_exact(m).enumerate() {
                 let yj = y[b0 + j];
@@ -637,11 +696,30 @@ impl PatternLu {
             }
         }
         for s in (0..supernodes).rev() {
-            let (b0, b1) = (self.begin[s], self.begin[s + 1]);
+            let (b0, b1) = (begin[s], begin[s + 1]);
             let width = b1 - b0;
-            let rows = &self.pattern[self.pattern_ptr[s]..self.pattern_ptr[s + 1]];
+            let rows = &pattern[pattern_ptr[s]..pattern_ptr[s + 1]];
             let m = width + rows.len();
-            let (panel, u12) = self.factor[self.factor_ptr[s]..self.factor_ptr[s + 1]].split_at(m * width);
+            let (panel, u12) = factor[factor_ptr[s]..factor_ptr[s + 1]].split_at(m * width);
+            if width >= DENSE_SOLVE_WIDTH {
+                let below = &mut below_rows[..rows.len()];
+                for (v, &r) in below.iter_mut().zip(rows) {
+                    *v = y[r];
+                }
+                let head = &mut y[b0..b1];
+                let mut head = MatMut::from_column_major_slice_mut(head, width, 1);
+                matmul(
+                    head.rb_mut(),
+                    Accum::Add,
+                    MatRef::from_column_major_slice(u12, width, rows.len()),
+                    MatRef::from_column_major_slice(&*below, rows.len(), 1),
+                    -1.0,
+                    Par::Seq,
+                );
+                let u11 = MatRef::from_column_major_slice(panel, m, width).split_at_row(width).0;
+                solve_upper_triangular_in_place(u11, head, Par::Seq);
+                continue;
+            }
             for (column, &r) in u12.chunks_exact(width.max(1)).zip(rows) {
                 let yr = y[r];
                 if yr != 0.0 {
@@ -659,7 +737,8 @@ impl PatternLu {
                 }
             }
         }
-        for (&yi, &o) in y.iter().zip(&self.ordering) {
+        crate::simd_state::clear_upper_state();
+        for (&yi, &o) in y.iter().zip(ordering.iter()) {
             b[o] = yi;
         }
     }

@@ -263,7 +263,19 @@ pub struct SmoothLattice {
     /// Per support, the local nodes removed with a hole (bit `3 ky + kx`, 2D); empty while the
     /// lattice is whole.
     missing: Vec<u32>,
+    /// Per direction and window, the 1D functions `(N_k, dN_k/ds)` of the window's three nodes
+    /// at the three Gauss points of [`SmoothLattice::projection_points`]: the factors of the
+    /// projection rule, which a u–p support evaluates at every assembly
+    /// ([`SmoothLattice::projection_rule`]).
+    projection_1d: [Vec<GaussWindow>; 3],
 }
+
+/// A window's three 1D functions `(N_k, dN_k/ds)` at each of its three Gauss points.
+type GaussWindow = [[(f64, f64); 3]; 3];
+
+/// The abscissae of the 3-point Gauss rule on `[−1, 1]` and their weights.
+const GAUSS_3: ([f64; 3], [f64; 3]) =
+    ([-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4], [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0]);
 
 impl SmoothLattice {
     /// The supports of `basis` (smooth) on the lattice `origin + [0, cells · spacing]` in
@@ -272,7 +284,16 @@ impl SmoothLattice {
     pub fn new(basis: Basis, dim: usize, origin: [f64; 3], spacing: [f64; 3], cells: [usize; 3]) -> Self {
         let cells = if dim == 2 { [cells[0], cells[1], 1] } else { cells };
         debug_assert!(basis.is_smooth() && (0..dim).all(|d| cells[d] >= 2));
-        let mut lattice = Self { basis, dim, origin, spacing, cells, nodes: Vec::new(), missing: Vec::new() };
+        let mut lattice = Self {
+            basis,
+            dim,
+            origin,
+            spacing,
+            cells,
+            nodes: Vec::new(),
+            missing: Vec::new(),
+            projection_1d: Default::default(),
+        };
         let [wx, wy, wz] = lattice.windows();
         let m = lattice.support_len();
         let layers = if dim == 3 { 3 } else { 1 };
@@ -291,6 +312,17 @@ impl SmoothLattice {
             }
         }
         lattice.nodes = nodes;
+        lattice.projection_1d = std::array::from_fn(|d| {
+            (0..if d < dim { cells[d] - 1 } else { 0 })
+                .map(|w| {
+                    lattice.gauss_1d(d, w).map(|(point, _)| {
+                        let (window, values) = basis.window_1d(point, cells[d], 0.0);
+                        debug_assert_eq!(window, w, "a Gauss point of a window's region lies in the window");
+                        values
+                    })
+                })
+                .collect()
+        });
         lattice
     }
 
@@ -500,20 +532,22 @@ impl SmoothLattice {
         (support, g)
     }
 
-    /// The region of the lattice whose points fall into support `s`: per direction the
+    /// The span of the lattice whose points fall into window `w` along direction `d`, in
     /// lattice coordinates `[lo, hi]` (the nearest nodes' half cells; the edge windows reach
-    /// to the edge; `[0, 0]` along z in 2D).
-    fn region(&self, s: usize) -> [[f64; 2]; 3] {
-        let w = self.window(s);
-        std::array::from_fn(|d| {
-            if d >= self.dim {
-                return [0.0, 0.0];
-            }
-            let n = self.cells[d];
-            let lo = if w[d] == 0 { 0.0 } else { w[d] as f64 + 0.5 };
-            let hi = if w[d] == n - 2 { n as f64 } else { w[d] as f64 + 1.5 };
-            [lo, hi]
-        })
+    /// to the edge).
+    fn span(&self, d: usize, w: usize) -> [f64; 2] {
+        let n = self.cells[d];
+        let lo = if w == 0 { 0.0 } else { w as f64 + 0.5 };
+        let hi = if w == n - 2 { n as f64 } else { w as f64 + 1.5 };
+        [lo, hi]
+    }
+
+    /// The 3-point Gauss rule over [`SmoothLattice::span`] `(d, w)`: per point its lattice
+    /// coordinate and its weight in lattice cells.
+    fn gauss_1d(&self, d: usize, w: usize) -> [(f64, f64); 3] {
+        let [lo, hi] = self.span(d, w);
+        let (xi, weight) = GAUSS_3;
+        std::array::from_fn(|k| (0.5 * (lo + hi) + 0.5 * (hi - lo) * xi[k], weight[k] * 0.5 * (hi - lo)))
     }
 
     /// A 3-point-per-direction Gauss rule over the region of support `s` in lattice
@@ -521,17 +555,17 @@ impl SmoothLattice {
     /// entries): per point its lattice coordinates and its weight in lattice cells (`Σ = ` the
     /// region's area or volume in cells).
     pub fn projection_points(&self, s: usize) -> [([f64; 3], f64); MAX_SUPPORT_NODES] {
-        const XI: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
-        const W: [f64; 3] = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
-        let region = self.region(s);
+        let w = self.window(s);
+        let rules: [[(f64, f64); 3]; 3] =
+            std::array::from_fn(|d| if d < self.dim { self.gauss_1d(d, w[d]) } else { [(0.0, 1.0); 3] });
         std::array::from_fn(|q| {
             let k = [q % 3, (q / 3) % 3, q / 9];
             let mut point = [0.0; 3];
             let mut weight = 1.0;
             for d in 0..self.dim {
-                let [lo, hi] = region[d];
-                point[d] = 0.5 * (lo + hi) + 0.5 * (hi - lo) * XI[k[d]];
-                weight *= W[k[d]] * 0.5 * (hi - lo);
+                let (coordinate, factor) = rules[d][k[d]];
+                point[d] = coordinate;
+                weight *= factor;
             }
             (point, weight)
         })
@@ -548,8 +582,36 @@ impl SmoothLattice {
     /// a u–p support integrates its pressure projection ([`loam_fem::mixed_kernel`]). Writes
     /// [`SmoothLattice::support_len`] points into `rule`.
     pub fn projection_rule(&self, s: usize, formulation: Formulation, thickness: f64, rule: &mut [PointGeometry]) {
-        for (g, (point, weight)) in rule.iter_mut().zip(self.projection_points(s)).take(self.support_len()) {
-            let (_, mut geometry) = self.evaluate_at(point, [0.0; 3], formulation);
+        let points = self.projection_points(s);
+        if self.missing.get(s).is_some_and(|&mask| mask != 0) {
+            for (g, (point, weight)) in rule.iter_mut().zip(points).take(self.support_len()) {
+                let (_, mut geometry) = self.evaluate_at(point, [0.0; 3], formulation);
+                geometry.weight = weight * self.cell_measure() * formulation.measure_factor(thickness, geometry.radius);
+                *g = geometry;
+            }
+            return;
+        }
+        // the whole support: the tensor products of the cached 1D factors, the same products
+        // as `functions_without` forms (bit for bit the evaluation at the points)
+        let w = self.window(s);
+        let h = self.spacing;
+        let m = self.support_len();
+        let flat = [(1.0, 0.0), (0.0, 0.0), (0.0, 0.0)];
+        for (q, (g, (_, weight))) in rule.iter_mut().zip(points).take(m).enumerate() {
+            let k = [q % 3, (q / 3) % 3, q / 9];
+            let [fx, fy, fz]: [[(f64, f64); 3]; 3] =
+                std::array::from_fn(|d| if d < self.dim { self.projection_1d[d][w[d]][k[d]] } else { flat });
+            let mut geometry =
+                PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
+            for a in 0..m {
+                let (x, y, z) = (fx[a % 3], fy[(a / 3) % 3], fz[a / 9]);
+                let v = [x.0 * y.0 * z.0, x.1 * y.0 * z.0, x.0 * y.1 * z.0, x.0 * y.0 * z.1];
+                geometry.shape[a] = v[0];
+                geometry.gradient[a] = [v[1] / h[0], v[2] / h[1], if self.dim == 3 { v[3] / h[2] } else { 0.0 }];
+                if formulation == Formulation::Axisymmetric {
+                    geometry.radius += v[0] * (self.origin[0] + (w[0] + a % 3) as f64 * h[0]);
+                }
+            }
             geometry.weight = weight * self.cell_measure() * formulation.measure_factor(thickness, geometry.radius);
             *g = geometry;
         }
@@ -645,6 +707,44 @@ mod tests {
             assert_eq!((w, v[0].0, v[1].0, v[2].0), (0, 1.0, 0.0, 0.0), "{basis:?} at the lower edge");
             let (w, v) = basis.window_1d(n as f64, n, 0.5);
             assert_eq!((w, v[2].0, v[1].0, v[0].0), (n - 2, 1.0, 0.0, 0.0), "{basis:?} at the upper edge");
+        }
+    }
+
+    /// The projection rule from the cached 1D factors ([`SmoothLattice::projection_rule`]) is
+    /// the basis evaluated at the rule's points, bit for bit: every support of a 2D and a 3D
+    /// lattice (edges included), both bases, plane strain, axisymmetry and 3D.
+    #[test]
+    fn cached_projection_rule_is_the_evaluation_at_its_points() {
+        for basis in BASES {
+            for dim in [2, 3] {
+                let lattice = SmoothLattice::new(basis, dim, [1.0, -2.0, 0.5], [0.5, 0.25, 0.4], [5, 4, 3]);
+                let formulations: &[Formulation] = if dim == 3 {
+                    &[Formulation::ThreeD]
+                } else {
+                    &[Formulation::PlaneStrain, Formulation::Axisymmetric]
+                };
+                for &formulation in formulations {
+                    for s in 0..lattice.num_supports() {
+                        let mut rule = [PointGeometry::default(); MAX_NODES];
+                        lattice.projection_rule(s, formulation, 0.7, &mut rule);
+                        for (q, (point, weight)) in
+                            lattice.projection_points(s).iter().take(lattice.support_len()).enumerate()
+                        {
+                            let (support, g) = lattice.evaluate_at(*point, [0.0; 3], formulation);
+                            let weight = weight * lattice.cell_measure() * formulation.measure_factor(0.7, g.radius);
+                            let cached = &rule[q];
+                            assert_eq!(support, s);
+                            assert!(
+                                cached.shape == g.shape
+                                    && cached.gradient == g.gradient
+                                    && cached.radius.to_bits() == g.radius.to_bits()
+                                    && cached.weight.to_bits() == weight.to_bits(),
+                                "{basis:?} {dim}D {formulation:?}: support {s}, point {q}"
+                            );
+                        }
+                    }
+                }
+            }
         }
     }
 
