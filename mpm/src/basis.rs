@@ -186,6 +186,17 @@ impl Basis {
 /// `3^dim` entries are used.
 pub type SupportValues = [[f64; 4]; MAX_SUPPORT_NODES];
 
+/// The support's functions as tensor products of the 1D windows' `(N_k, dN_k/ds)` per
+/// direction: `[N, ∂N/∂s_x, ∂N/∂s_y, ∂N/∂s_z]` for the first `m` local nodes.
+fn tensor_values([fx, fy, fz]: [[(f64, f64); 3]; 3], m: usize) -> SupportValues {
+    let mut values = [[0.0; 4]; MAX_SUPPORT_NODES];
+    for (k, v) in values.iter_mut().enumerate().take(m) {
+        let (x, y, z) = (fx[k % 3], fy[(k / 3) % 3], fz[k / 9]);
+        *v = [x.0 * y.0 * z.0, x.1 * y.0 * z.0, x.0 * y.1 * z.0, x.0 * y.0 * z.1];
+    }
+    values
+}
+
 /// Folds the functions of a support's removed nodes (`mask`, bit `3 ky + kx`; 2D) into the
 /// nodes it keeps, by the extrapolation of a linear field from kept nodes (so the folded
 /// functions stay a partition of unity that reproduces linear fields, as at the lattice's
@@ -463,11 +474,7 @@ impl SmoothLattice {
     ) -> Option<(usize, SupportValues)> {
         let [(wx, fx), (wy, fy), (wz, fz)] = self.windows_1d(s, half_cells);
         let m = self.support_len();
-        let mut values = [[0.0; 4]; MAX_SUPPORT_NODES];
-        for (k, v) in values.iter_mut().enumerate().take(m) {
-            let (x, y, z) = (fx[k % 3], fy[(k / 3) % 3], fz[k / 9]);
-            *v = [x.0 * y.0 * z.0, x.1 * y.0 * z.0, x.0 * y.1 * z.0, x.0 * y.0 * z.1];
-        }
+        let mut values = tensor_values([fx, fy, fz], m);
         let support = self.support_of([wx, wy, wz]);
         let mut mask = self.missing.get(support).copied().unwrap_or(0);
         for (k, &a) in self.support(support).iter().enumerate() {
@@ -518,6 +525,12 @@ impl SmoothLattice {
     /// [`SmoothLattice::evaluate`] at lattice coordinates `s` of the fixed lattice.
     fn evaluate_at(&self, s: [f64; 3], half_size: [f64; 3], formulation: Formulation) -> (usize, PointGeometry) {
         let (support, values) = self.functions_at(s, self.in_cells(half_size));
+        (support, self.geometry_of(support, &values, formulation))
+    }
+
+    /// The point geometry of the functions `values` of `support`: shape values, gradients
+    /// `∂N/∂x`, and the radius `Σ N_I x_I` in axisymmetry (weight 0: the caller's).
+    fn geometry_of(&self, support: usize, values: &SupportValues, formulation: Formulation) -> PointGeometry {
         let mut g =
             PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
         let wx = self.window(support)[0];
@@ -529,7 +542,7 @@ impl SmoothLattice {
                 g.radius += v[0] * (self.origin[0] + (wx + a % 3) as f64 * h[0]);
             }
         }
-        (support, g)
+        g
     }
 
     /// The span of the lattice whose points fall into window `w` along direction `d`, in
@@ -594,24 +607,11 @@ impl SmoothLattice {
         // the whole support: the tensor products of the cached 1D factors, the same products
         // as `functions_without` forms (bit for bit the evaluation at the points)
         let w = self.window(s);
-        let h = self.spacing;
-        let m = self.support_len();
         let flat = [(1.0, 0.0), (0.0, 0.0), (0.0, 0.0)];
-        for (q, (g, (_, weight))) in rule.iter_mut().zip(points).take(m).enumerate() {
+        for (q, (g, (_, weight))) in rule.iter_mut().zip(points).take(self.support_len()).enumerate() {
             let k = [q % 3, (q / 3) % 3, q / 9];
-            let [fx, fy, fz]: [[(f64, f64); 3]; 3] =
-                std::array::from_fn(|d| if d < self.dim { self.projection_1d[d][w[d]][k[d]] } else { flat });
-            let mut geometry =
-                PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
-            for a in 0..m {
-                let (x, y, z) = (fx[a % 3], fy[(a / 3) % 3], fz[a / 9]);
-                let v = [x.0 * y.0 * z.0, x.1 * y.0 * z.0, x.0 * y.1 * z.0, x.0 * y.0 * z.1];
-                geometry.shape[a] = v[0];
-                geometry.gradient[a] = [v[1] / h[0], v[2] / h[1], if self.dim == 3 { v[3] / h[2] } else { 0.0 }];
-                if formulation == Formulation::Axisymmetric {
-                    geometry.radius += v[0] * (self.origin[0] + (w[0] + a % 3) as f64 * h[0]);
-                }
-            }
+            let factors = std::array::from_fn(|d| if d < self.dim { self.projection_1d[d][w[d]][k[d]] } else { flat });
+            let mut geometry = self.geometry_of(s, &tensor_values(factors, self.support_len()), formulation);
             geometry.weight = weight * self.cell_measure() * formulation.measure_factor(thickness, geometry.radius);
             *g = geometry;
         }
