@@ -560,8 +560,11 @@ fn footing_fem_on_mpm_by_contact() {
 /// displacement of its top nodes; `q_over_su` from the rigid body's reaction. The plateau is
 /// within 5 % of Prandtl's 2 + π (the concrete footing's 5.213 is the same to the penalty's
 /// and the concrete's elastic compliance), the reaction equals the contact force (1e-6),
-/// and no soil enters the footing. About 50 s.
+/// and no soil enters the footing. About 50 s on 2 cores alone (long suite since 7 December, to
+/// keep the default suite within CI's 30 minutes: `footing_fem_on_mpm_by_contact` there runs the same
+/// contact on the same grid with the concrete footing).
 #[test]
+#[ignore = "long (about 1 min): LOAM_LONG=1 scripts/test.sh"]
 fn rigid_footing_on_mpm_by_contact() {
     let mut json = case_json("footing_fem_on_mpm.json");
     json["domains"][1]["type"] = serde_json::json!("rigid");
@@ -635,8 +638,11 @@ fn footing_fem_on_mpm_by_contact_converges() {
 /// Pure penalty, the footing sinks 15 mm into the soil (`t_N/β_N`) and the plateau is 0.7 %
 /// below the default penalty's; with `gap_tolerance` 1e-5 m the largest penetration is below
 /// the tolerance after the augmented-Lagrangian updates (measured 7.2e-6 m) and the plateau
-/// within 0.1 % of the default penalty's (measured 0.03 %). About 40 s.
+/// within 0.1 % of the default penalty's (measured 0.03 %). About 1.5 min on 2 cores alone
+/// (three runs; the augmented one takes 1 207 Newton iterations with its 297 multiplier
+/// updates): long suite since 7 December, to keep the default suite within CI's 30 minutes.
 #[test]
+#[ignore = "long (about 1.5 min): LOAM_LONG=1 scripts/test.sh"]
 fn footing_contact_augmented_lagrangian_removes_the_penalty_gap() {
     let coarse = |edits: &[(&str, serde_json::Value)]| {
         let mut all = vec![

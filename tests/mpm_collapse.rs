@@ -325,8 +325,11 @@ fn bui2008_collapse_triangular_grid() {
 /// 3D that it does not in 2D (docs/validation.md). Measured 6 December 2026: at rest at
 /// 0.718 s in 377 steps, 38 s; surface 3.17 mm, failure line 34.5°, runout 0.3682 m (−12.3 %;
 /// the 2D case 0.4367 m), point-centre profile 2.11 mm; the kinetic energy per metre of depth
-/// 0.6 % and 0.8 % below the 2D case's at 0.1 and 0.15 s (its peak, 1.44 J/m).
+/// 0.6 % and 0.8 % below the 2D case's at 0.1 and 0.15 s (its peak, 1.44 J/m). Long suite since
+/// 7 December (about 50 s on 2 cores alone), to keep the default suite within CI's 30 minutes;
+/// `bui_slab_3d_is_the_plane_strain_case_per_metre_of_depth` stays in the default suite.
 #[test]
+#[ignore = "long (about 1 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_collapse_3d_slab() {
     let case = "collapse_bui2008_slab_3d.json";
     let (sim, history) = run(parse(case_json(case)));
