@@ -1094,7 +1094,9 @@ pub enum MonitorSpec {
     },
     /// Runout of material points (m) from a wall at `x = wall` towards `+x`: where the free
     /// surface (top envelope of the points' squares) falls below `threshold` above the
-    /// base line `y = base` (plane problems; Bui et al. 2008 use 2 mm).
+    /// base line `y = base` (plane problems; Bui et al. 2008 use 2 mm), or with `"measure":
+    /// "thickness"` where the deposit's thickness from the points' areas in bins of `bin`
+    /// falls to `threshold` ([`RunoutMeasure`]).
     Runout {
         /// Column name.
         name: String,
@@ -1104,9 +1106,16 @@ pub enum MonitorSpec {
         /// y of the base (m, default 0).
         #[serde(default)]
         base: f64,
-        /// Surface height below which the body has ended (m, default 0.002).
+        /// Surface height (or thickness) below which the body has ended (m, default 0.002).
         #[serde(default = "default_runout_threshold")]
         threshold: f64,
+        /// How the end is read (default `surface`).
+        #[serde(default)]
+        measure: RunoutMeasure,
+        /// Width of the bins along x of `"measure": "thickness"` (m; required there, refused
+        /// otherwise).
+        #[serde(default)]
+        bin: Option<f64>,
     },
     /// Height (m) of the material points' free surface above the base line `y = base` at
     /// abscissa `x` (plane problems), e.g. the height at a wall.
@@ -1254,6 +1263,23 @@ impl MonitorSpec {
             | MonitorSpec::StrainEnergy { name, .. } => name,
         }
     }
+}
+
+/// How a `runout` monitor reads the end of the body.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RunoutMeasure {
+    /// The connected stretch from the wall where the points' squares stand `threshold` above
+    /// the base, joined across gaps up to half a point's size
+    /// ([`loam_mpm::surface::SurfaceProfile::runout`]).
+    #[default]
+    Surface,
+    /// Where the deposit's thickness, the points' areas summed in bins of `bin` along x and
+    /// divided by it (in 3D their volumes over the bin and the points' extent across y), falls
+    /// to `threshold` ([`loam_mpm::surface::runout_of_thickness`]): independent of how the
+    /// points are stacked, so that a sheet one or two points thick at a front does not make
+    /// it jump.
+    Thickness,
 }
 
 fn default_runout_threshold() -> f64 {

@@ -2,9 +2,9 @@
 
 use loam_fem::domain::{Domain, PointExtent, PointQuantity, PointTensor};
 use loam_fem::model::Model;
-use loam_mpm::surface::SurfaceProfile;
+use loam_mpm::surface::{binned_along_x, runout_of_thickness, SurfaceProfile};
 
-use crate::case::RigidQuantity;
+use crate::case::{RigidQuantity, RunoutMeasure};
 
 /// What a monitor measures.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,14 +48,19 @@ pub enum MonitorKind {
         /// Component index.
         component: Option<usize>,
     },
-    /// Runout of the material points from a wall ([`SurfaceProfile::runout`]).
+    /// Runout of the material points from a wall ([`SurfaceProfile::runout`], or
+    /// [`runout_of_thickness`] with [`RunoutMeasure::Thickness`]).
     Runout {
         /// x of the wall.
         wall: f64,
         /// y of the base.
         base: f64,
-        /// Surface height threshold.
+        /// Surface height (thickness) threshold.
         threshold: f64,
+        /// How the end is read.
+        measure: RunoutMeasure,
+        /// Bin width along x of the thickness measure.
+        bin: f64,
     },
     /// Free-surface height of the material points at `x` ([`SurfaceProfile::height_at`]).
     SurfaceHeight {
@@ -184,7 +189,12 @@ impl Monitor {
                     None => f64::NAN, // the point left the grid and was erased
                 }
             }
-            MonitorKind::Runout { wall, base, threshold } => surface_runout(model, *wall, *base, *threshold),
+            MonitorKind::Runout { wall, base, threshold, measure: RunoutMeasure::Surface, .. } => {
+                surface_runout(model, *wall, *base, *threshold)
+            }
+            MonitorKind::Runout { wall, threshold, measure: RunoutMeasure::Thickness, bin, .. } => {
+                thickness_runout(model, *wall, *threshold, *bin)
+            }
             MonitorKind::SurfaceHeight { x, base } => surface_height(model, *x, *base),
             MonitorKind::MaterialPointTensor { points, quantity, component } => {
                 let (mut sum, mut count) = (0.0, 0);
@@ -292,18 +302,18 @@ pub fn point_extents(model: &Model) -> Vec<PointExtent> {
 /// The extents `of` each domain, seen as the surface monitors see them (the side view in 3D:
 /// [`point_extents`]).
 fn extents_seen_by_the_surface(model: &Model, of: impl Fn(&dyn Domain) -> Vec<PointExtent>) -> Vec<PointExtent> {
-    let side_view = model.dim == 3;
-    model
-        .domains
-        .iter()
-        .flat_map(|d| of(d.as_ref()))
-        .map(|mut p| {
-            if side_view {
-                p.position.swap(1, 2);
-            }
-            p
-        })
-        .collect()
+    model.domains.iter().flat_map(|d| extents_seen_by_the_surface_of(model, of(d.as_ref()))).collect()
+}
+
+/// `extents` as the surface monitors see them: in 3D from the side, `(x, z)` as the profile's
+/// `(x, y)` and `y` third ([`point_extents`]).
+fn extents_seen_by_the_surface_of(model: &Model, mut extents: Vec<PointExtent>) -> Vec<PointExtent> {
+    if model.dim == 3 {
+        for p in &mut extents {
+            p.position.swap(1, 2);
+        }
+    }
+    extents
 }
 
 /// The ranks over which some domain's points are distributed, if any.
@@ -326,6 +336,58 @@ fn surface_runout(model: &Model, wall: f64, base: f64, threshold: f64) -> f64 {
     let all = ranks.all_gather_varcount(&mine);
     let runs = all.iter().flat_map(|part| part.chunks_exact(3)).map(|r| (r[0], r[1], r[2])).collect();
     loam_mpm::surface::runout_of_spans(runs, wall)
+}
+
+/// The runout by the deposit's thickness ([`runout_of_thickness`]): each point's area (in 3D
+/// its volume, and the sum divided by the points' extent across y) binned along x from the
+/// wall. Where points are distributed, each rank bins its own points of the distributed
+/// domains and the bins are summed over the ranks (with the extent across y); the points of
+/// replicated domains, on every rank, are binned once.
+fn thickness_runout(model: &Model, wall: f64, threshold: f64, bin: f64) -> f64 {
+    let three_d = model.dim == 3;
+    let amount = |p: &PointExtent| if three_d { p.size.powi(3) } else { p.size * p.size };
+    let (mut own, mut replicated) = (Vec::new(), Vec::new());
+    for domain in &model.domains {
+        let seen = extents_seen_by_the_surface_of(model, domain.as_ref().point_extents());
+        if domain.points_distributed().is_some() {
+            own.extend(seen);
+        } else {
+            replicated.extend(seen);
+        }
+    }
+    // the extent across y (the side view's third coordinate) and the bins, own then replicated
+    let across = |points: &[PointExtent]| {
+        points.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], p| {
+            [lo.min(p.position[2] - 0.5 * p.size), hi.max(p.position[2] + 0.5 * p.size)]
+        })
+    };
+    let (mut extent, mut bins) = (across(&own), binned_along_x(&own, wall, bin, amount));
+    if let Some(ranks) = points_ranks(model) {
+        let mine: Vec<f64> = extent.iter().chain(&bins).copied().collect();
+        let all = ranks.all_gather_varcount(&mine);
+        extent = [f64::INFINITY, f64::NEG_INFINITY];
+        bins.clear();
+        for part in &all {
+            extent = [extent[0].min(part[0]), extent[1].max(part[1])];
+            add_bins(&mut bins, &part[2..]);
+        }
+    }
+    let shared = across(&replicated);
+    extent = [extent[0].min(shared[0]), extent[1].max(shared[1])];
+    add_bins(&mut bins, &binned_along_x(&replicated, wall, bin, amount));
+    let depth = if three_d { extent[1] - extent[0] } else { 1.0 };
+    let thickness: Vec<f64> = bins.iter().map(|a| a / (bin * depth)).collect();
+    runout_of_thickness(&thickness, bin, threshold)
+}
+
+/// `sum += other`, entry by entry, `sum` lengthened as needed.
+fn add_bins(sum: &mut Vec<f64>, other: &[f64]) {
+    if sum.len() < other.len() {
+        sum.resize(other.len(), 0.0);
+    }
+    for (s, o) in sum.iter_mut().zip(other) {
+        *s += o;
+    }
 }
 
 /// The surface height monitor ([`SurfaceProfile::height_at`]): the highest point covering

@@ -484,6 +484,27 @@ fn named_inputs(dir: &Path, inputs: &mut Vec<Input>) {
         bad("monitors[0].name"),
     );
     case(
+        "runout by thickness without its bin",
+        "check",
+        &collapse,
+        &|v| v["monitors"][0]["measure"] = json!("thickness"),
+        bad("monitors[0].bin"),
+    );
+    case(
+        "runout bin on the surface measure",
+        "check",
+        &collapse,
+        &|v| v["monitors"][0]["bin"] = json!(0.005),
+        bad("monitors[0].bin"),
+    );
+    case(
+        "runout measure unknown",
+        "check",
+        &collapse,
+        &|v| v["monitors"][0]["measure"] = json!("volume"),
+        bad("monitors[0].measure"),
+    );
+    case(
         "geostatic surface below the body",
         "check",
         &collapse,

@@ -511,8 +511,12 @@ fn plateau_near_prandtl(label: &str, sim: &Simulation, h: &History, tolerance: f
 /// force on its base.
 #[test]
 fn footing_on_undrained_soil_mpm() {
-    let (sim_up, h_up) = run(case("footing_undrained_mpm_up.json"));
-    let (sim_u, h_u) = run(case("footing_undrained_mpm_u.json"));
+    // the two runs side by side (the suite's longest test: the u–p run alone is two minutes)
+    let ((sim_up, h_up), (sim_u, h_u)) = std::thread::scope(|scope| {
+        let displacement = scope.spawn(|| run(case("footing_undrained_mpm_u.json")));
+        let mixed = run(case("footing_undrained_mpm_up.json"));
+        (mixed, displacement.join().expect("the displacement run"))
+    });
     print_curve("footing MPM u–p", &sim_up, &h_up, 5);
     print_curve("footing MPM displacement", &sim_u, &h_u, 5);
     let (up, end) = plateau(&sim_up, &h_up);

@@ -16,7 +16,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{case_json, last, parse, run};
+use common::{case_json, last, parse, report, run};
 use loam::monitor::point_extents;
 use loam::simulation::Simulation;
 use loam_fem::domain::PointQuantity;
@@ -233,21 +233,53 @@ fn assert_checks(label: &str, c: &Collapse, runout_asserted: bool) {
 /// relaxation time 0.32 s (weak: the deposit does not depend on it), steps set by the local
 /// time-integration error. Asserted against the experiment: at rest, runout within 5 %, final
 /// surface within 4 mm RMS, failure line within 5°, and issue 24 item 4's point-centre profile
-/// within 2.5 mm RMS. Measured (7 December 2026, the LU's FMA kernels): at rest at 0.70 s in
-/// 1 121 steps, runout 0.4255 m (+1.3 %), surface 1.37 mm RMS, point-centre profile 1.06 mm
-/// RMS, failure line 30.6° (6 December: 1 262 steps, 0.4248 m, 1.04 mm). Its runout holds
+/// within 2.5 mm RMS. Measured (7 December 2026, eleventh session, since a445636's solve
+/// kernels): at rest at 0.70 s in 1 130 steps, runout 0.4238 m (+0.9 %), surface 1.33 mm RMS,
+/// point-centre profile 1.13 mm RMS, failure line 30.5° (with the FMA kernels alone: 1 121
+/// steps, 0.4255 m, 1.37 / 1.06 mm; 6 December: 1 262 steps, 0.4248 m, 1.04 mm). Its runout holds
 /// under round-off (gravity × (1 + k·1e-12), k = 0, 1, 2: 0.42478 / 0.42484 / 0.42476 m), and
-/// the farthest point centre at 2 mm agrees with the monitor. Its refinement is
-/// [`bui2008_mu_i_up_converges_to_the_experiment`]. About a minute on 2 threads.
+/// the farthest point centre at 2 mm agrees with the monitor. Also asserted: the runout by the
+/// deposit's thickness (`"measure": "thickness"`, 5 mm bins) at the experiment's 2 mm within
+/// 5 % (measured 0.4257 m, +1.4 %, from the run's last points), beyond the one at 5 mm of
+/// thickness (0.4231 m). Its refinement is [`bui2008_mu_i_up_converges_to_the_experiment`].
+/// About a minute on 2 threads.
 #[test]
 fn bui2008_collapse_quadrilateral_grid() {
     let case = "collapse_bui2008_quad.json";
-    let (sim, history) = run(parse(case_json(case)));
+    let (sim, history) = run(parse(with_thickness_runouts(case_json(case))));
     let c = collapse_of(case, &sim, &history);
     assert_checks(case, &c, true);
     let centres = centre_profile_rms(&sim, 0.005);
     println!("{case}: point-centre profile {:.2} mm RMS from the experiment (tolerance 2.5 mm)", centres * 1e3);
     assert!(centres <= 0.0025, "{case}: point-centre profile outside 2.5 mm");
+    let (thick, thick_5mm) = thickness_runouts(case, &sim, &history);
+    report(&format!("{case}: runout where the deposit is 2 mm thick vs the experiment [m]"), thick, RUNOUT, 0.05);
+    assert!(thick_5mm < thick, "the deposit thins towards its front");
+}
+
+/// `json` with two more monitors, the runout by the deposit's thickness (`"measure":
+/// "thickness"`, bins of 5 mm) at 2 mm (the experiment's threshold) and at 5 mm:
+/// `runout_thickness` and `runout_thickness_5mm`.
+fn with_thickness_runouts(mut json: serde_json::Value) -> serde_json::Value {
+    let monitors = json["monitors"].as_array_mut().expect("monitors");
+    for (name, threshold) in [("runout_thickness", 0.002), ("runout_thickness_5mm", 0.005)] {
+        monitors.push(serde_json::json!({
+            "name": name, "type": "runout", "wall": 0.0, "measure": "thickness", "bin": 0.005, "threshold": threshold
+        }));
+    }
+    json
+}
+
+/// Prints and returns the two monitors of [`with_thickness_runouts`] at the end of a run.
+fn thickness_runouts(label: &str, sim: &Simulation, history: &common::History) -> (f64, f64) {
+    let (thick, thick_5mm) = (last(sim, history, "runout_thickness"), last(sim, history, "runout_thickness_5mm"));
+    println!(
+        "{label}: runout where the deposit (points' areas in 5 mm bins) is 2 mm thick {thick:.4} m ({:+.2} % on {RUNOUT} m), \
+         5 mm thick {thick_5mm:.4} m; the surface monitor {:.4} m",
+        100.0 * (thick / RUNOUT - 1.0),
+        last(sim, history, "runout")
+    );
+    (thick, thick_5mm)
 }
 
 /// The Mohr–Coulomb case on the linear basis (`cases/collapse_bui2008_quad_mc.json`: the
@@ -625,8 +657,9 @@ fn surface_monitors_see_a_3d_column_from_the_side() {
 /// A refinement level of the μ(I) cases: benchmark 8's measures with issue 24 item 4's
 /// point-centre profile (RMS, m) of [`centre_profile_rms`] at the level's cell size `h`.
 fn measure_level(case_name: &str, h: f64) -> (Collapse, f64) {
-    let (sim, history) = run(parse(case_json(case_name)));
+    let (sim, history) = run(parse(with_thickness_runouts(case_json(case_name))));
     let collapse = collapse_of(case_name, &sim, &history);
+    thickness_runouts(case_name, &sim, &history);
     let centres = centre_profile_rms(&sim, h);
     (collapse, centres)
 }
@@ -691,11 +724,12 @@ fn mu_i_refinement(prefix: &str) -> Vec<(Collapse, f64)> {
 /// experiment's 1 mm lower top, within its digitising error, is not a quantity of the flow.
 /// About 17 minutes beside the other two μ(I) tests (the finest level most of it).
 ///
-/// **Fails since the LU's FMA kernels (7 December 2026, tenth session)**: the finest level
-/// depends on round-off. On that build h = 2.5 mm ends at 0.4445 / 0.4412 / 0.4406 m (+5.8 /
-/// +5.1 / +4.9 %) with gravity × (1 + k·1e-12), k = 0 / 1 / 2, against 0.4278 m on the build
-/// above: its front is a sheet two points thick whose reach small differences decide
-/// (docs/validation.md, μ(I) section). The tolerance is left as the issue asks.
+/// **Fails since the LU's FMA kernels (7 December 2026, tenth session)**: the 0.4278 m above
+/// was the chance of that build's round-off. Seven runs of h = 2.5 mm (gravity × (1 + k·1e-12),
+/// two builds) end at 0.4400–0.4460 m (mean 0.4423 m, +5.3 %): the runout grows by about 2 cm
+/// per halving of h, through a sheet 2–4 mm thick at the front, while the deposit down to 5 mm
+/// of thickness reaches 0.4231 / 0.4235 m at h = 5 / 2.5 mm (`scripts/bui_front.py`;
+/// docs/validation.md, μ(I) section). The tolerance is left as the issue asks.
 #[test]
 #[ignore = "long (about 17 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_mu_i_up_converges_to_the_experiment() {

@@ -10,7 +10,7 @@ use loam_fem::rigid_body::RigidFrame;
 use super::meshes::ResolvedInterface;
 use super::regions::{nearest_node, region, select_points};
 use super::{check_len, check_positive, component_index};
-use crate::case::{Case, CaseError, MonitorSpec};
+use crate::case::{Case, CaseError, MonitorSpec, RunoutMeasure};
 use crate::monitor::{Monitor, MonitorKind};
 
 /// The monitors of the case, in case order.
@@ -78,10 +78,24 @@ pub(super) fn build(
                     component: component_index(&format!("{loc}.component"), *component, dim)?,
                 }
             }
-            MonitorSpec::Runout { wall, base, threshold, .. } => {
+            MonitorSpec::Runout { wall, base, threshold, measure, bin, .. } => {
                 check_surface_monitor(&loc, model)?;
                 check_positive(&format!("{loc}.threshold"), *threshold)?;
-                MonitorKind::Runout { wall: *wall, base: *base, threshold: *threshold }
+                let bin = match (measure, bin) {
+                    (RunoutMeasure::Thickness, Some(bin)) => {
+                        check_positive(&format!("{loc}.bin"), *bin)?;
+                        *bin
+                    }
+                    (RunoutMeasure::Thickness, None) => return Err(CaseError::new(
+                        format!("{loc}.bin"),
+                        "is required with \"measure\": \"thickness\" (m: the width of the bins along x, e.g. 0.005)",
+                    )),
+                    (RunoutMeasure::Surface, Some(_)) => {
+                        return Err(CaseError::new(format!("{loc}.bin"), "applies to \"measure\": \"thickness\" only"))
+                    }
+                    (RunoutMeasure::Surface, None) => 0.0,
+                };
+                MonitorKind::Runout { wall: *wall, base: *base, threshold: *threshold, measure: *measure, bin }
             }
             MonitorSpec::SurfaceHeight { x, base, .. } => {
                 check_surface_monitor(&loc, model)?;
