@@ -1116,6 +1116,10 @@ pub enum MonitorSpec {
         /// otherwise).
         #[serde(default)]
         bin: Option<f64>,
+        /// Depth across y over which the points' volumes spread, in 3D with `"measure":
+        /// "thickness"` (m; required there, refused otherwise).
+        #[serde(default)]
+        depth: Option<f64>,
     },
     /// Height (m) of the material points' free surface above the base line `y = base` at
     /// abscissa `x` (plane problems), e.g. the height at a wall.
@@ -1275,7 +1279,7 @@ pub enum RunoutMeasure {
     #[default]
     Surface,
     /// Where the deposit's thickness, the points' areas summed in bins of `bin` along x and
-    /// divided by it (in 3D their volumes over the bin and the points' extent across y), falls
+    /// divided by it (in 3D their volumes over the bin and `depth`), falls
     /// to `threshold` ([`loam_mpm::surface::runout_of_thickness`]): independent of how the
     /// points are stacked, so that a sheet one or two points thick at a front does not make
     /// it jump.

@@ -61,6 +61,8 @@ pub enum MonitorKind {
         measure: RunoutMeasure,
         /// Bin width along x of the thickness measure.
         bin: f64,
+        /// Depth across y of the thickness measure in 3D (1 in plane problems).
+        depth: f64,
     },
     /// Free-surface height of the material points at `x` ([`SurfaceProfile::height_at`]).
     SurfaceHeight {
@@ -192,8 +194,8 @@ impl Monitor {
             MonitorKind::Runout { wall, base, threshold, measure: RunoutMeasure::Surface, .. } => {
                 surface_runout(model, *wall, *base, *threshold)
             }
-            MonitorKind::Runout { wall, threshold, measure: RunoutMeasure::Thickness, bin, .. } => {
-                thickness_runout(model, *wall, *threshold, *bin)
+            MonitorKind::Runout { wall, threshold, measure: RunoutMeasure::Thickness, bin, depth, .. } => {
+                thickness_runout(model, *wall, *threshold, *bin, *depth)
             }
             MonitorKind::SurfaceHeight { x, base } => surface_height(model, *x, *base),
             MonitorKind::MaterialPointTensor { points, quantity, component } => {
@@ -339,13 +341,11 @@ fn surface_runout(model: &Model, wall: f64, base: f64, threshold: f64) -> f64 {
 }
 
 /// The runout by the deposit's thickness ([`runout_of_thickness`]): each point's area (in 3D
-/// its volume, and the sum divided by the points' extent across y) binned along x from the
-/// wall. Where points are distributed, each rank bins its own points of the distributed
-/// domains and the bins are summed over the ranks (with the extent across y); the points of
-/// replicated domains, on every rank, are binned once.
-fn thickness_runout(model: &Model, wall: f64, threshold: f64, bin: f64) -> f64 {
-    let three_d = model.dim == 3;
-    let amount = |p: &PointExtent| if three_d { p.size.powi(3) } else { p.size * p.size };
+/// its volume, the sums then divided by `depth`) binned along x from the wall. Where points
+/// are distributed, each rank bins its own points of the distributed domains and the bins are
+/// summed over the ranks; the points of replicated domains, on every rank, are binned once.
+fn thickness_runout(model: &Model, wall: f64, threshold: f64, bin: f64, depth: f64) -> f64 {
+    let amount = |p: &PointExtent| p.size.powi(model.dim as i32);
     let (mut own, mut replicated) = (Vec::new(), Vec::new());
     for domain in &model.domains {
         let seen = extents_seen_by_the_surface_of(model, domain.as_ref().point_extents());
@@ -355,27 +355,15 @@ fn thickness_runout(model: &Model, wall: f64, threshold: f64, bin: f64) -> f64 {
             replicated.extend(seen);
         }
     }
-    // the extent across y (the side view's third coordinate) and the bins, own then replicated
-    let across = |points: &[PointExtent]| {
-        points.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], p| {
-            [lo.min(p.position[2] - 0.5 * p.size), hi.max(p.position[2] + 0.5 * p.size)]
-        })
-    };
-    let (mut extent, mut bins) = (across(&own), binned_along_x(&own, wall, bin, amount));
+    let mut bins = binned_along_x(&own, wall, bin, amount);
     if let Some(ranks) = points_ranks(model) {
-        let mine: Vec<f64> = extent.iter().chain(&bins).copied().collect();
-        let all = ranks.all_gather_varcount(&mine);
-        extent = [f64::INFINITY, f64::NEG_INFINITY];
+        let all = ranks.all_gather_varcount(&bins);
         bins.clear();
         for part in &all {
-            extent = [extent[0].min(part[0]), extent[1].max(part[1])];
-            add_bins(&mut bins, &part[2..]);
+            add_bins(&mut bins, part);
         }
     }
-    let shared = across(&replicated);
-    extent = [extent[0].min(shared[0]), extent[1].max(shared[1])];
     add_bins(&mut bins, &binned_along_x(&replicated, wall, bin, amount));
-    let depth = if three_d { extent[1] - extent[0] } else { 1.0 };
     let thickness: Vec<f64> = bins.iter().map(|a| a / (bin * depth)).collect();
     runout_of_thickness(&thickness, bin, threshold)
 }

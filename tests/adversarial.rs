@@ -498,6 +498,17 @@ fn named_inputs(dir: &Path, inputs: &mut Vec<Input>) {
         bad("monitors[0].bin"),
     );
     case(
+        "runout depth on a plane case",
+        "check",
+        &collapse,
+        &|v| {
+            v["monitors"][0]["measure"] = json!("thickness");
+            v["monitors"][0]["bin"] = json!(0.005);
+            v["monitors"][0]["depth"] = json!(0.005);
+        },
+        bad("monitors[0].depth"),
+    );
+    case(
         "runout measure unknown",
         "check",
         &collapse,

@@ -324,16 +324,27 @@ fn mpm_2d_cantilever_on_1_to_8_ranks_equals_the_serial_runs() {
 /// runs. No closed form exists for these milliseconds: the whole run is validated against
 /// the experiment by `mpm_collapse::bui2008_collapse_3d_slab`, and these steps against the 2D
 /// case per metre of depth by `mpm_collapse::bui_slab_3d_is_the_plane_strain_case_per_metre_of_depth`.
+/// With a `runout` monitor by thickness (`"measure": "thickness"`, 5 mm bins, threshold 90 mm:
+/// the points' volumes summed over the ranks and divided by the slab's `depth`, 5 mm), which at
+/// the start reads the column's 0.1 m thickness in every bin up to x = 0.2 m, so that the
+/// profile through the bin centres falls to 90 mm at 0.1975 + 0.005 · (0.1 − 0.09)/0.1 =
+/// 0.198 m (to 1e-9 on 8 ranks; a wrong depth or a bin counted on two ranks would move it by
+/// a bin or more).
 #[test]
 fn bui_slab_3d_on_1_to_8_ranks_equals_the_serial_runs() {
     let m = runs_on_1_to_8_ranks_agree("collapse_bui2008_slab_3d.json", 6400, |case| {
         plastic_column(case);
         case["output"] = json!({ "vtk": false });
-        case["monitors"].as_array_mut().unwrap().push(json!({
-            "name": "base_reaction_z", "type": "reaction", "region": "base", "component": "z"
+        let monitors = case["monitors"].as_array_mut().unwrap();
+        monitors.push(json!({ "name": "base_reaction_z", "type": "reaction", "region": "base", "component": "z" }));
+        monitors.push(json!({
+            "name": "runout_thickness", "type": "runout", "measure": "thickness", "bin": 0.005, "depth": 0.005,
+            "threshold": 0.09
         }));
     });
     assert_eq!(m.1.len(), 5, "4 steps and the start");
+    let column = m.0.iter().position(|n| n == "runout_thickness").expect("the thickness runout");
+    report("3D Bui slab on 8 ranks at the start: runout by thickness (90 mm) [m]", m.1[0][column], 0.198, 1e-9);
     println!(
         "3D Bui slab on 8 ranks at 4 ms: base reaction {:.4} N (weight ρ g V = 2.5997 N), kinetic energy {:.3e} J",
         last_value(&m, "base_reaction_z"),

@@ -78,24 +78,19 @@ pub(super) fn build(
                     component: component_index(&format!("{loc}.component"), *component, dim)?,
                 }
             }
-            MonitorSpec::Runout { wall, base, threshold, measure, bin, .. } => {
+            MonitorSpec::Runout { wall, base, threshold, measure, bin, depth, .. } => {
                 check_surface_monitor(&loc, model)?;
                 check_positive(&format!("{loc}.threshold"), *threshold)?;
-                let bin = match (measure, bin) {
-                    (RunoutMeasure::Thickness, Some(bin)) => {
-                        check_positive(&format!("{loc}.bin"), *bin)?;
-                        *bin
-                    }
-                    (RunoutMeasure::Thickness, None) => return Err(CaseError::new(
-                        format!("{loc}.bin"),
-                        "is required with \"measure\": \"thickness\" (m: the width of the bins along x, e.g. 0.005)",
-                    )),
-                    (RunoutMeasure::Surface, Some(_)) => {
-                        return Err(CaseError::new(format!("{loc}.bin"), "applies to \"measure\": \"thickness\" only"))
-                    }
-                    (RunoutMeasure::Surface, None) => 0.0,
+                let thickness = *measure == RunoutMeasure::Thickness;
+                let bin = thickness_key(&loc, "bin", *bin, thickness, "the width of the bins along x, e.g. 0.005")?;
+                let depth = if model.dim == 3 {
+                    thickness_key(&loc, "depth", *depth, thickness, "the depth across y over which the points spread")?
+                } else if depth.is_some() {
+                    return Err(CaseError::new(format!("{loc}.depth"), "applies to 3D cases only"));
+                } else {
+                    1.0
                 };
-                MonitorKind::Runout { wall: *wall, base: *base, threshold: *threshold, measure: *measure, bin }
+                MonitorKind::Runout { wall: *wall, base: *base, threshold: *threshold, measure: *measure, bin, depth }
             }
             MonitorSpec::SurfaceHeight { x, base, .. } => {
                 check_surface_monitor(&loc, model)?;
@@ -220,6 +215,23 @@ fn check_surface_monitor(loc: &str, model: &Model) -> Result<(), CaseError> {
         return Err(CaseError::new(format!("{loc}.type"), "the model has no material points"));
     }
     Ok(())
+}
+
+/// A length key of the thickness runout (`bin`, `depth`): required and positive where
+/// `thickness` (the measure is `"thickness"`), refused otherwise; 0 where it does not apply.
+fn thickness_key(loc: &str, key: &str, value: Option<f64>, thickness: bool, what: &str) -> Result<f64, CaseError> {
+    match (thickness, value) {
+        (true, Some(v)) => {
+            check_positive(&format!("{loc}.{key}"), v)?;
+            Ok(v)
+        }
+        (true, None) => Err(CaseError::new(
+            format!("{loc}.{key}"),
+            format!("is required with \"measure\": \"thickness\" (m: {what})"),
+        )),
+        (false, Some(_)) => Err(CaseError::new(format!("{loc}.{key}"), "applies to \"measure\": \"thickness\" only")),
+        (false, None) => Ok(0.0),
+    }
 }
 
 /// SI unit of a monitor's value.
