@@ -4,7 +4,7 @@ use loam_fem::domain::{Domain, PointExtent, PointQuantity, PointTensor};
 use loam_fem::model::Model;
 use loam_mpm::surface::{binned_along_x, runout_of_thickness, SurfaceProfile};
 
-use crate::case::{RigidQuantity, RunoutMeasure};
+use crate::case::RigidQuantity;
 
 /// What a monitor measures.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,20 +48,25 @@ pub enum MonitorKind {
         /// Component index.
         component: Option<usize>,
     },
-    /// Runout of the material points from a wall ([`SurfaceProfile::runout`], or
-    /// [`runout_of_thickness`] with [`RunoutMeasure::Thickness`]).
+    /// Runout of the material points from a wall ([`SurfaceProfile::runout`]).
     Runout {
         /// x of the wall.
         wall: f64,
         /// y of the base.
         base: f64,
-        /// Surface height (thickness) threshold.
+        /// Surface height threshold.
         threshold: f64,
-        /// How the end is read.
-        measure: RunoutMeasure,
-        /// Bin width along x of the thickness measure.
+    },
+    /// Runout of the material points from a wall by the deposit's thickness
+    /// ([`runout_of_thickness`]; the case's `"measure": "thickness"`).
+    ThicknessRunout {
+        /// x of the wall.
+        wall: f64,
+        /// Thickness threshold.
+        threshold: f64,
+        /// Bin width along x.
         bin: f64,
-        /// Depth across y of the thickness measure in 3D (1 in plane problems).
+        /// Depth across y over which the volumes spread in 3D (1 in plane problems).
         depth: f64,
     },
     /// Free-surface height of the material points at `x` ([`SurfaceProfile::height_at`]).
@@ -191,10 +196,8 @@ impl Monitor {
                     None => f64::NAN, // the point left the grid and was erased
                 }
             }
-            MonitorKind::Runout { wall, base, threshold, measure: RunoutMeasure::Surface, .. } => {
-                surface_runout(model, *wall, *base, *threshold)
-            }
-            MonitorKind::Runout { wall, threshold, measure: RunoutMeasure::Thickness, bin, depth, .. } => {
+            MonitorKind::Runout { wall, base, threshold } => surface_runout(model, *wall, *base, *threshold),
+            MonitorKind::ThicknessRunout { wall, threshold, bin, depth } => {
                 thickness_runout(model, *wall, *threshold, *bin, *depth)
             }
             MonitorKind::SurfaceHeight { x, base } => surface_height(model, *x, *base),
@@ -304,18 +307,18 @@ pub fn point_extents(model: &Model) -> Vec<PointExtent> {
 /// The extents `of` each domain, seen as the surface monitors see them (the side view in 3D:
 /// [`point_extents`]).
 fn extents_seen_by_the_surface(model: &Model, of: impl Fn(&dyn Domain) -> Vec<PointExtent>) -> Vec<PointExtent> {
-    model.domains.iter().flat_map(|d| extents_seen_by_the_surface_of(model, of(d.as_ref()))).collect()
-}
-
-/// `extents` as the surface monitors see them: in 3D from the side, `(x, z)` as the profile's
-/// `(x, y)` and `y` third ([`point_extents`]).
-fn extents_seen_by_the_surface_of(model: &Model, mut extents: Vec<PointExtent>) -> Vec<PointExtent> {
-    if model.dim == 3 {
-        for p in &mut extents {
-            p.position.swap(1, 2);
-        }
-    }
-    extents
+    let side_view = model.dim == 3;
+    model
+        .domains
+        .iter()
+        .flat_map(|d| of(d.as_ref()))
+        .map(|mut p| {
+            if side_view {
+                p.position.swap(1, 2);
+            }
+            p
+        })
+        .collect()
 }
 
 /// The ranks over which some domain's points are distributed, if any.
@@ -348,11 +351,11 @@ fn thickness_runout(model: &Model, wall: f64, threshold: f64, bin: f64, depth: f
     let amount = |p: &PointExtent| p.size.powi(model.dim as i32);
     let (mut own, mut replicated) = (Vec::new(), Vec::new());
     for domain in &model.domains {
-        let seen = extents_seen_by_the_surface_of(model, domain.as_ref().point_extents());
+        let points = domain.point_extents();
         if domain.points_distributed().is_some() {
-            own.extend(seen);
+            own.extend(points);
         } else {
-            replicated.extend(seen);
+            replicated.extend(points);
         }
     }
     let mut bins = binned_along_x(&own, wall, bin, amount);

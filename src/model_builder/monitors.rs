@@ -88,9 +88,14 @@ pub(super) fn build(
                 } else if depth.is_some() {
                     return Err(CaseError::new(format!("{loc}.depth"), "applies to 3D cases only"));
                 } else {
-                    1.0
+                    Some(1.0)
                 };
-                MonitorKind::Runout { wall: *wall, base: *base, threshold: *threshold, measure: *measure, bin, depth }
+                match (bin, depth) {
+                    (Some(bin), Some(depth)) => {
+                        MonitorKind::ThicknessRunout { wall: *wall, threshold: *threshold, bin, depth }
+                    }
+                    _ => MonitorKind::Runout { wall: *wall, base: *base, threshold: *threshold },
+                }
             }
             MonitorSpec::SurfaceHeight { x, base, .. } => {
                 check_surface_monitor(&loc, model)?;
@@ -218,19 +223,26 @@ fn check_surface_monitor(loc: &str, model: &Model) -> Result<(), CaseError> {
 }
 
 /// A length key of the thickness runout (`bin`, `depth`): required and positive where
-/// `thickness` (the measure is `"thickness"`), refused otherwise; 0 where it does not apply.
-fn thickness_key(loc: &str, key: &str, value: Option<f64>, thickness: bool, what: &str) -> Result<f64, CaseError> {
+/// `thickness` (the measure is `"thickness"`), refused otherwise; `None` where it does not
+/// apply.
+fn thickness_key(
+    loc: &str,
+    key: &str,
+    value: Option<f64>,
+    thickness: bool,
+    what: &str,
+) -> Result<Option<f64>, CaseError> {
     match (thickness, value) {
         (true, Some(v)) => {
             check_positive(&format!("{loc}.{key}"), v)?;
-            Ok(v)
+            Ok(Some(v))
         }
         (true, None) => Err(CaseError::new(
             format!("{loc}.{key}"),
             format!("is required with \"measure\": \"thickness\" (m: {what})"),
         )),
         (false, Some(_)) => Err(CaseError::new(format!("{loc}.{key}"), "applies to \"measure\": \"thickness\" only")),
-        (false, None) => Ok(0.0),
+        (false, None) => Ok(None),
     }
 }
 
@@ -241,7 +253,7 @@ pub fn monitor_unit(kind: &MonitorKind) -> &'static str {
         MonitorKind::Velocity { .. } => "m/s",
         MonitorKind::Acceleration { .. } => "m/s2",
         MonitorKind::Reaction { .. } | MonitorKind::WallForce { .. } | MonitorKind::InterfaceForce { .. } => "N",
-        MonitorKind::Runout { .. } | MonitorKind::SurfaceHeight { .. } => "m",
+        MonitorKind::Runout { .. } | MonitorKind::ThicknessRunout { .. } | MonitorKind::SurfaceHeight { .. } => "m",
         MonitorKind::MaterialPoint { quantity, .. } => match quantity {
             PointQuantity::Position | PointQuantity::Displacement => "m",
             PointQuantity::Velocity => "m/s",
