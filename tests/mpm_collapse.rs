@@ -241,7 +241,8 @@ fn assert_checks(label: &str, c: &Collapse, runout_asserted: bool) {
 /// (1 + k·1e-12), k = 0, 1, 2 on the 6 December build: 0.42478 / 0.42484 / 0.42476 m), and the
 /// farthest point centre at 2 mm agrees with the monitor. Also asserted: the runout by the
 /// deposit's thickness (`"measure": "thickness"`, 5 mm bins) at the experiment's 2 mm within
-/// 5 % (measured 0.4257 m, +1.4 %), beyond the one at 5 mm of thickness (0.4231 m). Its refinement is [`bui2008_mu_i_up_converges_to_the_experiment`].
+/// 5 % (measured 0.4257 m, +1.4 %), beyond the one at 5 mm of thickness (0.4231 m). Its
+/// refinement is [`bui2008_mu_i_up_converges_to_the_experiment`].
 /// About a minute on 2 threads.
 #[test]
 fn bui2008_collapse_quadrilateral_grid() {
