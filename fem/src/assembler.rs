@@ -37,7 +37,7 @@
 //! saddle-point matrix are of one magnitude. The element blocks, the residual and the
 //! correction keep their physical units.
 
-use crate::assembly::{AssemblyPattern, BlockLayout};
+use crate::assembly::{scale_values, AssemblyPattern, BlockLayout};
 use crate::convergence::BlockNorms;
 use crate::dofs::{Block, DofMap, DofTie, NodeRole, CONSTRAINED};
 use crate::domain::{AssemblyInput, Domain, DomainError};
@@ -117,6 +117,9 @@ pub struct Assembler {
     delta: Vec<f64>,
     /// Equilibration `D` per equation (empty without pressure equations).
     scale: Vec<f64>,
+    /// The equilibration's factors `D_ii D_jj` and `1/(D_ii D_jj)` per nonzero of the
+    /// solved pattern, made at its first solve ([`AssemblyPattern::symmetric_scale_factors`]).
+    entry_scales: (Vec<f64>, Vec<f64>),
     /// `1/s` per pressure DOF (the weights of [`Assembler::dof_norm`]).
     pressure_weights: Vec<f64>,
     /// Whether `rhs` holds the correction of the last solve (else the residual).
@@ -227,6 +230,7 @@ impl Assembler {
             rhs: vec![0.0; n_eq],
             delta: vec![0.0; num_dofs],
             scale,
+            entry_scales: Default::default(),
             pressure_weights: system.pressure_scales.iter().map(|s| 1.0 / s).collect(),
             solved: false,
             layout,
@@ -527,13 +531,17 @@ impl Assembler {
             solver.solve(pattern, values, &mut self.rhs)?;
         } else {
             // D K D x̂ = D (−R), δ = D x̂ (module doc); the values are restored after
-            pattern.scale_symmetric(values, &self.scale);
+            if self.entry_scales.0.len() != values.len() {
+                let inverse: Vec<f64> = self.scale.iter().map(|d| 1.0 / d).collect();
+                self.entry_scales =
+                    (pattern.symmetric_scale_factors(&self.scale), pattern.symmetric_scale_factors(&inverse));
+            }
+            scale_values(values, &self.entry_scales.0);
             for (r, d) in self.rhs.iter_mut().zip(&self.scale) {
                 *r *= d;
             }
             let solved = solver.solve(pattern, values, &mut self.rhs);
-            let inverse: Vec<f64> = self.scale.iter().map(|d| 1.0 / d).collect();
-            pattern.scale_symmetric(values, &inverse);
+            scale_values(values, &self.entry_scales.1);
             solved?;
             for (r, d) in self.rhs.iter_mut().zip(&self.scale) {
                 *r *= d;

@@ -260,14 +260,19 @@ impl AssemblyPattern {
         }
     }
 
-    /// `A ← D A D` for the diagonal `D = diag(d)` (one entry per equation), in place.
-    pub fn scale_symmetric(&self, values: &mut [f64], d: &[f64]) {
+    /// The factors `d_i d_j` of `A ← D A D` (`D = diag(d)`, one entry per equation) for every
+    /// stored nonzero `(i, j)`, in the order of the values: with them the scaling is one
+    /// streaming product over the values ([`scale_values`]), where a sweep over the columns
+    /// reads `d` at every row index.
+    pub fn symmetric_scale_factors(&self, d: &[f64]) -> Vec<f64> {
         let (col_ptr, row_idx) = (self.symbolic.col_ptr(), self.symbolic.row_idx());
+        let mut factors = vec![0.0; row_idx.len()];
         for (c, &dc) in d.iter().enumerate() {
             for k in col_ptr[c]..col_ptr[c + 1] {
-                values[k] *= d[row_idx[k]] * dc;
+                factors[k] = d[row_idx[k]] * dc;
             }
         }
+        factors
     }
 
     /// Sums the element matrices of `matrix_buffer` into `values` (one per nonzero, in
@@ -357,6 +362,11 @@ impl AssemblyPattern {
     pub fn matrix<'a>(&'a self, values: &'a [f64]) -> SparseColMatRef<'a, usize, f64> {
         SparseColMatRef::new(self.symbolic.as_ref(), values)
     }
+}
+
+/// `values_k ← values_k · factors_k` (the factors of [`AssemblyPattern::symmetric_scale_factors`]).
+pub fn scale_values(values: &mut [f64], factors: &[f64]) {
+    values.iter_mut().zip(factors).for_each(|(v, f)| *v *= f);
 }
 
 /// `max |v|` over `values` (NaN ignored, 0 for none), in eight independent lanes: a single

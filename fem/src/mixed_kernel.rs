@@ -341,7 +341,34 @@ fn tensor_form(formulation: Formulation) -> Option<TensorPointFn> {
 /// p/K)` and, with the tangent `Ã`, `K_uu,(ai)(bk) += Σ_L (w Σ_J ∂N_a/∂X̃_J Ã_iJkL) ∂N_b/∂X̃_L`,
 /// `K_up,(ai)b += w (Σ_J ∂N_a/∂X̃_J B̃_iJ) N_b`, `K_pu,a(bk) += w0 N_a Σ_L ΔF⁻ᵀ_kL ∂N_b/∂X̃_L`,
 /// `K_pp,ab −= w0 N_a N_b / K`.
+///
+/// The node counts of the grids' blocks (3, 4, 8, 9 and 27 nodes) get the body compiled for
+/// their `nn` as a constant, so that the loops over the nodes are unrolled and their
+/// independent outputs vectorised (the same products summed in the same order, so the values
+/// are those of the loop over a run-time `nn` bit for bit).
 fn add_tensor_point<const D: usize>(
+    nn: usize,
+    g: &PointGeometry,
+    terms: &PointTerms<'_>,
+    delta_f: &Matrix3<f64>,
+    tangent: Option<&loam_laws::Tangent>,
+    residual: &mut [f64],
+    stiffness: Option<&mut [f64]>,
+) {
+    let body = tensor_point_terms::<D>;
+    match nn {
+        3 => body(3, g, terms, delta_f, tangent, residual, stiffness),
+        4 => body(4, g, terms, delta_f, tangent, residual, stiffness),
+        8 => body(8, g, terms, delta_f, tangent, residual, stiffness),
+        9 => body(9, g, terms, delta_f, tangent, residual, stiffness),
+        27 => body(27, g, terms, delta_f, tangent, residual, stiffness),
+        _ => body(nn, g, terms, delta_f, tangent, residual, stiffness),
+    }
+}
+
+/// The body of [`add_tensor_point`], inlined into each of its node counts.
+#[inline(always)]
+fn tensor_point_terms<const D: usize>(
     nn: usize,
     g: &PointGeometry,
     terms: &PointTerms<'_>,

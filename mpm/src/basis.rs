@@ -533,6 +533,15 @@ impl SmoothLattice {
     fn geometry_of(&self, support: usize, values: &SupportValues, formulation: Formulation) -> PointGeometry {
         let mut g =
             PointGeometry { shape: [0.0; MAX_NODES], gradient: [[0.0; 3]; MAX_NODES], weight: 0.0, radius: 0.0 };
+        self.geometry_into(support, values, formulation, &mut g);
+        g
+    }
+
+    /// [`SmoothLattice::geometry_of`] written into `g` in place (its entries past the support's
+    /// nodes untouched, its weight 0).
+    fn geometry_into(&self, support: usize, values: &SupportValues, formulation: Formulation, g: &mut PointGeometry) {
+        g.weight = 0.0;
+        g.radius = 0.0;
         let wx = self.window(support)[0];
         let h = self.spacing;
         for (a, v) in values.iter().enumerate().take(self.support_len()) {
@@ -542,7 +551,6 @@ impl SmoothLattice {
                 g.radius += v[0] * (self.origin[0] + (wx + a % 3) as f64 * h[0]);
             }
         }
-        g
     }
 
     /// The span of the lattice whose points fall into window `w` along direction `d`, in
@@ -611,9 +619,8 @@ impl SmoothLattice {
         for (q, (g, (_, weight))) in rule.iter_mut().zip(points).take(self.support_len()).enumerate() {
             let k = [q % 3, (q / 3) % 3, q / 9];
             let factors = std::array::from_fn(|d| if d < self.dim { self.projection_1d[d][w[d]][k[d]] } else { flat });
-            let mut geometry = self.geometry_of(s, &tensor_values(factors, self.support_len()), formulation);
-            geometry.weight = weight * self.cell_measure() * formulation.measure_factor(thickness, geometry.radius);
-            *g = geometry;
+            self.geometry_into(s, &tensor_values(factors, self.support_len()), formulation, g);
+            g.weight = weight * self.cell_measure() * formulation.measure_factor(thickness, g.radius);
         }
     }
 
