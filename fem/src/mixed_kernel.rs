@@ -111,11 +111,17 @@ pub fn mixed_element<G: Geometries + ?Sized>(
     stiffness: Option<&mut [f64]>,
     projection_rule: Option<&[PointGeometry]>,
 ) -> Result<(), KernelError> {
-    // scratch sized by the block: the elements and 2D supports, or a 3D smooth support
-    let run = if disp.len() * ctx.element.dim() <= SMALL_BLOCK_DOFS {
-        mixed_element_in::<SMALL_BLOCK_DOFS, { SMALL_BLOCK_DOFS / 2 }, G>
-    } else {
-        mixed_element_in::<MAX_DOFS, MAX_NODES, G>
+    // scratch sized by the block: the elements and 2D supports, or a 3D smooth support; the
+    // grids' node counts compiled with `nn` a constant (their loops over the nodes unrolled)
+    const SMALL: usize = SMALL_BLOCK_DOFS;
+    let run = match (disp.len(), disp.len() * ctx.element.dim() <= SMALL) {
+        (3, true) => mixed_element_in::<SMALL, { SMALL / 2 }, 3, G>,
+        (4, true) => mixed_element_in::<SMALL, { SMALL / 2 }, 4, G>,
+        (8, true) => mixed_element_in::<SMALL, { SMALL / 2 }, 8, G>,
+        (9, true) => mixed_element_in::<SMALL, { SMALL / 2 }, 9, G>,
+        (_, true) => mixed_element_in::<SMALL, { SMALL / 2 }, 0, G>,
+        (27, false) => mixed_element_in::<MAX_DOFS, MAX_NODES, 27, G>,
+        (_, false) => mixed_element_in::<MAX_DOFS, MAX_NODES, 0, G>,
     };
     run(
         ctx,
@@ -134,11 +140,11 @@ pub fn mixed_element<G: Geometries + ?Sized>(
     )
 }
 
-/// [`mixed_element`] with scratch for `DOFS` displacement DOFs and `NODES` nodes; every
-/// formulation through the general gradient operator if `general_operator` (the check of the
-/// tensor form, [`tensor_form`]).
+/// [`mixed_element`] with scratch for `DOFS` displacement DOFs and `NODES` nodes, for blocks
+/// of `NN` nodes (`0`: any number, `disp.len()`); every formulation through the general
+/// gradient operator if `general_operator` (the check of the tensor form, [`tensor_form`]).
 #[allow(clippy::too_many_arguments)]
-fn mixed_element_in<const DOFS: usize, const NODES: usize, G: Geometries + ?Sized>(
+fn mixed_element_in<const DOFS: usize, const NODES: usize, const NN: usize, G: Geometries + ?Sized>(
     ctx: &KernelContext<'_>,
     disp: &[[f64; 3]],
     pressure: &[f64],
@@ -155,7 +161,8 @@ fn mixed_element_in<const DOFS: usize, const NODES: usize, G: Geometries + ?Size
 ) -> Result<(), KernelError> {
     let law = mixed_law(ctx)?;
     let tensor = if general_operator { None } else { tensor_form(ctx.formulation) };
-    let nn = disp.len();
+    debug_assert!(NN == 0 || NN == disp.len(), "a block of {} nodes in the kernel of {NN}", disp.len());
+    let nn = if NN == 0 { disp.len() } else { NN };
     let dim = ctx.element.dim();
     let nu = nn * dim;
     let nd = nu + nn;
@@ -530,7 +537,7 @@ mod tests {
             let mut r = vec![0.0; nd];
             let mut out = vec![PointOutput::default(); np];
             let mut trial = committed.clone();
-            mixed_element_in::<MAX_DOFS, MAX_NODES, [PointGeometry]>(
+            mixed_element_in::<MAX_DOFS, MAX_NODES, 0, [PointGeometry]>(
                 &ctx,
                 &disp,
                 &x[nn * dim..],
