@@ -99,10 +99,21 @@ fn runs_on_1_to_8_ranks_agree(name: &str, points: u64, edit: impl Fn(&mut Value)
 
 /// The largest difference of every monitor of `rows` from `reference`, relative to the
 /// largest magnitude of that monitor in `reference`, printed and asserted within
-/// [`RANK_AGREEMENT`].
-fn assert_monitors_agree(what: &str, names: &[String], rows: &[Vec<f64>], reference: &[Vec<f64>]) {
+/// [`RANK_AGREEMENT`]; the monitors named in `unchecked` only printed (a stiff quantity whose
+/// round-off the caller asserts against a closed form instead).
+fn assert_monitors_agree(what: &str, names: &[String], rows: &[Vec<f64>], reference: &[Vec<f64>], unchecked: &[&str]) {
     assert_eq!(rows.len(), reference.len(), "{what}: as many output rows");
     for k in 1..names.len() {
+        if unchecked.contains(&names[k].as_str()) {
+            let scale = reference.iter().map(|r| r[k].abs()).fold(0.0, f64::max).max(1e-300);
+            let diff = rows.iter().zip(reference).map(|(a, b)| (a[k] - b[k]).abs()).fold(0.0, f64::max);
+            println!(
+                "{what}: {}: largest difference {:.2e} (relative; not compared, see the test)",
+                names[k],
+                diff / scale
+            );
+            continue;
+        }
         let scale = reference.iter().map(|r| r[k].abs()).fold(0.0, f64::max).max(1e-300);
         let diff = rows.iter().zip(reference).map(|(a, b)| (a[k] - b[k]).abs()).fold(0.0, f64::max);
         println!("{what}: {}: largest difference {:.2e} (relative)", names[k], diff / scale);
@@ -124,6 +135,19 @@ fn runs_on_ranks_agree_with(
     ranks: &[usize],
     direct: bool,
     points: Option<u64>,
+    edit: impl Fn(&mut Value),
+) -> (Vec<String>, Vec<Vec<f64>>) {
+    runs_on_ranks_agree_except(path, ranks, direct, points, &[], edit)
+}
+
+/// [`runs_on_ranks_agree_with`] with the monitors named in `unchecked` run and returned but not
+/// compared with the serial runs ([`assert_monitors_agree`]).
+fn runs_on_ranks_agree_except(
+    path: &str,
+    ranks: &[usize],
+    direct: bool,
+    points: Option<u64>,
+    unchecked: &[&str],
     edit: impl Fn(&mut Value),
 ) -> (Vec<String>, Vec<Vec<f64>>) {
     let name = Path::new(path).file_name().unwrap().to_str().unwrap();
@@ -148,7 +172,7 @@ fn runs_on_ranks_agree_with(
     loam_run(&serial_case, &serial_out, None);
     let (names, serial) = monitors(&serial_out);
     if let Some(direct_rows) = &direct_rows {
-        assert_monitors_agree(&format!("{name}, serial PETSc vs direct"), &names, &serial, direct_rows);
+        assert_monitors_agree(&format!("{name}, serial PETSc vs direct"), &names, &serial, direct_rows, unchecked);
     }
     let mut last = (names.clone(), serial.clone());
     for &p in ranks {
@@ -179,9 +203,9 @@ fn runs_on_ranks_agree_with(
         }
         let (n, rows) = monitors(&out);
         assert_eq!(n, names);
-        assert_monitors_agree(&format!("{name}, {p} ranks vs serial PETSc"), &names, &rows, &serial);
+        assert_monitors_agree(&format!("{name}, {p} ranks vs serial PETSc"), &names, &rows, &serial, unchecked);
         if let Some(direct_rows) = &direct_rows {
-            assert_monitors_agree(&format!("{name}, {p} ranks vs direct"), &names, &rows, direct_rows);
+            assert_monitors_agree(&format!("{name}, {p} ranks vs direct"), &names, &rows, direct_rows, unchecked);
         }
         last = (n, rows);
     }
@@ -420,8 +444,8 @@ fn run_on_4_ranks(path: &str, edit: impl Fn(&mut Value)) -> ((Vec<String>, Vec<V
 /// boundary particles read the nodal masses summed over the ranks): the first 0.2 s on 2 and
 /// 4 ranks with MUMPS through PETSc (GAMG breaks down on the penalty's 10¹³ N/m³ against the
 /// mass matrix). Against the serial run within [`RANK_AGREEMENT`]: the four points around
-/// the centre and the kinetic energy. The wall's force is compared with the closed form
-/// instead: it is the penalty `β w = 5·10¹⁰ N/m` times a gap of about 10⁻⁸ m, so the ranks'
+/// the centre and the kinetic energy. The wall's force (read from the same 4-rank run, not
+/// compared with the serial one) is compared with the closed form instead: it is the penalty `β w = 5·10¹⁰ N/m` times a gap of about 10⁻⁸ m, so the ranks'
 /// solver round-off in the grid's displacement (≈ 10⁻¹⁶ m) moves it by ≈ 10⁻⁹ of itself
 /// (measured 1.7e-9 on 4 ranks, 8.8e-12 on 2). Asserted: the centre's slide against
 /// `½ g sin α t²` within 2 % (as `mpm_penalty`'s full run), and on 4 ranks the plane's mean
@@ -429,17 +453,20 @@ fn run_on_4_ranks(path: &str, edit: impl Fn(&mut Value)) -> ((Vec<String>, Vec<V
 /// friction force below 1e-6 of it.
 #[test]
 fn a_cylinder_on_a_penalty_wall_slides_on_2_and_4_ranks_as_in_the_serial_run() {
-    let edit = |case: &mut Value, forces: bool| {
+    let edit = |case: &mut Value| {
         case["analysis"]["end_time"] = json!(0.2);
         case["output"] = json!({ "vtk": false });
         case["solver"] = json!({ "linear_solver": "petsc", "petsc_options": { "-pc_type": "mumps" } });
-        if !forces {
-            case["monitors"].as_array_mut().unwrap().retain(|m| !m["name"].as_str().unwrap().starts_with("wall_"));
-        }
     };
-    let m = runs_on_ranks_agree_with("cases/cylinder_incline_slip_mpm.json", &[2, 4], false, Some(1264), |c| {
-        edit(c, false)
-    });
+    let wall_forces = ["wall_fx", "wall_fy"];
+    let m = runs_on_ranks_agree_except(
+        "cases/cylinder_incline_slip_mpm.json",
+        &[2, 4],
+        false,
+        Some(1264),
+        &wall_forces,
+        edit,
+    );
     let a = 60f64.to_radians();
     let (ux, uy) = (0..4).fold((0.0, 0.0), |(x, y), k| {
         (x + 0.25 * last_value(&m, &format!("c{k}_ux")), y + 0.25 * last_value(&m, &format!("c{k}_uy")))
@@ -451,7 +478,7 @@ fn a_cylinder_on_a_penalty_wall_slides_on_2_and_4_ranks_as_in_the_serial_run() {
         0.5 * 9.81 * a.sin() * t * t,
         0.02,
     );
-    let ((names, rows), _) = run_on_4_ranks("cases/cylinder_incline_slip_mpm.json", |c| edit(c, true));
+    let (names, rows) = &m;
     let column = |name: &str| names.iter().position(|n| n == name).unwrap();
     let (fx, fy) = (column("wall_fx"), column("wall_fy"));
     let forces: Vec<(f64, f64)> = rows[1..].iter().map(|r| (r[fx], r[fy])).collect();
@@ -480,24 +507,20 @@ fn a_cylinder_on_a_penalty_wall_slides_on_2_and_4_ranks_as_in_the_serial_run() {
 /// reaches it multiplied by that stiffness (the footing's converged residual is 3.4e-6 N, its
 /// round-off floor, against a reaction of about 530 N; measured 2e-16 to 1.8e-9 of the
 /// reaction between runs on 2 ranks, with the Newton tolerances at 1e-10 or 1e-12 alike,
-/// while the contact force agrees to 5e-14); on 4 ranks it is asserted against the same force
-/// measured through the contact (`interface_q`) within 1e-6.
+/// while the contact force agrees to 5e-14): it is run and printed, and on 4 ranks asserted
+/// against the same force measured through the contact (`interface_q`) within 1e-6.
 #[test]
 fn a_footing_in_contact_with_filled_cells_on_2_and_4_ranks_equals_the_serial_run() {
-    let edit = |case: &mut Value, reaction: bool| {
+    let edit = |case: &mut Value| {
         case["analysis"]["end_time"] = json!(0.06);
         case["output"] = json!({ "vtk": false });
         case["solver"]["petsc_options"] = json!({ "-pc_type": "mumps" });
         for key in ["residual_relative_tolerance", "displacement_relative_tolerance"] {
             case["solver"][key] = json!(1e-10);
         }
-        if !reaction {
-            case["monitors"].as_array_mut().unwrap().retain(|m| m["name"] != "q_over_su");
-        }
     };
-    let m = runs_on_ranks_agree_with("cases/footing_fem_on_mpm.json", &[2, 4], false, Some(90_000), |c| edit(c, false));
-    println!("footing on 4 ranks after 3 steps: q/s_u {:.9} through the contact", last_value(&m, "interface_q"));
-    let (m, _) = run_on_4_ranks("cases/footing_fem_on_mpm.json", |c| edit(c, true));
+    let m =
+        runs_on_ranks_agree_except("cases/footing_fem_on_mpm.json", &[2, 4], false, Some(90_000), &["q_over_su"], edit);
     let (q, q_contact) = (last_value(&m, "q_over_su"), last_value(&m, "interface_q"));
     println!("footing on 4 ranks after 3 steps: q/s_u {q:.9} at the top, {q_contact:.9} through the contact");
     assert!(q > 0.0 && (q - q_contact).abs() <= 1e-6 * q, "{q} against {q_contact}");
