@@ -160,7 +160,7 @@ fn mixed_element_in<const DOFS: usize, const NODES: usize, const NN: usize, G: G
     general_operator: bool,
 ) -> Result<(), KernelError> {
     let law = mixed_law(ctx)?;
-    let tensor = if general_operator { None } else { tensor_form(ctx.formulation) };
+    let tensor = if general_operator { None } else { tensor_form::<NN>(ctx.formulation) };
     debug_assert!(NN == 0 || NN == disp.len(), "a block of {} nodes in the kernel of {NN}", disp.len());
     let nn = if NN == 0 { disp.len() } else { NN };
     let dim = ctx.element.dim();
@@ -336,10 +336,10 @@ type TensorPointFn = fn(
 /// each sum over the same nonzero products in the same order as the general operator's, so
 /// that both give the same values bit for bit. Axisymmetry (the hoop row `N_a/R`) takes the
 /// general operator (`None`).
-fn tensor_form(formulation: Formulation) -> Option<TensorPointFn> {
+fn tensor_form<const NN: usize>(formulation: Formulation) -> Option<TensorPointFn> {
     match formulation {
-        Formulation::PlaneStrain => Some(add_tensor_point::<2>),
-        Formulation::ThreeD => Some(add_tensor_point::<3>),
+        Formulation::PlaneStrain => Some(add_tensor_point::<2, NN>),
+        Formulation::ThreeD => Some(add_tensor_point::<3, NN>),
         Formulation::Axisymmetric | Formulation::PlaneStress => None,
     }
 }
@@ -349,11 +349,10 @@ fn tensor_form(formulation: Formulation) -> Option<TensorPointFn> {
 /// `K_up,(ai)b += w (Σ_J ∂N_a/∂X̃_J B̃_iJ) N_b`, `K_pu,a(bk) += w0 N_a Σ_L ΔF⁻ᵀ_kL ∂N_b/∂X̃_L`,
 /// `K_pp,ab −= w0 N_a N_b / K`.
 ///
-/// The node counts of the grids' blocks (3, 4, 8, 9 and 27 nodes) get the body compiled for
-/// their `nn` as a constant, so that the loops over the nodes are unrolled and their
-/// independent outputs vectorised (the same products summed in the same order, so the values
-/// are those of the loop over a run-time `nn` bit for bit).
-fn add_tensor_point<const D: usize>(
+/// Compiled for blocks of `NN` nodes (`0`: any number, `nn`), as [`mixed_element_in`]: with
+/// `nn` a constant the loops over the nodes are unrolled and their independent outputs
+/// vectorised, the same products summed in the same order (bit for bit the run-time loop).
+fn add_tensor_point<const D: usize, const NN: usize>(
     nn: usize,
     g: &PointGeometry,
     terms: &PointTerms<'_>,
@@ -362,28 +361,7 @@ fn add_tensor_point<const D: usize>(
     residual: &mut [f64],
     stiffness: Option<&mut [f64]>,
 ) {
-    let body = tensor_point_terms::<D>;
-    match nn {
-        3 => body(3, g, terms, delta_f, tangent, residual, stiffness),
-        4 => body(4, g, terms, delta_f, tangent, residual, stiffness),
-        8 => body(8, g, terms, delta_f, tangent, residual, stiffness),
-        9 => body(9, g, terms, delta_f, tangent, residual, stiffness),
-        27 => body(27, g, terms, delta_f, tangent, residual, stiffness),
-        _ => body(nn, g, terms, delta_f, tangent, residual, stiffness),
-    }
-}
-
-/// The body of [`add_tensor_point`], inlined into each of its node counts.
-#[inline(always)]
-fn tensor_point_terms<const D: usize>(
-    nn: usize,
-    g: &PointGeometry,
-    terms: &PointTerms<'_>,
-    delta_f: &Matrix3<f64>,
-    tangent: Option<&loam_laws::Tangent>,
-    residual: &mut [f64],
-    stiffness: Option<&mut [f64]>,
-) {
+    let nn = if NN == 0 { nn } else { NN };
     let PointTerms { w, w0, stress, dp_tilde, volumetric, inv_k } = *terms;
     let nu = nn * D;
     let nd = nu + nn;
@@ -558,7 +536,7 @@ mod tests {
         let residual = |x: &[f64], k: Option<&mut [f64]>| evaluate(x, k, false);
         let mut k = vec![0.0; nd * nd];
         let (r, trial) = residual(&x, Some(&mut k));
-        if tensor_form(formulation).is_some() {
+        if tensor_form::<0>(formulation).is_some() {
             // the tensor form against the general operator, bit for bit
             let mut k2 = vec![0.0; nd * nd];
             let (r2, _) = evaluate(&x, Some(&mut k2), true);
