@@ -308,8 +308,11 @@ fn bui2008_mohr_coulomb_on_the_linear_basis() {
 /// predictor lets the controller take longer steps at the same iterations per step).
 /// Measured: 569 steps and 3 526 iterations against 840 and 5 076; runout 0.4370 m, at rest at
 /// 0.71 s. Under the error control the steps are set by accuracy and it gains nothing (427
-/// against 384 steps), nor at 30 000 points (docs/performance.md).
+/// against 384 steps), nor at 30 000 points (docs/performance.md). Long suite since
+/// 7 December (two runs to rest, 30–56 s), to keep the default suite within CI's 30 minutes:
+/// the predictor is not the bundled control's.
 #[test]
+#[ignore = "long (about 1 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_constant_acceleration_predictor() {
     let iteration_control = |predictor: &str| {
         let mut json = case_json("collapse_bui2008_quad_mc.json");
