@@ -9,8 +9,9 @@
 #                                 a fresh machine adds its builds, about 8 minutes, and about 2
 #                                 minutes of packages)
 #   LOAM_LONG=1 scripts/test.sh   also the long validation runs: every test marked
-#                                 #[ignore = "long ..."] (about 25 minutes, plus about 18 for
-#                                 the three μ(I) Bui tests run together: 1 050 s measured)
+#                                 #[ignore = "long ..."] (the Rust tests 58 minutes under
+#                                 cargo-nextest on 7 December, the μ(I) Bui refinements the
+#                                 longest; three of them fail, README)
 #   LOAM_MPI=0 scripts/test.sh    without the distributed path; LOAM_MPI=1 fails where its
 #                                 packages cannot be installed (by default the stage is then
 #                                 skipped with a message)
