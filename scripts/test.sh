@@ -24,7 +24,8 @@ cd "$(dirname "$0")/.."
 
 # The Rust tests run under cargo-nextest where the machine has it (a process per test, two at a
 # time across all test binaries: the long tests of one binary no longer wait for each other's
-# binary to finish, 494-523 s on 7 December against an estimated 650-720 s under `cargo test`: earlier suite logs less this day's test changes), else `cargo test`.
+# binary to finish; 494-523 s on 7 December against an estimated 650-720 s under `cargo test`,
+# from earlier suite logs less that day's test changes), else `cargo test`.
 # `rust_tests ARGS...` runs the tests that ARGS select (cargo's target and feature options).
 if cargo nextest --version >/dev/null 2>&1; then
   rust_tests() { cargo nextest run --release --no-fail-fast "$@"; }
