@@ -36,41 +36,44 @@ else
   long_tests=(-- --include-ignored --skip meshio_reads_mesh_and_cloud --skip tutorial_6_fmu_python)
 fi
 
+# `stage TITLE` prints a stage's title with the minutes and seconds since the suite started
+stage() { printf '== [%d:%02d] %s\n' $((SECONDS / 60)) $((SECONDS % 60)) "$*"; }
+
 # one (release) build serves the tests, the CLI and the FMU library
-echo "== Rust: the workspace's tests (release)"
+stage "Rust: the workspace's tests (release)"
 if [ "${LOAM_LONG:-0}" = "1" ]; then
   rust_tests --workspace "${long_tests[@]}"
 else
   rust_tests --workspace
 fi
 
-echo "== Python: virtual environment for meshio/fmpy checks (.venv)"
+stage "Python: virtual environment for meshio/fmpy checks (.venv)"
 if [ ! -x .venv/bin/python ]; then
   python3 -m venv .venv
 fi
 .venv/bin/python -m pip install --quiet --disable-pip-version-check -r scripts/requirements.txt
 
-echo "== Python: VTK output read by meshio"
+stage "Python: VTK output read by meshio"
 cargo build --release --quiet
 cargo test --release --quiet -p loam --lib \
   output::vtk::tests::meshio_reads_mesh_and_cloud -- --ignored --exact
 .venv/bin/python scripts/check_vtk.py
 
-echo "== Python: relative links and anchors of README.md and docs/ (standard library)"
+stage "Python: relative links and anchors of README.md and docs/ (standard library)"
 python3 scripts/check_links.py
 
-echo "== C: fmu/src/ffi.rs types compiled against the FMI 3.0 headers (fmpy's)"
+stage "C: fmu/src/ffi.rs types compiled against the FMI 3.0 headers (fmpy's)"
 .venv/bin/python scripts/check_fmi_header.py
 
-echo "== Python: FMI 3.0 FMUs run by fmpy (loam fmu, tests/fmu)"
+stage "Python: FMI 3.0 FMUs run by fmpy (loam fmu, tests/fmu)"
 cargo build --release --quiet -p loam -p loam-fmu
 .venv/bin/python tests/fmu/test_fmu.py
 
-echo "== Python: tutorial 6, a case as an FMU in a Python loop (docs/tutorial/fmu_python)"
+stage "Python: tutorial 6, a case as an FMU in a Python loop (docs/tutorial/fmu_python)"
 LOAM_PYTHON="$PWD/.venv/bin/python" cargo test --release --quiet --test tutorials \
   tutorial_6_fmu_python -- --ignored --exact
 
-echo "== Python: FMU robustness (reset, 100 instantiations, NaN/inf, bad steps, failing steps)"
+stage "Python: FMU robustness (reset, 100 instantiations, NaN/inf, bad steps, failing steps)"
 .venv/bin/python tests/fmu/test_fmu_robustness.py
 
 # The distributed path last (issue 26, item 7): its build replaces target/release/loam with the
@@ -79,11 +82,11 @@ mpi="${LOAM_MPI:-auto}"
 if [ "$mpi" != "0" ]; then
   have_packages() { pkg-config --exists petsc 2>/dev/null && command -v mpirun >/dev/null; }
   if ! have_packages; then
-    echo "== System packages of the petsc and mpi features (scripts/install_petsc.sh)"
+    stage "System packages of the petsc and mpi features (scripts/install_petsc.sh)"
     scripts/install_petsc.sh || true
   fi
   if have_packages; then
-    echo "== Rust: the petsc and mpi features (tests/petsc.rs; tests/mpi.rs: mpirun -n 1, 2, 4 and 8)"
+    stage "Rust: the petsc and mpi features (tests/petsc.rs; tests/mpi.rs: mpirun -n 1, 2, 4 and 8)"
     rust_tests --features mpi --test mpi --test petsc
     if [ "${LOAM_PETSC:-0}" = "1" ]; then
       cargo test --release --manifest-path petsc/Cargo.toml --target-dir target
@@ -96,3 +99,4 @@ if [ "$mpi" != "0" ]; then
       "(scripts/install_petsc.sh needs root and the network); LOAM_MPI=1 makes this an error"
   fi
 fi
+stage "done"
