@@ -4,10 +4,9 @@
 # then the distributed path: the `petsc` and `mpi` features' tests (tests/petsc.rs; tests/mpi.rs,
 # mpirun -n 1, 2, 4 and 8 against the serial runs), with PETSc and Open MPI installed from the
 # system's packages when missing (scripts/install_petsc.sh: root and the network).
-#   scripts/test.sh               the default suite (12 minutes on 2 cores with the features'
-#                                 tests, about 2.5 of them, builds cached, under cargo-nextest;
-#                                 a fresh machine adds its builds, about 8 minutes, and about 2
-#                                 minutes of packages)
+#   scripts/test.sh               the default suite (24 minutes on 2 cores from a fresh clone
+#                                 on 7 December, builds included: the first 8, the `mpi`
+#                                 feature's 2; a fresh machine adds about 2 minutes of packages)
 #   LOAM_LONG=1 scripts/test.sh   also the long validation runs: every test marked
 #                                 #[ignore = "long ..."] (the Rust tests 58 minutes under
 #                                 cargo-nextest on 7 December, the μ(I) Bui refinements the
