@@ -53,7 +53,8 @@ fi
 .venv/bin/python -m pip install --quiet --disable-pip-version-check -r scripts/requirements.txt
 
 stage "Python: VTK output read by meshio"
-cargo build --release --quiet
+# target/release/loam is the test build's (the CLI tests need it); the cargo commands below
+# reuse that build's artifacts (the same features, Cargo.toml's approx and workspace-hack)
 cargo test --release --quiet -p loam --lib \
   output::vtk::tests::meshio_reads_mesh_and_cloud -- --ignored --exact
 .venv/bin/python scripts/check_vtk.py
