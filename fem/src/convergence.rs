@@ -107,10 +107,23 @@ impl Convergence {
         r <= self.residual_absolute || r <= self.residual_relative * self.r0
     }
 
+    /// Whether the residual criterion alone holds at `r` after iteration 0 (`r_0` recorded);
+    /// under the `and` criterion a step can meet it while its last correction is still too
+    /// large ([`crate::newton::TangentReuse::Finish`]).
+    pub fn residual_criterion_met(&self, iteration: usize, r: f64) -> bool {
+        iteration > 0 && (r <= self.residual_absolute || r <= self.residual_relative * self.r0)
+    }
+
     /// The displacement criterion for the last correction `du` and the step's increment
     /// `du_step` (never at iteration 0: nothing has been solved).
     pub fn displacement_met(&self, iteration: usize, du: f64, du_step: f64) -> bool {
-        iteration > 0 && (du <= self.displacement_absolute || du <= self.displacement_relative * du_step)
+        self.displacement_within(1.0, iteration, du, du_step)
+    }
+
+    /// The displacement criterion with its tolerances widened by `factor`.
+    pub fn displacement_within(&self, factor: f64, iteration: usize, du: f64, du_step: f64) -> bool {
+        iteration > 0
+            && (du <= factor * self.displacement_absolute || du <= factor * self.displacement_relative * du_step)
     }
 
     /// Whether iteration `iteration` with residual `r` has converged (see the module doc);
@@ -130,16 +143,23 @@ impl Convergence {
         }
     }
 
+    /// Whether the residual criterion will most likely hold at iteration `iteration`: the
+    /// residual predicted by Newton's quadratic rate from the last residual `r_prev` and
+    /// corrections `du`, `du_prev`, with a factor 2 to spare.
+    pub fn residual_likely(&self, iteration: usize, r_prev: f64, du: f64, du_prev: f64) -> bool {
+        iteration > 1 && {
+            let predicted = r_prev * (du / du_prev).powi(2);
+            predicted <= 0.5 * self.residual_absolute.max(self.residual_relative * self.r0)
+        }
+    }
+
     /// Whether iteration `iteration` will most likely converge: the displacement criterion,
     /// and the residual predicted from the last residual `r_prev` and corrections `du`,
     /// `du_prev` (trusted with a factor 2 to spare; a wrong guess costs one residual-only
     /// assembly).
     pub fn likely(&self, iteration: usize, r_prev: f64, du: f64, du_prev: f64, du_step: f64) -> bool {
         let disp = self.displacement_met(iteration, du, du_step);
-        let residual = iteration > 1 && {
-            let predicted = r_prev * (du / du_prev).powi(2);
-            predicted <= 0.5 * self.residual_absolute.max(self.residual_relative * self.r0)
-        };
+        let residual = self.residual_likely(iteration, r_prev, du, du_prev);
         match self.criterion {
             ConvergenceCriterion::Residual => residual,
             ConvergenceCriterion::Displacement | ConvergenceCriterion::And => disp,
@@ -169,5 +189,19 @@ mod tests {
         }
         // a first residual below the absolute tolerance converges without a solve
         assert!(make(ConvergenceCriterion::And).converged(0, 1e-10, false));
+    }
+
+    #[test]
+    fn residual_alone_and_widened_displacement_criterion() {
+        let mut conv = Convergence::new(ConvergenceCriterion::And, 1e-6, 1e-9, 1e-6, 1e-12);
+        assert!(!conv.converged(0, 1.0, false));
+        // r_0 = 1 recorded: the residual criterion alone, never at iteration 0
+        assert!(conv.residual_criterion_met(2, 1e-7));
+        assert!(!conv.residual_criterion_met(2, 1e-5));
+        assert!(!conv.residual_criterion_met(0, 1e-10 * 0.5));
+        // a correction 5e-5 of the step's increment: within 100 times the tolerance, not 10
+        assert!(!conv.displacement_met(2, 5e-5, 1.0));
+        assert!(conv.displacement_within(100.0, 2, 5e-5, 1.0));
+        assert!(!conv.displacement_within(10.0, 2, 5e-5, 1.0));
     }
 }

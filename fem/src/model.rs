@@ -217,7 +217,7 @@ pub struct StepReport {
     /// Newton iterations (linear solves).
     pub iterations: usize,
     /// Of `iterations`: those that assembled and factorised a new tangent (all of them
-    /// unless `solver.tangent_reuse` is `auto`).
+    /// unless `solver.tangent_reuse` is `auto` or `finish`).
     pub tangents: usize,
     /// Free-DOF residual norm at each iteration, the last one converged.
     pub residuals: Vec<f64>,
