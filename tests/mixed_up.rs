@@ -930,3 +930,39 @@ fn footing_on_bsplines_follows_the_fem_curve() {
     let (p_fem, _) = plateau(&fem, &h_fem);
     println!("plateaus over the last 20 % of 0.15 m: B-splines {p_mpm:.3}, FEM {p_fem:.3}, Prandtl {PRANDTL:.3}");
 }
+
+/// Consistency check of `solver.tangent_reuse` `finish` (the reference is Loam's own full
+/// Newton run): benchmark 11 on B-splines (`cases/footing_undrained_mpm_up_smooth.json`, which
+/// bundles it) at h = B/10 over its first 10 static steps, with `off` and with `finish`. The
+/// iterations after the residual criterion holds solve with the step's last factors, so the
+/// run needs fewer factorisations at the same iterations (measured 7 December 2026: 52 + 9
+/// kept-factor solves against 61), and ends where full Newton does: both runs meet the case's
+/// Newton tolerances (relative 1e-6 on the residual and on the correction), so q/s_u may
+/// differ by that order (measured 8e-14 relative; asserted 1e-6).
+#[test]
+fn footing_steps_finished_with_kept_factors() {
+    let runs: Vec<(usize, usize, f64)> = ["off", "finish"]
+        .into_iter()
+        .map(|reuse| {
+            let mut json = case_json("footing_undrained_mpm_up_smooth.json");
+            json["domains"][0]["grid"]["cells"] = json!([50, 54]);
+            json["domains"][0]["material_points"]["polygon"]["spacing"] = json!(0.1 / 3.0);
+            json["analysis"]["end_time"] = json!(0.2);
+            json["solver"]["tangent_reuse"] = json!(reuse);
+            let (sim, history) = run(parse(json));
+            let timings = sim.model.solver_timings();
+            let q = history.last().expect("steps").1[monitor(&sim, "q_over_su")];
+            println!(
+                "tangent_reuse {reuse}: {} steps, {} factorisations, {} solves with kept factors; q/s_u {q:.12}",
+                sim.stats.steps, timings.factorisations, timings.reused_factors
+            );
+            (timings.factorisations, timings.reused_factors, q)
+        })
+        .collect();
+    let ((full, _, q_full), (finish, kept, q_finish)) = (runs[0], runs[1]);
+    assert!(
+        kept > 0 && 10 * finish <= 9 * full,
+        "kept factors must save a tenth of the factorisations: {finish} against {full}"
+    );
+    assert!((q_finish / q_full - 1.0).abs() <= 1e-6, "q/s_u {q_finish} against {q_full}");
+}

@@ -23,8 +23,9 @@
 //!
 //! **Finishing with kept factors** ([`TangentReuse::Finish`]): under the `and` criterion a step
 //! often meets the residual tolerance an iteration or two before its last correction is small
-//! enough (the displacement criterion): in the default Bui collapse's first 0.1 s, 159 of 509
-//! corrections came after the residual had converged. Those iterations solve with the factors
+//! enough (the displacement criterion): in the default Bui collapse's first 0.1 s (on a step
+//! tolerance of 2e-6 m), 159 of 509 corrections came after the residual had converged. Those
+//! iterations solve with the factors
 //! of the step's last tangent and assemble the residual alone, once the last correction is
 //! within [`FINISH_REACH`] of the displacement tolerance and while the residual stays below its
 //! tolerance and falls by [`FINISH_CONTRACTION`] or better per iteration; a correction that does
