@@ -25,12 +25,12 @@
 //! often meets the residual tolerance an iteration or two before its last correction is small
 //! enough (the displacement criterion): in the default Bui collapse's first 0.1 s (on a step
 //! tolerance of 2e-6 m), 159 of 509 corrections came after the residual had converged. Those
-//! iterations solve with the factors
-//! of the step's last tangent and assemble the residual alone, once the last correction is
-//! within [`FINISH_REACH`] of the displacement tolerance and while the residual stays below its
-//! tolerance and falls by [`FINISH_CONTRACTION`] or better per iteration; a correction that does
-//! not reduce it is taken back and a new tangent factorised, as above. Kept factors do not
-//! cross steps here. The converged state meets the same criteria.
+//! iterations solve with the factors of the step's last tangent and assemble the residual
+//! alone, once the last correction is within [`FINISH_REACH`] of the displacement tolerance
+//! and while the residual stays below its tolerance and falls by [`FINISH_CONTRACTION`] or
+//! better per iteration; a correction that does not reduce it is taken back and a new tangent
+//! factorised, as above. Kept factors do not cross steps here. The converged state meets the
+//! same criteria.
 //!
 //! The residual and correction norms of every iteration, per block of the monolithic system,
 //! go into the [`StepReport`]; with [`NewtonSettings::trace`] (`loam run --trace-newton`)
@@ -405,11 +405,13 @@ impl NewtonStrategy {
                 break;
             }
             let contraction = if it == 0 { 0.0 } else { r_norm / r_prev };
-            if reused_last && contraction > FINISH_CONTRACTION {
+            let finish = settings.tangent_reuse == TangentReuse::Finish;
+            if finish && reused_last && contraction > FINISH_CONTRACTION {
                 finish_stalled = true;
             }
             // (for `Finish`) the residual has converged, the correction is nearly small enough
-            let finishing = convergence.residual_criterion_met(it, r_norm)
+            let finishing = finish
+                && convergence.residual_criterion_met(it, r_norm)
                 && !finish_stalled
                 && convergence.displacement_within(FINISH_REACH, it, last_du, problem.assembler.dof_norm(&du_step));
             let reuse = !taken_back
