@@ -94,9 +94,9 @@ fn mixed_law<'a>(ctx: &KernelContext<'a>) -> Result<&'a dyn MixedLaw, KernelErro
 ///
 /// Arguments as [`crate::kernel::solid_element`] (`nn = disp.len()` nodes); outputs are
 /// overwritten.
-/// `projection_rule`: the cell's own Gauss points (weights: their share of the cell's
-/// volume) on which an MPM cell integrates the pressure projection, scaled by its fill
-/// fraction; `None` integrates it on the integration points (FEM).
+/// `projection`: the integrals of the basis over the cell's own region ([`CellProjection`])
+/// with which an MPM cell integrates the pressure projection, scaled by its fill fraction;
+/// `None` integrates it on the integration points (FEM).
 pub fn mixed_element<G: Geometries + ?Sized>(
     ctx: &KernelContext<'_>,
     disp: &[[f64; 3]],
@@ -109,7 +109,7 @@ pub fn mixed_element<G: Geometries + ?Sized>(
     point_out: &mut [PointOutput],
     residual: &mut [f64],
     stiffness: Option<&mut [f64]>,
-    projection_rule: Option<&[PointGeometry]>,
+    projection: Option<&CellProjection>,
 ) -> Result<(), KernelError> {
     // scratch sized by the block: the elements and 2D supports, or a 3D smooth support; the
     // grids' node counts compiled with `nn` a constant (their loops over the nodes unrolled)
@@ -123,21 +123,7 @@ pub fn mixed_element<G: Geometries + ?Sized>(
         (27, false) => mixed_element_in::<MAX_DOFS, MAX_NODES, 27, G>,
         (_, false) => mixed_element_in::<MAX_DOFS, MAX_NODES, 0, G>,
     };
-    run(
-        ctx,
-        disp,
-        pressure,
-        geometry,
-        f0,
-        f_prev,
-        committed,
-        trial,
-        point_out,
-        residual,
-        stiffness,
-        projection_rule,
-        false,
-    )
+    run(ctx, disp, pressure, geometry, f0, f_prev, committed, trial, point_out, residual, stiffness, projection, false)
 }
 
 /// [`mixed_element`] with scratch for `DOFS` displacement DOFs and `NODES` nodes, for blocks
@@ -156,7 +142,7 @@ fn mixed_element_in<const DOFS: usize, const NODES: usize, const NN: usize, G: G
     point_out: &mut [PointOutput],
     residual: &mut [f64],
     mut stiffness: Option<&mut [f64]>,
-    projection_rule: Option<&[PointGeometry]>,
+    projection: Option<&CellProjection>,
     general_operator: bool,
 ) -> Result<(), KernelError> {
     let law = mixed_law(ctx)?;
@@ -269,26 +255,29 @@ fn mixed_element_in<const DOFS: usize, const NODES: usize, const NN: usize, G: G
         return Ok(());
     }
     // the projection term −(1/μ) (M p − m Π₀p), Π₀p = mᵀp / V, on the points (FEM) or on the
-    // cell's rule scaled by the fill fraction (MPM)
+    // cell's region scaled by the fill fraction (MPM)
     let mut mass = [[0.0; NODES]; NODES];
-    let mut integrate = |w: f64, n: &[f64; MAX_NODES]| {
-        for a in 0..nn {
-            moments[a] += w * n[a];
-            for c in 0..nn {
-                mass[a][c] += w * n[a] * n[c];
-            }
-        }
-    };
-    match projection_rule {
+    match projection {
         None => {
             for (q, f) in f0.iter().enumerate().take(geometry.count()) {
                 let g = geometry.point(q, &mut scratch);
-                integrate(g.weight / f.determinant(), &g.shape);
+                let w = g.weight / f.determinant();
+                for a in 0..nn {
+                    moments[a] += w * g.shape[a];
+                    for c in 0..nn {
+                        mass[a][c] += w * g.shape[a] * g.shape[c];
+                    }
+                }
             }
         }
         Some(cell) => {
-            let fill = volume / cell.iter().map(|g| g.weight).sum::<f64>();
-            cell.iter().for_each(|g| integrate(g.weight * fill, &g.shape));
+            let fill = volume / cell.volume;
+            for a in 0..nn {
+                moments[a] = fill * cell.moments[a];
+                for c in 0..nn {
+                    mass[a][c] = fill * cell.mass[a * nn + c];
+                }
+            }
         }
     }
     let mean: f64 = (0..nn).map(|b| moments[b] * pressure[b]).sum::<f64>() / volume;
@@ -304,6 +293,45 @@ fn mixed_element_in<const DOFS: usize, const NODES: usize, const NN: usize, G: G
         }
     }
     Ok(())
+}
+
+/// The integrals of a block's `nn` functions over an MPM cell's own region (its Gauss rule
+/// in the step's configuration, or their closed form on a fixed lattice), with which a u–p
+/// cell integrates its pressure projection (module doc): `M_ab = ∫ N_a N_b dV` (row stride
+/// `nn`), `m_a = ∫ N_a dV` and `V = ∫ dV`, the thickness or `2πR` included.
+#[derive(Debug, Clone)]
+pub struct CellProjection {
+    /// `M_ab` at `a · nn + b`.
+    pub mass: [f64; MAX_NODES * MAX_NODES],
+    /// `m_a`.
+    pub moments: [f64; MAX_NODES],
+    /// `V`.
+    pub volume: f64,
+}
+
+impl Default for CellProjection {
+    fn default() -> Self {
+        Self { mass: [0.0; MAX_NODES * MAX_NODES], moments: [0.0; MAX_NODES], volume: 0.0 }
+    }
+}
+
+impl CellProjection {
+    /// The integrals on the Gauss rule `rule` of the cell (weights: the points' shares of the
+    /// cell's volume), for the first `nn` functions.
+    pub fn integrate(&mut self, nn: usize, rule: &[PointGeometry]) {
+        self.mass[..nn * nn].fill(0.0);
+        self.moments[..nn].fill(0.0);
+        self.volume = 0.0;
+        for g in rule {
+            self.volume += g.weight;
+            for a in 0..nn {
+                self.moments[a] += g.weight * g.shape[a];
+                for c in 0..nn {
+                    self.mass[a * nn + c] += g.weight * g.shape[a] * g.shape[c];
+                }
+            }
+        }
+    }
 }
 
 /// A point's own values in the residual and tangent of [`mixed_element_in`].
@@ -489,12 +517,15 @@ mod tests {
             .collect();
         let np = geometry.len();
         // as an MPM cell would: the projection on the cell's standard rule
-        let projection: Option<Vec<PointGeometry>> = cell_rule.then(|| {
-            element
+        let projection: Option<CellProjection> = cell_rule.then(|| {
+            let rule: Vec<PointGeometry> = element
                 .gauss_points_mixed()
                 .iter()
                 .map(|g| point_geometry(element, formulation, 1.0, &coords, &g.xi, g.weight, None).unwrap())
-                .collect()
+                .collect();
+            let mut cell = CellProjection::default();
+            cell.integrate(nn, &rule);
+            cell
         });
         let f0s = vec![pre_deformation(dim, formulation); np];
         let ctx = KernelContext { element, formulation, law, time_step: 0.0 };
@@ -527,7 +558,7 @@ mod tests {
                 &mut out,
                 &mut r,
                 k,
-                projection.as_deref(),
+                projection.as_ref(),
                 general_operator,
             )
             .unwrap();

@@ -21,7 +21,7 @@ use loam_fem::domain::{AssemblyInput, PointExtent, PointLoad};
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
 use loam_fem::kernel::{solid_element, KernelContext, KernelError, PointGeometry, PointOutput};
-use loam_fem::mixed_kernel::mixed_element;
+use loam_fem::mixed_kernel::{mixed_element, CellProjection};
 use loam_fem::packed_geometry::PackedGeometry;
 use loam_laws::ConstitutiveLaw;
 use nalgebra::Matrix3;
@@ -457,14 +457,15 @@ impl Body {
     /// nodal `pressure` of the cell the kernel is the mixed u–p one
     /// ([`loam_fem::mixed_kernel`]): `f_int` then holds the displacement rows and the `nn`
     /// pressure rows (which carry no mass; in a mass-only assembly they are `1 · a_p = 0`),
-    /// and `cell_rule` is the cell's Gauss rule on which it integrates its pressure projection.
+    /// and `cell` the integrals over the cell's region with which it integrates its pressure
+    /// projection.
     #[allow(clippy::too_many_arguments)]
     pub fn cell_contribution(
         &self,
         ctx: &KernelContext<'_>,
         cell: usize,
         disp: &[[f64; 3]],
-        pressure: Option<(&[f64], &[PointGeometry])>,
+        pressure: Option<(&[f64], &CellProjection)>,
         inertia: &[[f64; 3]],
         input: &AssemblyInput<'_>,
         trial: &mut [f64],
@@ -485,8 +486,8 @@ impl Body {
         let k = if with_stiffness { stiffness.as_deref_mut() } else { None };
         match pressure {
             None => solid_element(ctx, disp, geometry, f, f, committed, trial, out, f_int, k)?,
-            Some((p, cell_rule)) => {
-                mixed_element(ctx, disp, p, geometry, f, f, committed, trial, out, f_int, k, Some(cell_rule))?
+            Some((p, cell)) => {
+                mixed_element(ctx, disp, p, geometry, f, f, committed, trial, out, f_int, k, Some(cell))?
             }
         }
         if let (Some(km), false) = (stiffness.as_deref_mut(), with_stiffness) {

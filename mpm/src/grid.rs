@@ -25,6 +25,7 @@ use loam_fem::element::{ElementType, GaussPoint, MAX_ELEMENT_NODES, MAX_NODES};
 use loam_fem::formulation::Formulation;
 use loam_fem::kernel::{point_geometry_into, CellMap, KernelError, PointGeometry};
 use loam_fem::mesh::Mesh;
+use loam_fem::mixed_kernel::CellProjection;
 
 use crate::basis::{Basis, SmoothLattice, SupportValues};
 use nalgebra::Vector3;
@@ -517,6 +518,29 @@ impl Grid {
             return Ok(lattice.support_len());
         }
         self.cell_rule(s, formulation, thickness, rule)
+    }
+
+    /// The integrals of support (or cell) `s`'s functions over its region in the step's
+    /// configuration, with which a u–p support integrates its pressure projection
+    /// ([`CellProjection`]): in closed form on a fixed smooth lattice
+    /// ([`SmoothLattice::projection_moments`]), else on the region's Gauss rule
+    /// ([`Grid::projection_rule`], written into `rule`).
+    pub fn projection_moments(
+        &self,
+        s: usize,
+        formulation: Formulation,
+        thickness: f64,
+        rule: &mut [PointGeometry; MAX_NODES],
+        out: &mut CellProjection,
+    ) -> Result<(), KernelError> {
+        if let Some(lattice) = self.smooth.as_ref().filter(|_| !self.has_moved()) {
+            if lattice.projection_moments(s, formulation, thickness, out) {
+                return Ok(());
+            }
+        }
+        let len = self.projection_rule(s, formulation, thickness, rule)?;
+        out.integrate(self.support_len(), &rule[..len]);
+        Ok(())
     }
 
     /// The map of a smooth lattice in the step's configuration, `x(s) = Σ_I M_I(s) x_I`, at

@@ -42,6 +42,7 @@ use loam_fem::domain::{
 use loam_fem::element::MAX_NODES;
 use loam_fem::formulation::Formulation;
 use loam_fem::kernel::{KernelContext, PointGeometry};
+use loam_fem::mixed_kernel::CellProjection;
 use loam_fem::newton::DEFAULT_MPM_PATTERN_RINGS;
 use loam_fem::ranks::Ranks;
 use nalgebra::Matrix3;
@@ -63,6 +64,7 @@ const NONE: u8 = u8::MAX;
 /// 93 kB): a u–p support's projection rule, and the block of a second body in a support.
 struct BlockScratch {
     rule: [PointGeometry; MAX_NODES],
+    projection: CellProjection,
     disp: [[f64; 3]; MAX_NODES],
     inertia: [[f64; 3]; MAX_NODES],
     pressure: [f64; MAX_NODES],
@@ -73,6 +75,7 @@ impl Default for BlockScratch {
     fn default() -> Self {
         Self {
             rule: [NO_GEOMETRY; MAX_NODES],
+            projection: CellProjection::default(),
             disp: [[0.0; 3]; MAX_NODES],
             inertia: [[0.0; 3]; MAX_NODES],
             pressure: [0.0; MAX_NODES],
@@ -852,7 +855,7 @@ impl MpmDomain {
                     let cell = blocks.pattern[b];
                     let nodes = grid.support(cell);
                     // every entry read below is written here (the z components stay 0 in 2D)
-                    let BlockScratch { rule, disp, inertia, pressure, later } = scratch;
+                    let BlockScratch { rule, projection, disp, inertia, pressure, later } = scratch;
                     for (a, &local) in nodes.iter().enumerate() {
                         let dof = node_ids[local] * dim;
                         for i in 0..dim {
@@ -865,15 +868,14 @@ impl MpmDomain {
                             pressure[a] = input.state.u[p[local]];
                         }
                     }
-                    // the support's Gauss rule in the step's configuration, for the projection
-                    let rule_len = match pressure_dofs {
-                        Some(_) => grid.projection_rule(cell, formulation, thickness, rule).map_err(|err| {
+                    // the integrals over the support's region in the step's configuration, for
+                    // the projection
+                    if pressure_dofs.is_some() {
+                        grid.projection_moments(cell, formulation, thickness, rule, projection).map_err(|err| {
                             DomainError { domain: name.clone(), element: cell, message: err.to_string() }
-                        })?,
-                        None => 0,
-                    };
-                    let cell_rule = &rule[..rule_len];
-                    let pressure = pressure_dofs.map(|_| (&pressure[..nn], cell_rule));
+                        })?;
+                    }
+                    let pressure = pressure_dofs.map(|_| (&pressure[..nn], &*projection));
                     let fail = |err: loam_fem::kernel::KernelError| DomainError {
                         domain: name.clone(),
                         element: cell,
