@@ -736,7 +736,10 @@ fn mu_i_refinement(prefix: &str) -> Vec<(Collapse, f64)> {
 /// two builds) end at 0.4400–0.4460 m (mean 0.4423 m, +5.3 %): the runout grows by about 2 cm
 /// per halving of h, through a sheet 2–4 mm thick at the front, while the deposit down to 5 mm
 /// of thickness reaches 0.4231 / 0.4235 m at h = 5 / 2.5 mm (`scripts/bui_front.py`;
-/// docs/validation.md, μ(I) section). The tolerance is left as the issue asks.
+/// docs/validation.md, μ(I) section). The tolerance is left as the issue asks. Since the
+/// sixteenth session (7 December 2026) the three levels step on `error_tolerance` 4e-6 m with
+/// `tangent_reuse` `finish`: 0.3974 / 0.4223 / 0.4407 m, differences 0.0249 and 0.0184 m, order
+/// 0.44, the finest +4.9 % (docs/validation.md): still failing on the finest runout.
 #[test]
 #[ignore = "long (about 17 min): LOAM_LONG=1 scripts/test.sh"]
 fn bui2008_mu_i_up_converges_to_the_experiment() {
