@@ -58,10 +58,11 @@ use crate::quadrature::{cell_volume, normalise_filled_cells, PointQuadrature};
 /// Marker of a block without an occupying body.
 const NONE: u8 = u8::MAX;
 
-/// Largest element block (hex8 in 3D, u–p): 32 DOFs.
 /// Per worker of the assembly, storage that a block needs only sometimes, made once per
-/// worker rather than zeroed per block (a 3D smooth support's rule and block are 24 kB and
-/// 93 kB): a u–p support's projection rule, and the block of a second body in a support.
+/// worker rather than zeroed per block (a 3D smooth support's rule, projection integrals and
+/// block are 24 kB, 6 kB and 93 kB): a u–p support's projection rule and integrals (the rule
+/// only where they are not in closed form, [`Grid::projection_moments`]), and the block of a
+/// second body in a support.
 struct BlockScratch {
     rule: [PointGeometry; MAX_NODES],
     projection: CellProjection,
