@@ -861,6 +861,15 @@ mod tests {
                 if dim == 2 {
                     let mut out = CellProjection::default();
                     assert!(!lattice.projection_moments(0, Formulation::Axisymmetric, 0.7, &mut out));
+                    // a hole at grid node (2, 2) (of 6 × 5): declined exactly where it is missing
+                    let removed = 2 * 6 + 2;
+                    let new_node: Vec<usize> =
+                        (0..30).map(|a| if a == removed { usize::MAX } else { a - usize::from(a > removed) }).collect();
+                    let holed = lattice.holed(&new_node);
+                    for s in 0..lattice.num_supports() {
+                        let has_hole = lattice.support(s).contains(&removed);
+                        assert_eq!(holed.projection_moments(s, formulation, 0.7, &mut out), !has_hole, "support {s}");
+                    }
                 }
             }
         }
